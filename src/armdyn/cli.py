@@ -1,0 +1,137 @@
+"""The `armdyn` command: the built-in arms, their tables, and (later) the chapter's jobs."""
+
+from __future__ import annotations
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from armdyn.errors import ModelError
+from armdyn.model import catalog
+from armdyn.model.robot import Robot
+
+app = typer.Typer(help="armdyn: the dynamics of robot manipulators.", no_args_is_help=True, add_completion=False)
+console = Console(width=None if Console().is_terminal else 140)
+
+
+def _number(value: object, digits: int = 4) -> str:
+    if hasattr(value, "free_symbols"):
+        return str(value)
+    value = float(value)
+    if np.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return f"{value:.{digits}g}"
+
+
+def _vector(values: object, digits: int = 4) -> str:
+    return "[" + ", ".join(_number(v, digits) for v in np.asarray(values).ravel()) + "]"
+
+
+def _arm(name: str) -> Robot:
+    try:
+        return catalog.load(name)
+    except ModelError as error:
+        console.print(f"[red]error:[/red] {error}")
+        raise typer.Exit(2) from None
+
+
+@app.command()
+def models() -> None:
+    """List the built-in arms."""
+    table = Table(title="Built-in arms")
+    for column in ("name", "joints", "DOF", "dynamics", "motors", "friction", "description"):
+        table.add_column(column)
+    for name in catalog.names():
+        arm = catalog.load(name)
+        kinds = "".join("R" if kind == "revolute" else "P" for kind in arm.kinds)
+        table.add_row(
+            name,
+            kinds,
+            str(arm.n),
+            "yes" if arm.has_dynamics else "no",
+            "yes" if np.any(arm.reflected_inertia > 0) else "no",
+            "yes" if np.any(arm.viscous_friction > 0) or np.any(arm.coulomb_friction != 0) else "no",
+            arm.description,
+        )
+    console.print(table)
+
+
+@app.command()
+def show(name: str) -> None:
+    """Print an arm's DH (or joint) table and its dynamics table."""
+    arm = _arm(name)
+    console.print(f"[bold]{arm.name}[/bold]: {arm.description}  (n = {arm.n}, gravity {_vector(arm.gravity)})")
+    console.print(_geometry_table(arm))
+    console.print(_dynamics_table(arm))
+    if arm.configurations:
+        console.print(
+            "configurations: " + "; ".join(f"{key} = {_vector(value)}" for key, value in arm.configurations.items())
+        )
+
+
+def _geometry_table(arm: Robot) -> Table:
+    limits = arm.qlim
+    if arm.dh is not None:
+        table = Table(title=f"Denavit-Hartenberg parameters ({arm.dh['convention']})")
+        for column in ("joint", "kind", "theta", "d", "a", "alpha", "q min", "q max"):
+            table.add_column(column, justify="right")
+        for index, row in enumerate(arm.dh["rows"]):
+            revolute = row["kind"] == "revolute"
+            theta = f"q{index + 1}" + ("" if row["theta"] == 0 else f" + {_number(row['theta'])}")
+            d = f"q{index + 1}" + ("" if row["d"] == 0 else f" + {_number(row['d'])}")
+            table.add_row(
+                arm.joint_names[index],
+                "R" if revolute else "P",
+                theta if revolute else _number(row["theta"]),
+                _number(row["d"]) if revolute else d,
+                _number(row["a"]),
+                _number(row["alpha"]),
+                _number(limits[0, index]),
+                _number(limits[1, index]),
+            )
+        return table
+    table = Table(title="Joints")
+    for column in ("joint", "kind", "parent", "axis", "placement xyz", "q min", "q max"):
+        table.add_column(column, justify="right")
+    for index, link in enumerate(arm.links):
+        placement = link.joint.placement
+        table.add_row(
+            link.name,
+            "R" if link.kind == "revolute" else "P",
+            "base" if link.parent < 0 else arm.joint_names[link.parent],
+            _vector(link.joint.axis, 3),
+            _vector(placement[:3, 3], 4),
+            _number(limits[0, index]),
+            _number(limits[1, index]),
+        )
+    return table
+
+
+def _dynamics_table(arm: Robot) -> Table:
+    table = Table(title="Dynamics (inertia about the c.o.m. in the link frame; motor side Jm, B, Tc)")
+    for column in ("link", "mass", "c.o.m.", "Ixx Iyy Izz", "Ixy Iyz Ixz", "Jm", "G", "B", "Tc+ / Tc-"):
+        table.add_column(column, justify="right")
+    for link in arm.links:
+        body = link.inertial
+        inertia = body.inertia
+        table.add_row(
+            link.name,
+            _number(body.mass),
+            _vector(body.com),
+            _vector([inertia[0, 0], inertia[1, 1], inertia[2, 2]]),
+            _vector([inertia[0, 1], inertia[1, 2], inertia[0, 2]]),
+            _number(link.motor_inertia),
+            _number(link.gear_ratio),
+            _number(link.viscous),
+            f"{_number(link.coulomb[0])} / {_number(link.coulomb[1])}",
+        )
+    return table
+
+
+def main() -> None:
+    app()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""How the robot equation is computed: the Lagrange-Euler reference and the fast kernels."""

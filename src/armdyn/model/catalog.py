@@ -1,0 +1,254 @@
+"""The built-in arms, looked up by name: the book's examples and classic industrial arms.
+
+The book's three examples (BOOK.md section 4) take ``symbolic=True`` to carry SymPy
+symbols (m1, m2, a1, a2, g, ...) as parameters, ready for closed-form derivation.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+
+import numpy as np
+
+from armdyn.errors import ModelError
+from armdyn.model.inertial import Inertial
+from armdyn.model.joint import Joint
+from armdyn.model.robot import Link, Robot
+
+_PI = np.pi
+
+
+def _as_published(build: Callable[[], Robot]) -> Robot:
+    """Build an arm whose published inertias break the triangle inequality, without warnings."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*triangle inequality")
+        return build()
+
+
+def _symbols(names: str) -> tuple:
+    import sympy
+
+    return sympy.symbols(names, positive=True)
+
+
+def _planar_gravity(g: object) -> list[object]:
+    """The book's planar arms move in the vertical x-y plane with y up."""
+    return [0, -g, 0] if hasattr(g, "free_symbols") else [0.0, -float(g), 0.0]
+
+
+def two_link_planar(
+    m1: object = 1.0, m2: object = 1.0, a1: object = 1.0, a2: object = 1.0, g: object = 9.8, symbolic: bool = False
+) -> Robot:
+    """Example 3.2-2: the two-link planar elbow (RR) arm, point masses at the link ends.
+
+    Standard DH: a1, a2, alpha = 0; the arm moves in the vertical x-y plane, gravity -g y.
+    """
+    if symbolic:
+        m1, m2, a1, a2, g = _symbols("m1 m2 a1 a2 g")
+    table = [
+        {"a": a1, "mass": m1, "name": "theta1"},
+        {"a": a2, "mass": m2, "name": "theta2"},
+    ]
+    zeros = [0.0, 0.0]
+    return Robot.from_dh(
+        table,
+        name="two_link_planar",
+        gravity=_planar_gravity(g),
+        configurations={"qz": zeros, "qh": [_PI / 2, 0.0]},
+        description="Example 3.2-2, two-link planar elbow arm (point masses)",
+    )
+
+
+def polar_rp(m: object = 1.0, g: object = 9.8, symbolic: bool = False) -> Robot:
+    """Example 3.2-1: the two-link polar (RP) arm, a point mass m at radius r.
+
+    q = [theta, r]: theta turns the arm in the vertical x-y plane (gravity -g y), r is
+    the extension along the arm; the mass sits at the end of the prismatic link.
+    """
+    if symbolic:
+        (m,) = _symbols("m,")
+        (g,) = _symbols("g,")
+    links = [
+        Link("theta", Joint("revolute", name="theta"), Inertial(0.0, name="theta")),
+        Link(
+            "r",
+            Joint("prismatic", axis=np.array([1.0, 0.0, 0.0]), name="r"),
+            Inertial(m, name="r"),
+            parent=0,
+            limits=(0.0, np.inf),
+        ),
+    ]
+    return Robot(
+        links,
+        name="polar_rp",
+        gravity=_planar_gravity(g),
+        configurations={"qz": [0.0, 1.0]},
+        description="Example 3.2-1, two-link polar arm (point mass)",
+    )
+
+
+def cylindrical(J: object = 1.0, m1: object = 1.0, m2: object = 1.0, g: object = 9.8, symbolic: bool = False) -> Robot:
+    """Exercise 3.2-3: the three-link cylindrical arm, q = [theta, h, r].
+
+    The base turns about the vertical z axis with inertia J (a massless disc, so that J
+    alone appears); the vertical stage (mass m1) slides along z by h; the radial stage
+    (point mass m2) slides out along the arm by r. Gravity -g z.
+    """
+    if symbolic:
+        J, m1, m2, g = _symbols("J m1 m2 g")
+    disc = np.diag([J / 2, J / 2, J]) if not symbolic else np.array([[J / 2, 0, 0], [0, J / 2, 0], [0, 0, J]])
+    links = [
+        Link("theta", Joint("revolute", name="theta"), Inertial(0, np.zeros(3), disc, "theta")),
+        Link("h", Joint("prismatic", name="h"), Inertial(m1, name="h"), parent=0),
+        Link(
+            "r",
+            Joint("prismatic", axis=np.array([1.0, 0.0, 0.0]), name="r"),
+            Inertial(m2, name="r"),
+            parent=1,
+            limits=(0.0, np.inf),
+        ),
+    ]
+    gravity = [0, 0, -g] if symbolic else [0.0, 0.0, -float(g)]
+    return Robot(
+        links,
+        name="cylindrical",
+        gravity=gravity,
+        configurations={"qz": [0.0, 0.0, 1.0]},
+        description="Exercise 3.2-3, three-link cylindrical arm",
+    )
+
+
+def puma560() -> Robot:
+    """The Unimation PUMA 560, Armstrong/Corke parameters as the Robotics Toolbox ships them.
+
+    Standard DH; masses, centres of mass and inertias of Armstrong, Khatib and Burdick
+    (1986); motor inertia Jm, gear ratio G, viscous B and Coulomb Tc friction (motor
+    side) of Corke and Armstrong-Helouvry (1994). As published, the inertias of links 1
+    and 3 break the triangle inequality (link 1 is given only its Iyy about the vertical
+    axis); they are kept as published so that results match the literature.
+    Configurations: qz (zero), qr (ready, arm up), qs (stretched), qn (nominal).
+    """
+    deg = _PI / 180
+    table = [
+        {"d": 26.45 * 0.0254, "alpha": _PI / 2, "mass": 0.0, "com": [0, 0, 0], "inertia": [0, 0.35, 0, 0, 0, 0],
+         "Jm": 200e-6, "G": -62.6111, "B": 1.48e-3, "Tc": (0.395, -0.435), "qlim": (-160 * deg, 160 * deg)},
+        {"a": 0.4318, "mass": 17.4, "com": [-0.3638, 0.006, 0.2275], "inertia": [0.13, 0.524, 0.539, 0, 0, 0],
+         "Jm": 200e-6, "G": 107.815, "B": 0.817e-3, "Tc": (0.126, -0.071), "qlim": (-110 * deg, 110 * deg)},
+        {"d": 0.15005, "a": 0.0203, "alpha": -_PI / 2, "mass": 4.8, "com": [-0.0203, -0.0141, 0.070],
+         "inertia": [0.066, 0.086, 0.0125, 0, 0, 0], "Jm": 200e-6, "G": -53.7063, "B": 1.38e-3,
+         "Tc": (0.132, -0.105), "qlim": (-135 * deg, 135 * deg)},
+        {"d": 0.4318, "alpha": _PI / 2, "mass": 0.82, "com": [0, 0.019, 0], "inertia": [1.8e-3, 1.3e-3, 1.8e-3, 0, 0, 0],
+         "Jm": 33e-6, "G": 76.0364, "B": 71.2e-6, "Tc": (11.2e-3, -16.9e-3), "qlim": (-266 * deg, 266 * deg)},
+        {"alpha": -_PI / 2, "mass": 0.34, "com": [0, 0, 0], "inertia": [0.3e-3, 0.4e-3, 0.3e-3, 0, 0, 0],
+         "Jm": 33e-6, "G": 71.923, "B": 82.6e-6, "Tc": (9.26e-3, -14.5e-3), "qlim": (-100 * deg, 100 * deg)},
+        {"mass": 0.09, "com": [0, 0, 0.032], "inertia": [0.15e-3, 0.15e-3, 0.04e-3, 0, 0, 0],
+         "Jm": 33e-6, "G": 76.686, "B": 36.7e-6, "Tc": (3.96e-3, -10.5e-3), "qlim": (-266 * deg, 266 * deg)},
+    ]  # fmt: skip
+    for index, row in enumerate(table):
+        row["name"] = f"q{index + 1}"
+        row["strict"] = False
+    return _as_published(
+        lambda: Robot.from_dh(
+            table,
+            name="puma560",
+            gravity=[0.0, 0.0, -9.81],
+            configurations={
+                "qz": [0, 0, 0, 0, 0, 0],
+                "qr": [0, _PI / 2, -_PI / 2, 0, 0, 0],
+                "qs": [0, 0, -_PI / 2, 0, 0, 0],
+                "qn": [0, _PI / 4, _PI, 0, _PI / 4, 0],
+            },
+            description="Unimation PUMA 560 (Armstrong/Corke dynamics, motors and friction)",
+        )
+    )
+
+
+def stanford() -> Robot:
+    """The Stanford arm (RRPRRR), standard DH, dynamics as the Robotics Toolbox ships them.
+
+    Kinematics from Stanford AIM-177, dynamics from Paul (1981, Tables 6.5 and 6.6) as
+    the Toolbox gives them: motor inertias are already reflected (G = 1), no friction.
+    As published, link 5's inertia breaks the triangle inequality and some centres of
+    mass lie far outside the links (-6.447 m for link 3); they are kept as published.
+    qz puts the prismatic joint at 0, outside its limits, as the Toolbox does.
+    """
+    deg, inch = _PI / 180, 0.0254
+    table = [
+        {"d": 0.412, "alpha": -_PI / 2, "mass": 9.29, "com": [0, 0.0175, -0.1105],
+         "inertia": [0.276, 0.255, 0.071, 0, 0, 0], "Jm": 0.953, "G": 1, "qlim": (-170 * deg, 170 * deg)},
+        {"d": 0.154, "alpha": _PI / 2, "mass": 5.01, "com": [0, -1.054, 0],
+         "inertia": [0.108, 0.018, 0.100, 0, 0, 0], "Jm": 2.193, "G": 1, "qlim": (-170 * deg, 170 * deg)},
+        {"kind": "P", "theta": -_PI / 2, "a": 0.0203, "mass": 4.25, "com": [0, 0, -6.447],
+         "inertia": [2.51, 2.51, 0.006, 0, 0, 0], "Jm": 0.782, "G": 1, "qlim": (12 * inch, 50 * inch)},
+        {"alpha": -_PI / 2, "mass": 1.08, "com": [0, 0.092, -0.054],
+         "inertia": [0.002, 0.001, 0.001, 0, 0, 0], "Jm": 0.106, "G": 1, "qlim": (-170 * deg, 170 * deg)},
+        {"alpha": _PI / 2, "mass": 0.630, "com": [0, 0.566, 0.003],
+         "inertia": [0.003, 0.0004, 0, 0, 0, 0], "Jm": 0.097, "G": 1, "qlim": (-90 * deg, 90 * deg)},
+        {"mass": 0.51, "com": [0, 0, 1.554],
+         "inertia": [0.013, 0.013, 0.0003, 0, 0, 0], "Jm": 0.020, "G": 1, "qlim": (-170 * deg, 170 * deg)},
+    ]  # fmt: skip
+    for index, row in enumerate(table):
+        row["name"] = f"q{index + 1}"
+        row["strict"] = False
+    return _as_published(
+        lambda: Robot.from_dh(
+            table,
+            name="stanford",
+            gravity=[0.0, 0.0, -9.81],
+            configurations={"qz": [0, 0, 0.5, 0, 0, 0]},
+            description="Stanford arm (RRPRRR)",
+        )
+    )
+
+
+def scara() -> Robot:
+    """A four-axis SCARA (RRPR), the geometry of the Adept Cobra 600.
+
+    Standard DH (a1 = 0.325 m, a2 = 0.275 m, d1 = 0.387 m, alpha2 = pi so the quill
+    moves down). The masses and inertias are representative values for an arm of this
+    size (slender links, a 2 kg quill), not a manufacturer's data sheet.
+    """
+    deg = _PI / 180
+    table = [
+        {"d": 0.387, "a": 0.325, "mass": 8.0, "com": [-0.1625, 0, 0], "inertia": [0.02, 0.08, 0.08, 0, 0, 0],
+         "B": 0.5, "Tc": (0.3, -0.3), "qlim": (-50 * deg, 50 * deg)},
+        {"a": 0.275, "alpha": _PI, "mass": 6.0, "com": [-0.1375, 0, 0], "inertia": [0.01, 0.045, 0.045, 0, 0, 0],
+         "B": 0.4, "Tc": (0.2, -0.2), "qlim": (-88 * deg, 88 * deg)},
+        {"kind": "P", "mass": 2.0, "com": [0, 0, 0.1], "inertia": [0.007, 0.007, 0.0005, 0, 0, 0],
+         "B": 5.0, "Tc": (2.0, -2.0), "qlim": (0.0, 0.210)},
+        {"mass": 0.5, "com": [0, 0, 0.02], "inertia": [0.0005, 0.0005, 0.0003, 0, 0, 0],
+         "B": 0.05, "Tc": (0.02, -0.02), "qlim": (-190 * deg, 190 * deg)},
+    ]  # fmt: skip
+    for index, row in enumerate(table):
+        row["name"] = f"q{index + 1}"
+    return Robot.from_dh(
+        table,
+        name="scara",
+        gravity=[0.0, 0.0, -9.81],
+        configurations={"qz": [0, 0, 0, 0], "qr": [0, _PI / 4, 0.1, 0]},
+        description="SCARA (RRPR), Adept Cobra 600 geometry, representative dynamics",
+    )
+
+
+_CATALOG: dict[str, Callable[[], Robot]] = {
+    "two_link_planar": two_link_planar,
+    "polar_rp": polar_rp,
+    "cylindrical": cylindrical,
+    "puma560": puma560,
+    "stanford": stanford,
+    "scara": scara,
+}
+
+
+def names() -> list[str]:
+    """The names of the built-in arms."""
+    return list(_CATALOG)
+
+
+def load(name: str) -> Robot:
+    """A built-in arm by name (see names())."""
+    try:
+        return _CATALOG[name.lower()]()
+    except KeyError:
+        raise ModelError(f"no built-in arm named '{name}' (known: {', '.join(_CATALOG)})") from None

@@ -1,0 +1,168 @@
+"""Mass properties of one link: mass, centre of mass, inertia; the pseudo-inertia matrix.
+
+BOOK.md section 2 (3.2.20 to 3.2.27). Inertia tensors are given about the centre of
+mass, expressed in the link frame, as URDF and the Robotics Toolbox give them.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from armdyn.errors import ModelError
+
+_RELATIVE_TOLERANCE = 1e-9
+
+
+def _is_symbolic(*values: object) -> bool:
+    """True when any value is a SymPy expression (symbolic parameters skip numeric checks)."""
+    return any(np.asarray(v, dtype=object).dtype == object and _has_sympy(v) for v in values)
+
+
+def _has_sympy(value: object) -> bool:
+    items = np.asarray(value, dtype=object).ravel()
+    return any(hasattr(item, "free_symbols") and not _is_plain_number(item) for item in items)
+
+
+def _is_plain_number(item: object) -> bool:
+    try:
+        float(item)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def inertia_from_vector(values: object) -> np.ndarray:
+    """A 3x3 inertia tensor from 3 principal moments, 6 values or a 3x3 matrix.
+
+    Six values are [Ixx, Iyy, Izz, Ixy, Iyz, Ixz], the Robotics Toolbox order.
+    """
+    array = np.asarray(values)
+    if array.shape == (3, 3):
+        return array
+    if array.shape == (3,):
+        return np.diag(array)
+    if array.shape == (6,):
+        ixx, iyy, izz, ixy, iyz, ixz = array
+        return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=array.dtype)
+    raise ModelError(f"an inertia must be 3 moments, 6 values or a 3x3 matrix, got shape {array.shape}")
+
+
+@dataclass(frozen=True, eq=False)
+class Inertial:
+    """Mass properties of a rigid link.
+
+    mass: kg; com: centre of mass in the link frame (m); inertia: 3x3 tensor about the
+    centre of mass, axes of the link frame (kg m^2). ``name`` names the link in error
+    messages. ``strict=False`` accepts (with a warning) an inertia whose principal moments
+    break the triangle inequality, as CAD-exported URDFs sometimes carry; negative mass,
+    non-symmetric or indefinite tensors are always refused. SymPy expressions are accepted
+    as parameters (for closed-form work); numeric checks apply to numeric values only.
+    """
+
+    mass: object = 0.0
+    com: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
+    name: str = "link"
+    strict: bool = True
+
+    def __post_init__(self) -> None:
+        symbolic = _is_symbolic(self.mass, self.com, self.inertia)
+        dtype = object if symbolic else float
+        try:
+            com = np.array(self.com, dtype=dtype).reshape(3)
+            inertia = np.array(inertia_from_vector(self.inertia), dtype=dtype)
+        except (TypeError, ValueError) as error:
+            if isinstance(error, ModelError):
+                raise ModelError(f"link '{self.name}': {error}") from None
+            raise ModelError(f"link '{self.name}': centre of mass must be 3 numbers ({error})") from None
+        mass = self.mass if symbolic else float(self.mass)
+        object.__setattr__(self, "mass", mass)
+        object.__setattr__(self, "com", com)
+        object.__setattr__(self, "inertia", inertia)
+        if symbolic:
+            return
+        com.setflags(write=False)
+        inertia.setflags(write=False)
+        self._validate()
+
+    @property
+    def is_symbolic(self) -> bool:
+        return self.com.dtype == object
+
+    def _validate(self) -> None:
+        name, mass, inertia = self.name, self.mass, self.inertia
+        if not np.isfinite(mass):
+            raise ModelError(f"link '{name}': mass must be finite, got {mass}")
+        if mass < 0:
+            raise ModelError(f"link '{name}': mass must be non-negative, got {mass}")
+        if not np.all(np.isfinite(self.com)):
+            raise ModelError(f"link '{name}': centre of mass must be finite, got {self.com}")
+        if not np.all(np.isfinite(inertia)):
+            raise ModelError(f"link '{name}': inertia must be finite")
+        scale = max(float(np.max(np.abs(inertia))), 1e-300)
+        if np.max(np.abs(inertia - inertia.T)) > _RELATIVE_TOLERANCE * scale:
+            raise ModelError(f"link '{name}': inertia tensor is not symmetric:\n{inertia}")
+        moments = np.linalg.eigvalsh(inertia)
+        if moments[0] < -_RELATIVE_TOLERANCE * scale:
+            raise ModelError(
+                f"link '{name}': inertia tensor is not positive semi-definite (principal moments {moments})"
+            )
+        largest, others = moments[2], moments[0] + moments[1]
+        if largest > others + _RELATIVE_TOLERANCE * scale:
+            message = (
+                f"link '{name}': principal moments {moments} break the triangle inequality "
+                f"({moments[0]:.6g} + {moments[1]:.6g} < {largest:.6g}), which no rigid body can have"
+            )
+            if self.strict:
+                raise ModelError(message + "; pass strict=False to load it anyway")
+            warnings.warn(message + "; using the values as given", stacklevel=3)
+
+    @property
+    def first_moment(self) -> np.ndarray:
+        """m c, the first moment of mass (3.2.25)."""
+        return self.mass * self.com
+
+    def inertia_about_origin(self) -> np.ndarray:
+        """Inertia about the link-frame origin, by the parallel-axis theorem."""
+        c = self.com
+        shift = (c @ c) * np.eye(3) - np.outer(c, c)
+        return self.inertia + self.mass * shift
+
+    def pseudo_inertia(self) -> np.ndarray:
+        """The 4x4 pseudo-inertia matrix J = integral of r r^T dm, r = [x y z 1] (3.2.27)."""
+        inertia = self.inertia_about_origin()
+        second_moment = np.trace(inertia) / 2 * np.eye(3) - inertia
+        pseudo = np.empty((4, 4), dtype=self.com.dtype)
+        pseudo[:3, :3] = second_moment
+        pseudo[:3, 3] = pseudo[3, :3] = self.first_moment
+        pseudo[3, 3] = self.mass
+        return pseudo
+
+    def transformed(self, transform: np.ndarray) -> Inertial:
+        """The same body described in a frame F, given transform = pose of this frame in F."""
+        rotation, translation = transform[:3, :3], transform[:3, 3]
+        return _trusted(self.mass, rotation @ self.com + translation, rotation @ self.inertia @ rotation.T, self.name)
+
+    def __add__(self, other: Inertial) -> Inertial:
+        """Two bodies rigidly joined, both described in the same frame (parallel-axis theorem)."""
+        mass = self.mass + other.mass
+        if mass == 0:
+            return _trusted(0.0, np.zeros(3), self.inertia + other.inertia, self.name)
+        com = (self.mass * self.com + other.mass * other.com) / mass
+
+        def about(body: Inertial) -> np.ndarray:
+            d = body.com - com
+            return body.inertia + body.mass * ((d @ d) * np.eye(3) - np.outer(d, d))
+
+        return _trusted(mass, com, about(self) + about(other), self.name)
+
+
+def _trusted(mass: object, com: np.ndarray, inertia: np.ndarray, name: str) -> Inertial:
+    """An Inertial derived from already validated ones (a rotation or a sum keeps validity)."""
+    body = object.__new__(Inertial)
+    for key, value in (("mass", mass), ("com", com), ("inertia", inertia), ("name", name), ("strict", False)):
+        object.__setattr__(body, key, value)
+    return body
