@@ -1,10 +1,10 @@
 """armdyn: the dynamics of robot manipulators (Lewis, Dawson and Abdallah, Chapter 3)."""
 
 from armdyn import kinematics
-from armdyn.model import catalog as models
 from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
 from armdyn.model import Inertial, Joint, Link, Robot
+from armdyn.model import catalog as models
 from armdyn.model.urdf import load_urdf
 
 __version__ = "0.1.0"

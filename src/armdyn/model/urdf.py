@@ -21,7 +21,7 @@ from armdyn.model.robot import Link, Robot
 _MOVING = {"revolute", "continuous", "prismatic"}
 
 
-def _parse(path: Path):  # noqa: ANN202 (a yourdfpy Robot)
+def _parse(path: Path):
     import yourdfpy
     from lxml import etree
 
