@@ -25,6 +25,10 @@ def _parse(path: Path):
     import yourdfpy
     from lxml import etree
 
+    try:  # yourdfpy would recover from broken XML on its own: parse strictly first
+        etree.parse(str(path))
+    except etree.XMLSyntaxError as error:
+        raise ModelError(f"{path}: malformed XML ({error})") from None
     try:
         urdf = yourdfpy.URDF.load(
             str(path), build_scene_graph=False, build_collision_scene_graph=False, load_meshes=False,
@@ -67,6 +71,9 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
         raise ModelError(f"{path}: no such URDF file")
     robot = _parse(path)
     links = {link.name: link for link in robot.links}
+    for name in links:
+        if sum(link.name == name for link in robot.links) > 1:
+            raise ModelError(f"{path.name}: link '{name}' is defined more than once")
     children: dict[str, list] = {name: [] for name in links}
     parent_of: dict[str, str] = {}
     for joint in robot.joints:

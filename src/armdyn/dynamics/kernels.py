@@ -1,0 +1,817 @@
+"""Numba kernels of the robot equation on kinematic trees.
+
+Featherstone, Rigid Body Dynamics Algorithms (2008): RNEA (5.3), CRBA (6.2), ABA (7.3);
+Echeandia and Wensing, "Numerical methods to compute the Coriolis matrix and Christoffel
+symbols for rigid-body systems", J. Comput. Nonlinear Dyn. 16 (2021), Algorithm 2, for
+the Christoffel-consistent Coriolis matrix.
+
+Conventions. Every joint moves about/along the z axis of its body frame (compiled.py),
+so S = e_3 (revolute) or e_6 (prismatic) in body coordinates. Spatial vectors are
+[angular; linear]. A body's mass properties are (m, h = m c, I_O about the body origin).
+Joint i's transform: R_i (body axes in parent coordinates) and p_i (body origin in the
+parent). Motion vectors go parent -> child as w' = R^T w, v' = R^T (v + w x p); forces go
+child -> parent as f = R f', n = R n' + p x (R f').
+
+Each kernel reads the model buffer ``m`` and works in ``w`` from offset ``w0``; none
+allocates in its loops. A one-state entry returns a status: 0, or which argument was
+wrong (1, 2, 3 for the shape of q, qd, qdd/tau; 11, 12, 13 for a NaN or infinity there).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from armdyn.dynamics.compiled import (
+    ARMATURE,
+    COULOMB_NEG,
+    COULOMB_POS,
+    FIRST_MOMENT,
+    GRAVITY,
+    HEADER,
+    INERTIA,
+    KIND,
+    MASS,
+    PARENT,
+    POSITION,
+    ROTATION,
+    STRIDE,
+    TOOL_LINK,
+    TOOL_POSITION,
+    TOOL_ROTATION,
+    VISCOUS,
+)
+
+WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION, WITH_WRENCH = 1, 2, 4, 8, 16
+INVERSE_DYNAMICS = WITH_QDD | WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
+NONLINEAR = WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
+CORIOLIS = WITH_VELOCITY
+GRAVITY_ONLY = WITH_GRAVITY
+
+_OPTS = {"cache": True, "fastmath": False, "error_model": "numpy", "boundscheck": False}
+
+
+# ----- small pieces ------------------------------------------------------------------------
+@njit(inline="always", **_OPTS)
+def _check(x: np.ndarray, n: int, code: int) -> int:
+    """0, or code when x has the wrong length, or code + 10 when it holds NaN or infinity."""
+    if x.shape[0] != n:
+        return code
+    for k in range(n):
+        if not (x[k] - x[k] == 0.0):
+            return code + 10
+    return 0
+
+
+@njit(inline="always", **_OPTS)
+def _joint_transform(m: np.ndarray, j: int, qj: float, w: np.ndarray, o: int) -> None:
+    """R_j = P_R Rz(q) (revolute) or P_R (prismatic), p_j = P_p (+ q P_R e_z): w[o:o+9], w[o+9:o+12]."""
+    b = HEADER + STRIDE * j
+    r = b + ROTATION
+    if m[b + KIND] == 0.0:
+        c, s = math.cos(qj), math.sin(qj)
+        for row in range(3):
+            x, y = m[r + 3 * row], m[r + 3 * row + 1]
+            w[o + 3 * row] = x * c + y * s
+            w[o + 3 * row + 1] = y * c - x * s
+            w[o + 3 * row + 2] = m[r + 3 * row + 2]
+        for k in range(3):
+            w[o + 9 + k] = m[b + POSITION + k]
+    else:
+        for k in range(9):
+            w[o + k] = m[r + k]
+        for k in range(3):
+            w[o + 9 + k] = m[b + POSITION + k] + qj * m[r + 3 * k + 2]
+
+
+@njit(inline="always", **_OPTS)
+def _friction(m: np.ndarray, j: int, qdj: float) -> float:
+    """F_j(qd_j) = Fv qd + Fc+ (qd > 0) or Fc- (qd < 0) (3.3.2)."""
+    b = HEADER + STRIDE * j
+    f = m[b + VISCOUS] * qdj
+    if qdj > 0.0:
+        f += m[b + COULOMB_POS]
+    elif qdj < 0.0:
+        f += m[b + COULOMB_NEG]
+    return f
+
+
+@njit(inline="always", **_OPTS)
+def _motion_to_child(w: np.ndarray, t: int, src: np.ndarray, s: int, dst: np.ndarray, d: int) -> None:
+    """dst = X src for a motion vector: [R^T a; R^T (l + a x p)], transform at w[t:t+12]."""
+    ax, ay, az = src[s], src[s + 1], src[s + 2]
+    px, py, pz = w[t + 9], w[t + 10], w[t + 11]
+    lx = src[s + 3] + ay * pz - az * py
+    ly = src[s + 4] + az * px - ax * pz
+    lz = src[s + 5] + ax * py - ay * px
+    for k in range(3):
+        dst[d + k] = w[t + k] * ax + w[t + 3 + k] * ay + w[t + 6 + k] * az
+        dst[d + 3 + k] = w[t + k] * lx + w[t + 3 + k] * ly + w[t + 6 + k] * lz
+
+
+@njit(inline="always", **_OPTS)
+def _add_force_to_parent(w: np.ndarray, t: int, src: np.ndarray, s: int, dst: np.ndarray, d: int) -> None:
+    """dst += X^T src for a force: [R n + p x (R f); R f], transform at w[t:t+12]."""
+    fx = w[t] * src[s + 3] + w[t + 1] * src[s + 4] + w[t + 2] * src[s + 5]
+    fy = w[t + 3] * src[s + 3] + w[t + 4] * src[s + 4] + w[t + 5] * src[s + 5]
+    fz = w[t + 6] * src[s + 3] + w[t + 7] * src[s + 4] + w[t + 8] * src[s + 5]
+    px, py, pz = w[t + 9], w[t + 10], w[t + 11]
+    for k in range(3):
+        dst[d + k] += w[t + 3 * k] * src[s] + w[t + 3 * k + 1] * src[s + 1] + w[t + 3 * k + 2] * src[s + 2]
+    dst[d] += py * fz - pz * fy
+    dst[d + 1] += pz * fx - px * fz
+    dst[d + 2] += px * fy - py * fx
+    dst[d + 3] += fx
+    dst[d + 4] += fy
+    dst[d + 5] += fz
+
+
+@njit(inline="always", **_OPTS)
+def _inertia_times(m: np.ndarray, j: int, v: np.ndarray, s: int, out: np.ndarray, o: int) -> None:
+    """out = I_j v = [I_O a + h x l; m l - h x a] for v = [a; l]."""
+    b = HEADER + STRIDE * j
+    mass = m[b + MASS]
+    hx, hy, hz = m[b + FIRST_MOMENT], m[b + FIRST_MOMENT + 1], m[b + FIRST_MOMENT + 2]
+    i = b + INERTIA
+    ax, ay, az, lx, ly, lz = v[s], v[s + 1], v[s + 2], v[s + 3], v[s + 4], v[s + 5]
+    out[o] = m[i] * ax + m[i + 1] * ay + m[i + 2] * az + hy * lz - hz * ly
+    out[o + 1] = m[i + 1] * ax + m[i + 3] * ay + m[i + 4] * az + hz * lx - hx * lz
+    out[o + 2] = m[i + 2] * ax + m[i + 4] * ay + m[i + 5] * az + hx * ly - hy * lx
+    out[o + 3] = mass * lx - (hy * az - hz * ay)
+    out[o + 4] = mass * ly - (hz * ax - hx * az)
+    out[o + 5] = mass * lz - (hx * ay - hy * ax)
+
+
+# ----- RNEA: inverse dynamics and its parts -------------------------------------------------------
+@njit(inline="always", **_OPTS)
+def rnea_core(
+    m: np.ndarray,
+    w: np.ndarray,
+    w0: int,
+    q: np.ndarray,
+    qd: np.ndarray,
+    qdd: np.ndarray,
+    wrench: np.ndarray,
+    flags: int,
+    tau: np.ndarray,
+) -> None:
+    """tau = M qdd + Vm qd + F + G (+ J^T wrench), the parts selected by ``flags`` (Featherstone 5.3).
+
+    Forward: v_i = X_i v_p + S qd_i, a_i = X_i a_p + S qdd_i + (X_i v_p) x S qd_i, a_0 = -g;
+    f_i = I_i a_i + v_i x* I_i v_i. Backward: tau_i = S^T f_i (+ armature, friction),
+    f_p += X_i^T f_i.
+    """
+    n = int(m[0])
+    transforms, vel, acc, force, tmp = w0, w0 + 12 * n, w0 + 18 * n, w0 + 24 * n, w0 + 30 * n
+    use_velocity = (flags & WITH_VELOCITY) != 0
+    use_qdd = (flags & WITH_QDD) != 0
+    g = 1.0 if (flags & WITH_GRAVITY) != 0 else 0.0
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        parent = int(m[b + PARENT])
+        prismatic = m[b + KIND] != 0.0
+        t = transforms + 12 * i
+        _joint_transform(m, i, q[i], w, t)
+        v, a = vel + 6 * i, acc + 6 * i
+        if parent < 0:
+            for k in range(3):
+                w[tmp + k] = 0.0
+                w[tmp + 3 + k] = -g * m[GRAVITY + k]
+                w[tmp + 6 + k] = 0.0
+                w[tmp + 9 + k] = 0.0
+            _motion_to_child(w, t, w, tmp + 6, w, v)
+            _motion_to_child(w, t, w, tmp, w, a)
+        else:
+            _motion_to_child(w, t, w, vel + 6 * parent, w, v)
+            _motion_to_child(w, t, w, acc + 6 * parent, w, a)
+        rate = qd[i] if use_velocity else 0.0
+        accel = qdd[i] if use_qdd else 0.0
+        if prismatic:  # (X v_p) x e6 qd = [0; w x e3 qd]
+            w[a + 3] += w[v + 1] * rate
+            w[a + 4] -= w[v] * rate
+            w[a + 5] += accel
+            w[v + 5] += rate
+        else:  # (X v_p) x e3 qd = [w x e3 qd; l x e3 qd]
+            w[a] += w[v + 1] * rate
+            w[a + 1] -= w[v] * rate
+            w[a + 2] += accel
+            w[a + 3] += w[v + 4] * rate
+            w[a + 4] -= w[v + 3] * rate
+            w[v + 2] += rate
+        f = force + 6 * i
+        _inertia_times(m, i, w, a, w, f)
+        if use_velocity:
+            _inertia_times(m, i, w, v, w, tmp)  # momentum [k; l]; v x* [k; l] = [w x k + v x l; w x l]
+            wx, wy, wz, vx, vy, vz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
+            kx, ky, kz, lx, ly, lz = w[tmp], w[tmp + 1], w[tmp + 2], w[tmp + 3], w[tmp + 4], w[tmp + 5]
+            w[f] += wy * kz - wz * ky + vy * lz - vz * ly
+            w[f + 1] += wz * kx - wx * kz + vz * lx - vx * lz
+            w[f + 2] += wx * ky - wy * kx + vx * ly - vy * lx
+            w[f + 3] += wy * lz - wz * ly
+            w[f + 4] += wz * lx - wx * lz
+            w[f + 5] += wx * ly - wy * lx
+    if (flags & WITH_WRENCH) != 0:
+        _add_tool_wrench(m, w, force + 6 * int(m[TOOL_LINK]), wrench, tmp)
+    for i in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * i
+        f = force + 6 * i
+        value = w[f + 5] if m[b + KIND] != 0.0 else w[f + 2]
+        if use_qdd:
+            value += m[b + ARMATURE] * qdd[i]
+        if (flags & WITH_FRICTION) != 0:
+            value += _friction(m, i, qd[i])
+        tau[i] = value
+        parent = int(m[b + PARENT])
+        if parent >= 0:
+            _add_force_to_parent(w, transforms + 12 * i, w, f, w, force + 6 * parent)
+
+
+@njit(inline="always", **_OPTS)
+def _add_tool_wrench(m: np.ndarray, w: np.ndarray, f: int, wrench: np.ndarray, tmp: int) -> None:
+    """The body of the tool link must also supply the wrench [force; moment] that the tool
+    exerts on its surroundings, given in the tool frame about the tool point."""
+    for k in range(9):
+        w[tmp + k] = m[TOOL_ROTATION + k]
+    for k in range(3):
+        w[tmp + 9 + k] = m[TOOL_POSITION + k]
+        w[tmp + 12 + k] = wrench[3 + k]  # moment
+        w[tmp + 15 + k] = wrench[k]  # force
+    _add_force_to_parent(w, tmp, w, tmp + 12, w, f)
+
+
+@njit(**_OPTS)
+def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> int:
+    """One state: tau (checked), the parts chosen by flags; the buffer's scratch is the work space."""
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0 and (flags & (WITH_VELOCITY | WITH_FRICTION)) != 0:
+        status = _check(qd, n, 2)
+    if status == 0 and (flags & WITH_QDD) != 0:
+        status = _check(qdd, n, 3)
+    if status != 0 or tau.shape[0] != n:
+        return status if status != 0 else 4
+    rnea_core(m, m, HEADER + STRIDE * n, q, qd, qdd, qd, flags, tau)
+    return 0
+
+
+@njit(**_OPTS)
+def rnea_wrench_one(
+    m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, tau: np.ndarray
+) -> int:
+    """Inverse dynamics with a wrench exerted by the tool (tool frame, [force; moment])."""
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0:
+        status = _check(qd, n, 2)
+    if status == 0:
+        status = _check(qdd, n, 3)
+    if status == 0:
+        status = _check(wrench, 6, 5)
+    if status != 0 or tau.shape[0] != n:
+        return status if status != 0 else 4
+    rnea_core(m, m, HEADER + STRIDE * n, q, qd, qdd, wrench, INVERSE_DYNAMICS | WITH_WRENCH, tau)
+    return 0
+
+
+@njit(parallel=True, **_OPTS)
+def rnea_batch(
+    m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, flags: int, tau: np.ndarray
+) -> None:
+    """Many states (B, n) at once, in parallel chunks, each chunk with its own work space."""
+    n, count = int(m[0]), q.shape[0]
+    chunks = min(count, 64)
+    for c in prange(chunks):
+        w = np.empty(40 * n + 32)
+        for s in range(c * count // chunks, (c + 1) * count // chunks):
+            e = s if wrench.shape[0] == count else 0
+            rnea_core(m, w, 0, q[s], qd[s], qdd[s], wrench[e], flags, tau[s])
+
+
+# ----- CRBA: the inertia matrix ------------------------------------------------------------------
+@njit(inline="always", **_OPTS)
+def _add_inertia_to_parent(w: np.ndarray, t: int, src: int, dst: int) -> None:
+    """Composite inertia: (m, h, I_O) of a child, moved into its parent's frame and added there.
+
+    h' = R h + m p;  I_O' = R I_O R^T - [Rh]x [p]x - [p]x [Rh]x - m [p]x [p]x.
+    """
+    mass = w[src]
+    rh0 = w[t] * w[src + 1] + w[t + 1] * w[src + 2] + w[t + 2] * w[src + 3]
+    rh1 = w[t + 3] * w[src + 1] + w[t + 4] * w[src + 2] + w[t + 5] * w[src + 3]
+    rh2 = w[t + 6] * w[src + 1] + w[t + 7] * w[src + 2] + w[t + 8] * w[src + 3]
+    px, py, pz = w[t + 9], w[t + 10], w[t + 11]
+    # R I R^T: I stored as Ixx Ixy Ixz Iyy Iyz Izz at src + 4
+    i0, i1, i2, i3, i4, i5 = w[src + 4], w[src + 5], w[src + 6], w[src + 7], w[src + 8], w[src + 9]
+    # A = R I (3x3), then (A R^T) upper triangle
+    r00, r01, r02 = w[t], w[t + 1], w[t + 2]
+    r10, r11, r12 = w[t + 3], w[t + 4], w[t + 5]
+    r20, r21, r22 = w[t + 6], w[t + 7], w[t + 8]
+    a00 = r00 * i0 + r01 * i1 + r02 * i2
+    a01 = r00 * i1 + r01 * i3 + r02 * i4
+    a02 = r00 * i2 + r01 * i4 + r02 * i5
+    a10 = r10 * i0 + r11 * i1 + r12 * i2
+    a11 = r10 * i1 + r11 * i3 + r12 * i4
+    a12 = r10 * i2 + r11 * i4 + r12 * i5
+    a20 = r20 * i0 + r21 * i1 + r22 * i2
+    a21 = r20 * i1 + r21 * i3 + r22 * i4
+    a22 = r20 * i2 + r21 * i4 + r22 * i5
+    j00 = a00 * r00 + a01 * r01 + a02 * r02
+    j01 = a00 * r10 + a01 * r11 + a02 * r12
+    j02 = a00 * r20 + a01 * r21 + a02 * r22
+    j11 = a10 * r10 + a11 * r11 + a12 * r12
+    j12 = a10 * r20 + a11 * r21 + a12 * r22
+    j22 = a20 * r20 + a21 * r21 + a22 * r22
+    # - (hx px + px hx) - m px px, with [a]x[b]x = b a^T - (a.b) I
+    hp = rh0 * px + rh1 * py + rh2 * pz
+    pp = px * px + py * py + pz * pz
+    w[dst] += mass
+    w[dst + 1] += rh0 + mass * px
+    w[dst + 2] += rh1 + mass * py
+    w[dst + 3] += rh2 + mass * pz
+    w[dst + 4] += j00 - (2.0 * px * rh0 - 2.0 * hp) - mass * (px * px - pp)
+    w[dst + 5] += j01 - (px * rh1 + py * rh0) - mass * (px * py)
+    w[dst + 6] += j02 - (px * rh2 + pz * rh0) - mass * (px * pz)
+    w[dst + 7] += j11 - (2.0 * py * rh1 - 2.0 * hp) - mass * (py * py - pp)
+    w[dst + 8] += j12 - (py * rh2 + pz * rh1) - mass * (py * pz)
+    w[dst + 9] += j22 - (2.0 * pz * rh2 - 2.0 * hp) - mass * (pz * pz - pp)
+
+
+@njit(inline="always", **_OPTS)
+def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarray) -> None:
+    """M(q) by the composite-rigid-body algorithm (Featherstone 6.2), plus the armature diagonal.
+
+    Composite inertias I^c_i = I_i + sum of children's; F = I^c_i S_i, M_ii = S_i^T F,
+    then F is carried to each ancestor j: M_ij = M_ji = S_j^T F.
+    """
+    n = int(m[0])
+    transforms, composite, force = w0, w0 + 12 * n, w0 + 22 * n
+    for i in range(n):
+        _joint_transform(m, i, q[i], w, transforms + 12 * i)
+        b = HEADER + STRIDE * i
+        c = composite + 10 * i
+        w[c] = m[b + MASS]
+        for k in range(3):
+            w[c + 1 + k] = m[b + FIRST_MOMENT + k]
+        for k in range(6):
+            w[c + 4 + k] = m[b + INERTIA + k]
+        for j in range(n):
+            M[i, j] = 0.0
+    for i in range(n - 1, -1, -1):
+        parent = int(m[HEADER + STRIDE * i + PARENT])
+        if parent >= 0:
+            _add_inertia_to_parent(w, transforms + 12 * i, composite + 10 * i, composite + 10 * parent)
+    f = force
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        c = composite + 10 * i
+        mass, hx, hy = w[c], w[c + 1], w[c + 2]
+        if m[b + KIND] != 0.0:  # F = I^c e6 = [h x e3; m e3]
+            w[f], w[f + 1], w[f + 2], w[f + 3], w[f + 4], w[f + 5] = hy, -hx, 0.0, 0.0, 0.0, mass
+            M[i, i] = mass + m[b + ARMATURE]
+        else:  # F = I^c e3 = [I_O e3; -h x e3]
+            w[f], w[f + 1], w[f + 2] = w[c + 6], w[c + 8], w[c + 9]
+            w[f + 3], w[f + 4], w[f + 5] = -hy, hx, 0.0
+            M[i, i] = w[c + 9] + m[b + ARMATURE]
+        j = i
+        parent = int(m[b + PARENT])
+        while parent >= 0:
+            for k in range(6):
+                w[f + 6 + k] = 0.0
+            _add_force_to_parent(w, transforms + 12 * j, w, f, w, f + 6)
+            for k in range(6):
+                w[f + k] = w[f + 6 + k]
+            j = parent
+            bj = HEADER + STRIDE * j
+            value = w[f + 5] if m[bj + KIND] != 0.0 else w[f + 2]
+            M[i, j] = value
+            M[j, i] = value
+            parent = int(m[bj + PARENT])
+
+
+@njit(**_OPTS)
+def crba_one(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status != 0 or M.shape[0] != n or M.shape[1] != n:
+        return status if status != 0 else 4
+    crba_core(m, m, HEADER + STRIDE * n, q, M)
+    return 0
+
+
+@njit(parallel=True, **_OPTS)
+def crba_batch(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> None:
+    n, count = int(m[0]), q.shape[0]
+    chunks = min(count, 64)
+    for c in prange(chunks):
+        w = np.empty(40 * n + 32)
+        for s in range(c * count // chunks, (c + 1) * count // chunks):
+            crba_core(m, w, 0, q[s], M[s])
+
+
+# ----- world-frame kinematics (Coriolis matrix, energies) -------------------------------------------
+@njit(inline="always", **_OPTS)
+def _world_pose(m: np.ndarray, w: np.ndarray, local: int, parent_pose: int, pose: int, has_parent: bool) -> None:
+    """Pose of a body in the world: R_w = R_wp R, p_w = p_wp + R_wp p (12 values at w[pose:])."""
+    if not has_parent:
+        for k in range(12):
+            w[pose + k] = w[local + k]
+        return
+    for r in range(3):
+        for c in range(3):
+            w[pose + 3 * r + c] = (
+                w[parent_pose + 3 * r] * w[local + c]
+                + w[parent_pose + 3 * r + 1] * w[local + 3 + c]
+                + w[parent_pose + 3 * r + 2] * w[local + 6 + c]
+            )
+        w[pose + 9 + r] = (
+            w[parent_pose + 9 + r]
+            + w[parent_pose + 3 * r] * w[local + 9]
+            + w[parent_pose + 3 * r + 1] * w[local + 10]
+            + w[parent_pose + 3 * r + 2] * w[local + 11]
+        )
+
+
+@njit(inline="always", **_OPTS)
+def _world_inertia(m: np.ndarray, j: int, w: np.ndarray, pose: int, tmp: int, out: int) -> None:
+    """The 6x6 spatial inertia of body j in world coordinates, [[I_O, h^], [h^T, m 1]], at w[out:out+36]."""
+    b = HEADER + STRIDE * j
+    w[tmp] = m[b + MASS]
+    for k in range(3):
+        w[tmp + 1 + k] = m[b + FIRST_MOMENT + k]
+    for k in range(6):
+        w[tmp + 4 + k] = m[b + INERTIA + k]
+    for k in range(10):
+        w[tmp + 10 + k] = 0.0
+    _add_inertia_to_parent(w, pose, tmp, tmp + 10)
+    mass, hx, hy, hz = w[tmp + 10], w[tmp + 11], w[tmp + 12], w[tmp + 13]
+    i0, i1, i2, i3, i4, i5 = w[tmp + 14], w[tmp + 15], w[tmp + 16], w[tmp + 17], w[tmp + 18], w[tmp + 19]
+    values = (
+        (i0, i1, i2, 0.0, -hz, hy),
+        (i1, i3, i4, hz, 0.0, -hx),
+        (i2, i4, i5, -hy, hx, 0.0),
+        (0.0, hz, -hy, mass, 0.0, 0.0),
+        (-hz, 0.0, hx, 0.0, mass, 0.0),
+        (hy, -hx, 0.0, 0.0, 0.0, mass),
+    )
+    for r in range(6):
+        row = values[r]
+        for c in range(6):
+            w[out + 6 * r + c] = row[c]
+
+
+@njit(inline="always", **_OPTS)
+def _motion_cross(w: np.ndarray, v: int, s: int, out: int) -> None:
+    """out = v x s for motion vectors [w; u] x [a; l] = [w x a; w x l + u x a]."""
+    wx, wy, wz, ux, uy, uz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
+    ax, ay, az, lx, ly, lz = w[s], w[s + 1], w[s + 2], w[s + 3], w[s + 4], w[s + 5]
+    w[out] = wy * az - wz * ay
+    w[out + 1] = wz * ax - wx * az
+    w[out + 2] = wx * ay - wy * ax
+    w[out + 3] = wy * lz - wz * ly + uy * az - uz * ay
+    w[out + 4] = wz * lx - wx * lz + uz * ax - ux * az
+    w[out + 5] = wx * ly - wy * lx + ux * ay - uy * ax
+
+
+@njit(inline="always", **_OPTS)
+def _body_coriolis(w: np.ndarray, v: int, inertia: int, tmp: int, out: int) -> None:
+    """B = 1/2 [(v x*) I + (I v) xbar* - I (v x)] (Echeandia and Wensing 2021, eq. 19).
+
+    B v = v x* I v and B + B^T = dI/dt, which is what makes Mdot - 2 Vm skew.
+    """
+    wx, wy, wz, ux, uy, uz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
+    # cross = v x (motion) as 6x6 at tmp: [[w^, 0], [u^, w^]]
+    for k in range(36):
+        w[tmp + k] = 0.0
+    skews = ((wx, wy, wz, 0, 0), (wx, wy, wz, 3, 3), (ux, uy, uz, 3, 0))
+    for block in skews:
+        x, y, z, r0, c0 = block
+        w[tmp + 6 * (r0 + 0) + c0 + 1] = -z
+        w[tmp + 6 * (r0 + 0) + c0 + 2] = y
+        w[tmp + 6 * (r0 + 1) + c0 + 0] = z
+        w[tmp + 6 * (r0 + 1) + c0 + 2] = -x
+        w[tmp + 6 * (r0 + 2) + c0 + 0] = -y
+        w[tmp + 6 * (r0 + 2) + c0 + 1] = x
+    # h = I v at tmp + 36
+    for r in range(6):
+        total = 0.0
+        for c in range(6):
+            total += w[inertia + 6 * r + c] * w[v + c]
+        w[tmp + 36 + r] = total
+    for r in range(6):
+        for c in range(6):
+            total = 0.0
+            for k in range(6):  # (v x*) = -(v x)^T, so (v x*) I = -(v x)^T I
+                total -= w[tmp + 6 * k + r] * w[inertia + 6 * k + c]
+                total -= w[inertia + 6 * r + k] * w[tmp + 6 * k + c]
+            w[out + 6 * r + c] = 0.5 * total
+    nx, ny, nz, fx, fy, fz = w[tmp + 36], w[tmp + 37], w[tmp + 38], w[tmp + 39], w[tmp + 40], w[tmp + 41]
+    # (f xbar*) = [[-n^, -f^], [-f^, 0]]
+    bar = ((nx, ny, nz, 0, 0), (fx, fy, fz, 0, 3), (fx, fy, fz, 3, 0))
+    for block in bar:
+        x, y, z, r0, c0 = block
+        w[out + 6 * (r0 + 0) + c0 + 1] += 0.5 * z
+        w[out + 6 * (r0 + 0) + c0 + 2] -= 0.5 * y
+        w[out + 6 * (r0 + 1) + c0 + 0] -= 0.5 * z
+        w[out + 6 * (r0 + 1) + c0 + 2] += 0.5 * x
+        w[out + 6 * (r0 + 2) + c0 + 0] += 0.5 * y
+        w[out + 6 * (r0 + 2) + c0 + 1] -= 0.5 * x
+
+
+@njit(inline="always", **_OPTS)
+def _world_motion_subspace(m: np.ndarray, j: int, w: np.ndarray, pose: int, out: int) -> None:
+    """S_j in world coordinates: [z; p x z] (revolute) or [0; z] (prismatic)."""
+    zx, zy, zz = w[pose + 2], w[pose + 5], w[pose + 8]
+    if m[HEADER + STRIDE * j + KIND] != 0.0:
+        w[out], w[out + 1], w[out + 2], w[out + 3], w[out + 4], w[out + 5] = 0.0, 0.0, 0.0, zx, zy, zz
+    else:
+        px, py, pz = w[pose + 9], w[pose + 10], w[pose + 11]
+        w[out], w[out + 1], w[out + 2] = zx, zy, zz
+        w[out + 3] = py * zz - pz * zy
+        w[out + 4] = pz * zx - px * zz
+        w[out + 5] = px * zy - py * zx
+
+
+@njit(inline="always", **_OPTS)
+def _dot6(w: np.ndarray, a: int, b: int) -> float:
+    return w[a] * w[b] + w[a + 1] * w[b + 1] + w[a + 2] * w[b + 2] + w[a + 3] * w[b + 3] + w[a + 4] * w[b + 4] + (
+        w[a + 5] * w[b + 5]
+    )
+
+
+@njit(inline="always", **_OPTS)
+def coriolis_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> None:
+    """The Christoffel-consistent Vm(q, qd) in O(n d), d the depth (Echeandia and Wensing 2021, Alg. 2).
+
+    World frame: v_i = v_p + S_i qd_i, Sdot_i = v_i x S_i; composite I^c and B^c summed up the tree;
+    for j and each ancestor i: C_ij = S_i^T (I^c_j Sdot_j + B^c_j S_j),
+    C_ji = Sdot_i^T I^c_j S_j + S_i^T B^c_j^T S_j.
+    """
+    n = int(m[0])
+    local, pose, S, Sdot, vel = w0, w0 + 12 * n, w0 + 24 * n, w0 + 30 * n, w0 + 36 * n
+    IC, BC, tmp = w0 + 42 * n, w0 + 78 * n, w0 + 114 * n
+    for i in range(n):
+        parent = int(m[HEADER + STRIDE * i + PARENT])
+        _joint_transform(m, i, q[i], w, local + 12 * i)
+        _world_pose(m, w, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
+        _world_motion_subspace(m, i, w, pose + 12 * i, S + 6 * i)
+        for k in range(6):
+            w[vel + 6 * i + k] = (w[vel + 6 * parent + k] if parent >= 0 else 0.0) + w[S + 6 * i + k] * qd[i]
+        _motion_cross(w, vel + 6 * i, S + 6 * i, Sdot + 6 * i)
+        _world_inertia(m, i, w, pose + 12 * i, tmp, IC + 36 * i)
+        _body_coriolis(w, vel + 6 * i, IC + 36 * i, tmp, BC + 36 * i)
+        for j in range(n):
+            C[i, j] = 0.0
+    f1, f2, f3 = tmp, tmp + 6, tmp + 12
+    for j in range(n - 1, -1, -1):
+        ic, bc, sj, sdj = IC + 36 * j, BC + 36 * j, S + 6 * j, Sdot + 6 * j
+        for r in range(6):
+            a1 = 0.0
+            a2 = 0.0
+            a3 = 0.0
+            for c in range(6):
+                a1 += w[ic + 6 * r + c] * w[sdj + c] + w[bc + 6 * r + c] * w[sj + c]
+                a2 += w[ic + 6 * r + c] * w[sj + c]
+                a3 += w[bc + 6 * c + r] * w[sj + c]
+            w[f1 + r], w[f2 + r], w[f3 + r] = a1, a2, a3
+        C[j, j] = _dot6(w, sj, f1)
+        parent = int(m[HEADER + STRIDE * j + PARENT])
+        i = parent
+        while i >= 0:
+            C[i, j] = _dot6(w, S + 6 * i, f1)
+            C[j, i] = _dot6(w, Sdot + 6 * i, f2) + _dot6(w, S + 6 * i, f3)
+            i = int(m[HEADER + STRIDE * i + PARENT])
+        if parent >= 0:
+            for k in range(36):
+                w[IC + 36 * parent + k] += w[ic + k]
+                w[BC + 36 * parent + k] += w[bc + k]
+
+
+@njit(**_OPTS)
+def coriolis_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> int:
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0:
+        status = _check(qd, n, 2)
+    if status != 0 or C.shape[0] != n or C.shape[1] != n:
+        return status if status != 0 else 4
+    coriolis_core(m, m, HEADER + STRIDE * n, q, qd, C)
+    return 0
+
+
+@njit(parallel=True, **_OPTS)
+def coriolis_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> None:
+    n, count = int(m[0]), q.shape[0]
+    chunks = min(count, 64)
+    for c in prange(chunks):
+        w = np.empty(160 * n + 64)
+        for s in range(c * count // chunks, (c + 1) * count // chunks):
+            coriolis_core(m, w, 0, q[s], qd[s], C[s])
+
+
+# ----- ABA: forward dynamics -------------------------------------------------------------------
+@njit(inline="always", **_OPTS)
+def _motion_matrix(w: np.ndarray, t: int, X: int) -> None:
+    """X = [[E, 0], [-E p^, E]], E = R^T: the 6x6 motion transform parent -> child."""
+    px, py, pz = w[t + 9], w[t + 10], w[t + 11]
+    for r in range(3):
+        e0, e1, e2 = w[t + r], w[t + 3 + r], w[t + 6 + r]  # row r of R^T
+        for c in range(3):
+            w[X + 6 * r + c] = w[t + 3 * c + r]
+            w[X + 6 * r + 3 + c] = 0.0
+            w[X + 6 * (r + 3) + 3 + c] = w[t + 3 * c + r]
+        # row r of -E p^: -(e x p)... (E p^)_rc = sum_k E_rk p^_kc
+        w[X + 6 * (r + 3)] = -(e1 * 0.0 + e1 * pz - e2 * py) + 0.0
+        w[X + 6 * (r + 3) + 1] = -(-e0 * pz + e2 * px)
+        w[X + 6 * (r + 3) + 2] = -(e0 * py - e1 * px)
+
+
+@njit(inline="always", **_OPTS)
+def aba_core(
+    m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray
+) -> None:
+    """qdd = M^-1 (tau - Vm qd - F - G) by the articulated-body algorithm (Featherstone 7.3).
+
+    The armature G^2 Jm adds to D_i = S^T I^A_i S, as the rotor's inertia on the joint.
+    """
+    n = int(m[0])
+    transforms, vel, bias, IA, pA, U, acc = w0, w0 + 12 * n, w0 + 18 * n, w0 + 24 * n, w0 + 60 * n, w0 + 66 * n, w0 + 72 * n
+    Du, tmp = w0 + 78 * n, w0 + 80 * n
+    X, T1 = tmp, tmp + 36
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        parent = int(m[b + PARENT])
+        t, v, c = transforms + 12 * i, vel + 6 * i, bias + 6 * i
+        _joint_transform(m, i, q[i], w, t)
+        if parent < 0:
+            for k in range(6):
+                w[v + k] = 0.0
+        else:
+            _motion_to_child(w, t, w, vel + 6 * parent, w, v)
+        rate = qd[i]
+        for k in range(6):
+            w[c + k] = 0.0
+        if m[b + KIND] != 0.0:
+            w[c + 3] = w[v + 1] * rate
+            w[c + 4] = -w[v] * rate
+            w[v + 5] += rate
+        else:
+            w[c] = w[v + 1] * rate
+            w[c + 1] = -w[v] * rate
+            w[c + 3] = w[v + 4] * rate
+            w[c + 4] = -w[v + 3] * rate
+            w[v + 2] += rate
+        # I^A = I (6x6 in body coordinates), p^A = v x* I v
+        unit = T1
+        for k in range(6):
+            for r in range(6):
+                w[unit + r] = 1.0 if r == k else 0.0
+            _inertia_times(m, i, w, unit, w, IA + 36 * i + 6 * k)  # column k (I symmetric: row k)
+        _inertia_times(m, i, w, v, w, unit)
+        wx, wy, wz, vx, vy, vz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
+        kx, ky, kz, lx, ly, lz = w[unit], w[unit + 1], w[unit + 2], w[unit + 3], w[unit + 4], w[unit + 5]
+        p = pA + 6 * i
+        w[p] = wy * kz - wz * ky + vy * lz - vz * ly
+        w[p + 1] = wz * kx - wx * kz + vz * lx - vx * lz
+        w[p + 2] = wx * ky - wy * kx + vx * ly - vy * lx
+        w[p + 3] = wy * lz - wz * ly
+        w[p + 4] = wz * lx - wx * lz
+        w[p + 5] = wx * ly - wy * lx
+    for i in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * i
+        axis = 5 if m[b + KIND] != 0.0 else 2
+        ia, p, u = IA + 36 * i, pA + 6 * i, U + 6 * i
+        for k in range(6):
+            w[u + k] = w[ia + 6 * k + axis]
+        D = w[u + axis] + m[b + ARMATURE]
+        value = tau[i] - _friction(m, i, qd[i]) - w[p + axis]
+        w[Du + 2 * i] = D
+        w[Du + 2 * i + 1] = value
+        parent = int(m[b + PARENT])
+        if parent < 0:
+            continue
+        # Ia = I^A - U U^T / D ; pa = p^A + Ia c + U u / D
+        c = bias + 6 * i
+        for r in range(6):
+            for k in range(6):
+                w[ia + 6 * r + k] -= w[u + r] * w[u + k] / D
+        for r in range(6):
+            total = w[p + r] + w[u + r] * value / D
+            for k in range(6):
+                total += w[ia + 6 * r + k] * w[c + k]
+            w[T1 + r] = total
+        _add_force_to_parent(w, transforms + 12 * i, w, T1, w, pA + 6 * parent)
+        # I^A_parent += X^T Ia X
+        _motion_matrix(w, transforms + 12 * i, X)
+        target = IA + 36 * parent
+        for r in range(6):
+            for k in range(6):
+                total = 0.0
+                for l in range(6):
+                    total += w[ia + 6 * r + l] * w[X + 6 * l + k]
+                w[T1 + 6 * r + k] = total
+        for r in range(6):
+            for k in range(6):
+                total = 0.0
+                for l in range(6):
+                    total += w[X + 6 * l + r] * w[T1 + 6 * l + k]
+                w[target + 6 * r + k] += total
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        parent = int(m[b + PARENT])
+        a, t = acc + 6 * i, transforms + 12 * i
+        if parent < 0:
+            for k in range(3):
+                w[T1 + k] = 0.0
+                w[T1 + 3 + k] = -m[GRAVITY + k]
+            _motion_to_child(w, t, w, T1, w, a)
+        else:
+            _motion_to_child(w, t, w, acc + 6 * parent, w, a)
+        for k in range(6):
+            w[a + k] += w[bias + 6 * i + k]
+        axis = 5 if m[b + KIND] != 0.0 else 2
+        u = U + 6 * i
+        value = w[Du + 2 * i + 1] - _dot6(w, u, a)
+        result = value / w[Du + 2 * i]
+        qdd[i] = result
+        w[a + axis] += result
+
+
+@njit(**_OPTS)
+def aba_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> int:
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0:
+        status = _check(qd, n, 2)
+    if status == 0:
+        status = _check(tau, n, 3)
+    if status != 0 or qdd.shape[0] != n:
+        return status if status != 0 else 4
+    aba_core(m, m, HEADER + STRIDE * n, q, qd, tau, qdd)
+    return 0
+
+
+@njit(parallel=True, **_OPTS)
+def aba_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> None:
+    n, count = int(m[0]), q.shape[0]
+    chunks = min(count, 64)
+    for c in prange(chunks):
+        w = np.empty(160 * n + 64)
+        for s in range(c * count // chunks, (c + 1) * count // chunks):
+            aba_core(m, w, 0, q[s], qd[s], tau[s], qdd[s])
+
+
+# ----- energies ----------------------------------------------------------------------------------
+@njit(inline="always", **_OPTS)
+def energy_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
+    """out[0] = K = 1/2 sum v_i^T I_i v_i + 1/2 sum G^2 Jm qd^2; out[1] = P = -g . sum (m p_w + R_w h)."""
+    n = int(m[0])
+    local, pose, vel, tmp = w0, w0 + 12 * n, w0 + 24 * n, w0 + 30 * n
+    kinetic = 0.0
+    potential = 0.0
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        parent = int(m[b + PARENT])
+        t = local + 12 * i
+        _joint_transform(m, i, q[i], w, t)
+        _world_pose(m, w, t, pose + 12 * parent, pose + 12 * i, parent >= 0)
+        v = vel + 6 * i
+        if parent < 0:
+            for k in range(6):
+                w[v + k] = 0.0
+        else:
+            _motion_to_child(w, t, w, vel + 6 * parent, w, v)
+        w[v + (5 if m[b + KIND] != 0.0 else 2)] += qd[i]
+        _inertia_times(m, i, w, v, w, tmp)
+        kinetic += 0.5 * (_dot6(w, v, tmp) + m[b + ARMATURE] * qd[i] * qd[i])
+        o = pose + 12 * i
+        mass = m[b + MASS]
+        for r in range(3):
+            moment = mass * w[o + 9 + r]
+            for k in range(3):
+                moment += w[o + 3 * r + k] * m[b + FIRST_MOMENT + k]
+            potential -= m[GRAVITY + r] * moment
+    out[0] = kinetic
+    out[1] = potential
+
+
+@njit(**_OPTS)
+def energy_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0:
+        status = _check(qd, n, 2)
+    if status != 0:
+        return status
+    energy_core(m, m, HEADER + STRIDE * n, q, qd, out)
+    return 0
+
+
+@njit(parallel=True, **_OPTS)
+def energy_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
+    n, count = int(m[0]), q.shape[0]
+    chunks = min(count, 64)
+    for c in prange(chunks):
+        w = np.empty(40 * n + 32)
+        for s in range(c * count // chunks, (c + 1) * count // chunks):
+            energy_core(m, w, 0, q[s], qd[s], out[s])

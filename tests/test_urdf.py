@@ -1,0 +1,511 @@
+"""load_urdf: the example-robot-data arms against Pinocchio, hand-written URDF files, every error path."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
+
+import armdyn as ad
+from armdyn import ModelError, load_urdf
+from tests.conftest import ROBOTS, URDFS, pinocchio_pair
+
+ALLEGRO = ROBOTS / "allegro_hand_description" / "urdf"
+EXPECTED_N = {"panda.urdf": 9, "ur5_robot.urdf": 6}
+
+# A valid, fully populated inertia (principal moments satisfy the triangle inequality)
+GOOD_INERTIA = "ixx='0.02' iyy='0.03' izz='0.04' ixy='0.001' ixz='-0.002' iyz='0.0015'"
+LIMIT = "<limit lower='-2' upper='2' effort='10' velocity='1'/>"
+
+
+# ----- helpers to write small URDF files ---------------------------------------------------------------------
+def _link(name: str, mass: float | str = 1.0, xyz: str = "0.01 0.02 0.03", rpy: str = "0.1 -0.2 0.3",
+          inertia: str = GOOD_INERTIA, extra: str = "") -> str:  # fmt: skip
+    return (
+        f"<link name='{name}'><inertial><origin xyz='{xyz}' rpy='{rpy}'/><mass value='{mass}'/>"
+        f"<inertia {inertia}/></inertial>{extra}</link>"
+    )
+
+
+def _joint(name: str, parent: str, child: str, kind: str = "revolute", xyz: str = "0.1 0.05 0.2",
+           rpy: str = "0.3 0.1 -0.2", axis: str = "0 0 1", extra: str = LIMIT) -> str:  # fmt: skip
+    return (
+        f"<joint name='{name}' type='{kind}'><parent link='{parent}'/><child link='{child}'/>"
+        f"<origin xyz='{xyz}' rpy='{rpy}'/><axis xyz='{axis}'/>{extra}</joint>"
+    )
+
+
+def _robot(*parts: str) -> str:
+    return "<?xml version='1.0'?>\n<robot name='test'>\n" + "\n".join(parts) + "\n</robot>\n"
+
+
+def _write(tmp_path: Path, text: str, name: str = "test.urdf") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _load_quiet(path: Path, strict: bool = True) -> ad.Robot:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_urdf(path, strict=strict)
+
+
+def _pinocchio(path: Path, arm: ad.Robot) -> tuple[pin.Model, list[int]]:
+    model = pin.buildModelFromUrdf(str(path))
+    return model, [model.getJointId(name) for name in arm.joint_names]
+
+
+def _pin_q(model: pin.Model, ids: list[int], q: np.ndarray) -> np.ndarray:
+    """Pinocchio's configuration for armdyn's q (continuous joints are (cos, sin) there)."""
+    config = pin.neutral(model)
+    for value, joint_id in zip(q, ids, strict=True):
+        joint = model.joints[joint_id]
+        if joint.nq == 2:
+            config[joint.idx_q : joint.idx_q + 2] = np.cos(value), np.sin(value)
+        else:
+            config[joint.idx_q] = value
+    return config
+
+
+def _assert_fk_matches_pinocchio(path: Path, arm: ad.Robot, count: int = 3, seed: int = 0) -> None:
+    model, ids = _pinocchio(path, arm)
+    data = model.createData()
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        q = rng.uniform(-1.5, 1.5, arm.n)
+        pin.forwardKinematics(model, data, _pin_q(model, ids, q))
+        transforms = arm.link_transforms(q)
+        for i, joint_id in enumerate(ids):
+            assert_allclose(transforms[i], data.oMi[joint_id].homogeneous, rtol=0, atol=1e-12)
+
+
+def _assert_inertias_match_pinocchio(path: Path, arm: ad.Robot) -> None:
+    model, ids = _pinocchio(path, arm)
+    for link, joint_id in zip(arm.links, ids, strict=True):
+        expected = model.inertias[joint_id]
+        assert link.inertial.mass == pytest.approx(expected.mass, abs=1e-12), link.name
+        assert_allclose(link.inertial.com, expected.lever, rtol=0, atol=1e-12, err_msg=link.name)
+        assert_allclose(link.inertial.inertia, expected.inertia, rtol=0, atol=1e-12, err_msg=link.name)
+
+
+# ----- Panda and UR5 against Pinocchio -----------------------------------------------------------------------
+def test_joint_count_and_names_match_pinocchio(urdf_path: Path) -> None:
+    arm, model, _, _, _ = pinocchio_pair(urdf_path)
+    assert arm.n == EXPECTED_N[urdf_path.name]
+    assert arm.n == model.nv == model.njoints - 1
+    assert arm.joint_names == list(model.names)[1:]
+
+
+def test_joint_kinds_match_pinocchio(urdf_path: Path) -> None:
+    arm, model, _, _, _ = pinocchio_pair(urdf_path)
+    letters = {"revolute": "R", "prismatic": "P"}
+    for name, kind in zip(arm.joint_names, arm.kinds, strict=True):
+        shortname = model.joints[model.getJointId(name)].shortname()
+        assert shortname.startswith("JointModel" + letters[kind]), (name, kind, shortname)
+
+
+def test_panda_fingers_are_prismatic() -> None:
+    arm = _load_quiet(URDFS["panda"])
+    assert arm.kinds == ["revolute"] * 7 + ["prismatic"] * 2
+    assert arm.joint_names[7:] == ["panda_finger_joint1", "panda_finger_joint2"]
+    assert_array_equal(arm.parents, [-1, 0, 1, 2, 3, 4, 5, 6, 6])  # both fingers hang from the hand
+    assert not arm.is_chain
+
+
+def test_ur5_is_an_all_revolute_chain() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no mimic joints, no odd inertias: no warning at all
+        arm = load_urdf(URDFS["ur5"])
+    assert arm.kinds == ["revolute"] * 6
+    assert arm.is_chain
+
+
+def test_panda_mimic_joint_warns() -> None:
+    with pytest.warns(UserWarning, match=r"panda_finger_joint2") as record:
+        arm = load_urdf(URDFS["panda"])
+    assert any("mimic" in str(w.message) for w in record)
+    assert not any("panda_finger_joint1" in str(w.message) for w in record)  # only the mimicking joint is named
+    assert arm.n == 9  # loaded as an independent joint
+
+
+def test_limits_and_damping_match_pinocchio(urdf_path: Path) -> None:
+    arm, model, _, q_index, v_index = pinocchio_pair(urdf_path)
+    assert_array_equal(arm.qlim[0], model.lowerPositionLimit[q_index])
+    assert_array_equal(arm.qlim[1], model.upperPositionLimit[q_index])
+    assert_allclose(arm.viscous_friction, model.damping[v_index], rtol=0, atol=1e-15)
+    assert_allclose(arm.coulomb_friction[:, 0], model.friction[v_index], rtol=0, atol=1e-15)
+    assert_allclose(arm.coulomb_friction[:, 1], -model.friction[v_index], rtol=0, atol=1e-15)
+
+
+def test_total_mass_matches_pinocchio(urdf_path: Path) -> None:
+    arm, model, _, _, _ = pinocchio_pair(urdf_path)
+    total = sum(link.inertial.mass for link in arm.links)
+    expected = sum(model.inertias[i].mass for i in range(1, model.njoints))  # moving joints only, not the universe
+    assert total == pytest.approx(expected, rel=1e-14)
+    assert total > 10.0  # both arms weigh well over 10 kg
+
+
+def test_link_inertias_match_pinocchio(urdf_path: Path) -> None:
+    """Mass, centre of mass and inertia about it, per moving joint: checks the merging of fixed-joint children."""
+    arm = _load_quiet(urdf_path)
+    _assert_inertias_match_pinocchio(urdf_path, arm)
+
+
+# ----- small hand-written files --------------------------------------------------------------------------------
+def test_continuous_joint_has_one_unlimited_coordinate(tmp_path: Path) -> None:
+    path = _write(tmp_path, _robot(_link("base"), _link("arm"), _joint("spin", "base", "arm", "continuous", extra="")))
+    arm = load_urdf(path)
+    assert arm.n == 1
+    assert arm.kinds == ["revolute"]
+    assert_array_equal(arm.qlim, [[-np.inf], [np.inf]])
+    _assert_fk_matches_pinocchio(path, arm)
+    # one coordinate, the angle: a full turn comes back to the same pose, beyond +-pi is fine
+    assert_allclose(arm.link_transforms([0.4 + 2 * np.pi]), arm.link_transforms([0.4]), atol=1e-12)
+
+
+def test_continuous_joint_ignores_a_limit_element(tmp_path: Path) -> None:
+    joint = _joint("spin", "base", "arm", "continuous", extra="<limit effort='1' velocity='1'/>")
+    arm = load_urdf(_write(tmp_path, _robot(_link("base"), _link("arm"), joint)))
+    assert_array_equal(arm.qlim, [[-np.inf], [np.inf]])
+
+
+def test_prismatic_joint_with_limits(tmp_path: Path) -> None:
+    limit = "<limit lower='-0.1' upper='0.3' effort='10' velocity='1'/>"
+    joint = _joint("slide", "base", "carriage", "prismatic", axis="0 1 0", extra=limit)
+    path = _write(tmp_path, _robot(_link("base"), _link("carriage"), joint))
+    arm = load_urdf(path)
+    assert arm.kinds == ["prismatic"]
+    assert_array_equal(arm.qlim, [[-0.1], [0.3]])
+    _assert_fk_matches_pinocchio(path, arm)
+    # moving by dq translates the link along its own y axis, without rotating it
+    t0, t1 = arm.link_transforms([0.0])[0], arm.link_transforms([0.25])[0]
+    assert_allclose(t1[:3, :3], t0[:3, :3], atol=1e-15)
+    assert_allclose(t1[:3, 3] - t0[:3, 3], 0.25 * t0[:3, 1], atol=1e-15)
+
+
+def test_branching_tree(tmp_path: Path) -> None:
+    """Two children of one link; the numbering is depth first, children in file order."""
+    text = _robot(
+        _link("root"),
+        _link("trunk"),
+        _link("left"),
+        _link("right", mass=2.0),
+        _link("left_tip", mass=0.5),
+        _joint("j_trunk", "root", "trunk"),
+        _joint("j_left", "trunk", "left", axis="1 0 0"),
+        _joint("j_right", "trunk", "right", "prismatic", xyz="-0.1 0.2 0", axis="0 0.6 0.8"),
+        _joint("j_left_tip", "left", "left_tip", "continuous", axis="0 1 0", extra=""),
+    )
+    path = _write(tmp_path, text)
+    arm = load_urdf(path)
+    assert arm.joint_names == ["j_trunk", "j_left", "j_left_tip", "j_right"]
+    assert_array_equal(arm.parents, [-1, 0, 1, 0])
+    assert not arm.is_chain
+    assert_array_equal(arm.ancestors[3], [True, False, False, True])
+    model, ids = _pinocchio(path, arm)
+    for i, joint_id in enumerate(ids):  # same parent, by name
+        parent = arm.parents[i]
+        expected = model.names[model.parents[joint_id]]
+        assert (arm.joint_names[parent] if parent >= 0 else "universe") == expected
+    _assert_fk_matches_pinocchio(path, arm)
+    _assert_inertias_match_pinocchio(path, arm)
+
+
+def test_fixed_joints_are_merged_into_the_moving_parent(tmp_path: Path) -> None:
+    """moving j1 -> b =fixed=> c =fixed=> e -> moving j2 -> d, a fixed sensor leaf on d, a fixed plate on the root."""
+    text = _robot(
+        _link("a", mass=5.0),
+        _link("b", mass=1.0),
+        _link("c", mass=0.7, xyz="0.05 -0.02 0.1", rpy="0.5 0.4 -0.3"),
+        _link("e", mass=0.3, xyz="-0.03 0.01 0.02", rpy="-0.2 0.1 0.9"),
+        _link("d", mass=1.2),
+        _link("sensor", mass=0.2, xyz="0 0 0.01", rpy="0 0 0"),
+        _link("plate", mass=3.0),
+        _joint("j1", "a", "b"),
+        _joint("f1", "b", "c", "fixed", xyz="0.2 0.1 -0.05", rpy="0.7 -0.3 0.2", extra=""),
+        _joint("f2", "c", "e", "fixed", xyz="0.0 0.15 0.05", rpy="-0.4 0.2 0.6", extra=""),
+        _joint("j2", "e", "d", axis="0 1 0"),
+        _joint("f3", "d", "sensor", "fixed", extra=""),
+        _joint("f0", "a", "plate", "fixed", extra=""),
+    )
+    path = _write(tmp_path, text)
+    arm = load_urdf(path)
+    assert arm.joint_names == ["j1", "j2"]
+    assert_array_equal(arm.parents, [-1, 0])
+    assert arm.links[0].inertial.mass == pytest.approx(1.0 + 0.7 + 0.3)
+    assert arm.links[1].inertial.mass == pytest.approx(1.2 + 0.2)
+    _assert_fk_matches_pinocchio(path, arm)
+    _assert_inertias_match_pinocchio(path, arm)
+
+
+def test_dynamics_damping_and_friction(tmp_path: Path) -> None:
+    joint = _joint("j", "a", "b", extra=LIMIT + "<dynamics damping='0.5' friction='0.2'/>")
+    arm = load_urdf(_write(tmp_path, _robot(_link("a"), _link("b"), joint)))
+    assert_array_equal(arm.viscous_friction, [0.5])
+    assert_array_equal(arm.coulomb_friction, [[0.2, -0.2]])
+
+
+def test_no_dynamics_element_means_no_friction(tmp_path: Path) -> None:
+    arm = load_urdf(_write(tmp_path, _robot(_link("a"), _link("b"), _joint("j", "a", "b"))))
+    assert_array_equal(arm.viscous_friction, [0.0])
+    assert_array_equal(arm.coulomb_friction, [[0.0, 0.0]])
+
+
+def test_missing_package_mesh_is_ignored(tmp_path: Path) -> None:
+    mesh = "<geometry><mesh filename='package://no_such_package/meshes/part.stl' scale='1 1 1'/></geometry>"
+    visual = f"<visual><origin xyz='0 0 0'/>{mesh}</visual><collision>{mesh}</collision>"
+    path = _write(tmp_path, _robot(_link("a", extra=visual), _link("b", extra=visual), _joint("j", "a", "b")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        arm = load_urdf(path)
+    assert arm.n == 1
+    assert arm.links[0].inertial.mass == 1.0
+
+
+def test_link_without_inertial_is_massless(tmp_path: Path) -> None:
+    text = _robot("<link name='a'/>", "<link name='b'/>", _joint("j", "a", "b"))
+    arm = load_urdf(_write(tmp_path, text))
+    assert arm.links[0].inertial.mass == 0.0
+    assert_array_equal(arm.links[0].inertial.inertia, np.zeros((3, 3)))
+    assert not arm.has_dynamics
+
+
+def test_non_unit_axis_warns_and_is_normalised(tmp_path: Path) -> None:
+    path = _write(tmp_path, _robot(_link("a"), _link("b"), _joint("j", "a", "b", axis="0 0 2")))
+    with pytest.warns(UserWarning, match=r"'j'.*not a unit vector"):
+        arm = load_urdf(path)
+    assert_allclose(arm.links[0].joint.axis, [0.0, 0.0, 1.0])
+
+
+def test_gravity_option(tmp_path: Path) -> None:
+    path = _write(tmp_path, _robot(_link("a"), _link("b"), _joint("j", "a", "b")))
+    assert_array_equal(load_urdf(path).gravity, [0.0, 0.0, -9.81])
+    assert_array_equal(load_urdf(path, gravity=(0.0, -9.8, 0.0)).gravity, [0.0, -9.8, 0.0])
+
+
+# ----- error paths ------------------------------------------------------------------------------------------------
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(ModelError, match=r"nowhere\.urdf.*no such URDF file"):
+        load_urdf(tmp_path / "nowhere.urdf")
+
+
+def test_a_directory_is_not_a_file(tmp_path: Path) -> None:
+    with pytest.raises(ModelError, match=r"no such URDF file"):
+        load_urdf(tmp_path)
+
+
+def test_malformed_xml_unclosed_tag(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _joint("j", "a", "b")).replace("</link>", "", 1)  # first <link> unclosed
+    with pytest.raises(ModelError, match=r"malformed XML"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_malformed_xml_missing_closing_robot_tag(tmp_path: Path) -> None:
+    """A file cut short (no </robot>) is malformed XML and must not load as if it were whole."""
+    text = _robot(_link("a"), _link("b"), _joint("j", "a", "b")).replace("</robot>", "")
+    with pytest.raises(ModelError, match=r"malformed XML"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_empty_file(tmp_path: Path) -> None:
+    with pytest.raises(ModelError, match=r"malformed XML"):
+        load_urdf(_write(tmp_path, ""))
+
+
+def test_floating_joint(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _joint("free", "a", "b", "floating", extra=""))
+    with pytest.raises(ModelError, match=r"joint 'free' is floating"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_planar_joint(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _joint("flat", "a", "b", "planar", extra=""))
+    with pytest.raises(ModelError, match=r"joint 'flat' is planar"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_kinematic_loop(tmp_path: Path) -> None:
+    """Link 'c' is the child of two joints."""
+    text = _robot(
+        _link("a"), _link("b"), _link("c"), _joint("j1", "a", "b"), _joint("j2", "a", "c"), _joint("j3", "b", "c")
+    )
+    with pytest.raises(ModelError, match=r"joint 'j3'.*link 'c' already has parent joint 'j2'.*loop"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_joints_forming_a_cycle_have_no_root(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _joint("j1", "a", "b"), _joint("j2", "b", "a"))
+    with pytest.raises(ModelError, match=r"root link"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_joint_refers_to_undefined_link(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _joint("j1", "a", "b"), _joint("j2", "b", "ghost"))
+    with pytest.raises(ModelError, match=r"joint 'j2' refers to link 'ghost'"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_negative_mass(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b", mass=-1.0), _joint("j", "a", "b"))
+    with pytest.raises(ModelError, match=r"link 'b'.*mass must be non-negative"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_negative_mass_behind_a_fixed_joint(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _link("c", mass=-0.5), _joint("j", "a", "b"), _joint("f", "b", "c", "fixed"))
+    with pytest.raises(ModelError, match=r"link 'c'.*mass must be non-negative"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_inertia_not_positive_semidefinite(tmp_path: Path) -> None:
+    inertia = "ixx='-1' iyy='1' izz='1' ixy='0' ixz='0' iyz='0'"
+    text = _robot(_link("a"), _link("b", inertia=inertia), _joint("j", "a", "b"))
+    with pytest.raises(ModelError, match=r"link 'b'.*not positive semi-definite"):
+        load_urdf(_write(tmp_path, text))
+
+
+TRIANGLE_BREAKER = "ixx='1' iyy='1' izz='3' ixy='0' ixz='0' iyz='0'"
+
+
+def test_triangle_inequality_rejected_by_default(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b", inertia=TRIANGLE_BREAKER, rpy="0 0 0"), _joint("j", "a", "b"))
+    with pytest.raises(ModelError, match=r"link 'b'.*triangle inequality.*strict=False"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_triangle_inequality_accepted_with_strict_false(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b", inertia=TRIANGLE_BREAKER, rpy="0 0 0"), _joint("j", "a", "b"))
+    with pytest.warns(UserWarning, match=r"link 'b'.*triangle inequality"):
+        arm = load_urdf(_write(tmp_path, text), strict=False)
+    assert_array_equal(arm.links[0].inertial.inertia, np.diag([1.0, 1.0, 3.0]))  # kept as given
+
+
+def test_triangle_inequality_behind_a_fixed_joint(tmp_path: Path) -> None:
+    text = _robot(
+        _link("a"), _link("b"), _link("c", inertia=TRIANGLE_BREAKER), _joint("j", "a", "b"),
+        _joint("f", "b", "c", "fixed", extra=""),
+    )  # fmt: skip
+    path = _write(tmp_path, text)
+    with pytest.raises(ModelError, match=r"link 'c'.*strict=False"):
+        load_urdf(path)
+    with pytest.warns(UserWarning, match=r"link 'c'"):
+        load_urdf(path, strict=False)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (_robot(_link("a"), _link("b"), _joint("j", "a", "b", "spherical", extra="")), "joint 'j' has unknown type"),
+        (_robot(_link("a")), "no revolute, continuous or prismatic joint"),
+        (_robot(_link("a"), _link("b"), _joint("f", "a", "b", "fixed", extra="")), "no revolute"),
+        (_robot(_link("a"), _link("b")), r"one root link, found \['a', 'b'\]"),
+        (_robot(_link("a"), _link("b"), _joint("j", "a", "b", axis="0 0 0")), "'j'.*axis.*no direction"),
+        (
+            _robot(_link("a"), _link("b"), _link("c"), _joint("j", "a", "b"), _joint("j", "b", "c")),
+            "'j'.*unique",
+        ),
+        (
+            _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra="<limit lower='1' upper='-1'/>")),
+            "'j'.*lower <= upper",
+        ),
+        (
+            _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra=LIMIT + "<dynamics damping='-1'/>")),
+            "'j'.*viscous friction",
+        ),
+        (
+            _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra=LIMIT + "<dynamics friction='-1'/>")),
+            "'j'.*Coulomb friction",
+        ),
+    ],
+    ids=[
+        "unknown-type",
+        "no-joint",
+        "only-fixed",
+        "two-roots",
+        "zero-axis",
+        "duplicate-joint",
+        "bad-limits",
+        "negative-damping",
+        "negative-friction",
+    ],
+)
+def test_other_invalid_models(tmp_path: Path, text: str, match: str) -> None:
+    with pytest.raises(ModelError, match=match):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_duplicate_link_names_are_rejected(tmp_path: Path) -> None:
+    """Two different definitions of link 'b': urdfdom (and so Pinocchio) refuses the file; armdyn must not pick one."""
+    text = _robot(_link("a"), _link("b", mass=1.0), _link("b", mass=9.0), _joint("j", "a", "b"))
+    with pytest.raises(ModelError, match=r"'b'"):
+        load_urdf(_write(tmp_path, text))
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "",
+        "<robot name='t'><link name='a'>",
+        "<not-a-robot/>",
+        "plain text, not XML at all",
+        _robot(_link("a"), _link("b", mass="heavy"), _joint("j", "a", "b")),
+        _robot(_link("a"), _link("b"), _joint("j", "a", "b", xyz="0 zero 0")),
+        _robot(_link("a"), _link("b"), _joint("j", "a", "b", axis="0 0")),
+        _robot(_link("a"), _link("b", inertia=TRIANGLE_BREAKER.replace("'3'", "'x'")), _joint("j", "a", "b")),
+        _robot(_link("a"), _link("b"), "<joint name='j' type='revolute'><child link='b'/></joint>"),
+        _robot(_link("a"), _link("b"), "<joint type='revolute'><parent link='a'/><child link='b'/></joint>"),
+    ],
+    ids=[
+        "empty",
+        "unclosed",
+        "wrong-root",
+        "not-xml",
+        "bad-mass",
+        "bad-origin",
+        "short-axis",
+        "bad-inertia",
+        "no-parent",
+        "no-joint-name",
+    ],
+)
+def test_no_raw_parser_exception_leaks(tmp_path: Path, text: str) -> None:
+    """Whatever is wrong with the file, the caller sees a ModelError and nothing else."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ModelError) as info:
+            load_urdf(_write(tmp_path, text))
+    assert isinstance(info.value, ValueError)
+    assert str(info.value)
+
+
+# ----- the Allegro hand: CAD inertias that break the triangle inequality ----------------------------------------
+ALLEGRO_FILES = sorted(ALLEGRO.glob("*.urdf"))
+ALLEGRO_BAD_LINKS = {"link_3.0", "link_7.0", "link_11.0", "link_15.0"}
+
+
+def test_allegro_files_exist() -> None:
+    assert [path.name for path in ALLEGRO_FILES] == ["allegro_left_hand.urdf", "allegro_right_hand.urdf"]
+
+
+@pytest.mark.parametrize("path", ALLEGRO_FILES, ids=lambda path: path.stem)
+def test_allegro_strict_load_fails(path: Path) -> None:
+    with pytest.raises(ModelError, match=r"link 'link_(3|7|11|15)\.0'.*triangle inequality.*strict=False"):
+        load_urdf(path)
+
+
+@pytest.mark.parametrize("path", ALLEGRO_FILES, ids=lambda path: path.stem)
+def test_allegro_loads_with_strict_false(path: Path) -> None:
+    with pytest.warns(UserWarning, match=r"triangle inequality") as record:
+        arm = load_urdf(path, strict=False)
+    named = {str(w.message).split("'")[1] for w in record if "triangle inequality" in str(w.message)}
+    assert named == ALLEGRO_BAD_LINKS
+    assert arm.n == 16
+    assert arm.kinds == ["revolute"] * 16
+    assert np.count_nonzero(arm.parents == -1) == 4  # four fingers straight from the palm
+    _assert_fk_matches_pinocchio(path, arm, count=2)
+    _assert_inertias_match_pinocchio(path, arm)
