@@ -53,10 +53,7 @@ def body_frames(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:
     align = [_homogeneous(_rotation_onto(link.joint.axis)) for link in robot.links]
     placements, link_in_body = [], []
     for i, link in enumerate(robot.links):
-        if link.parent < 0:
-            before = robot.base
-        else:
-            before = link_in_body[link.parent]
+        before = robot.base if link.parent < 0 else link_in_body[link.parent]
         placements.append(before @ link.joint.placement @ align[i])
         link_in_body.append(np.linalg.inv(align[i]) @ link.joint.frame_offset)
     return placements, link_in_body

@@ -60,7 +60,7 @@ def _check(x: np.ndarray, n: int, code: int) -> int:
     if x.shape[0] != n:
         return code
     for k in range(n):
-        if not (x[k] - x[k] == 0.0):
+        if x[k] - x[k] != 0.0:  # NaN and infinity fail x - x == 0
             return code + 10
     return 0
 
@@ -534,8 +534,13 @@ def _world_motion_subspace(m: np.ndarray, j: int, w: np.ndarray, pose: int, out:
 
 @njit(inline="always", **_OPTS)
 def _dot6(w: np.ndarray, a: int, b: int) -> float:
-    return w[a] * w[b] + w[a + 1] * w[b + 1] + w[a + 2] * w[b + 2] + w[a + 3] * w[b + 3] + w[a + 4] * w[b + 4] + (
-        w[a + 5] * w[b + 5]
+    return (
+        w[a] * w[b]
+        + w[a + 1] * w[b + 1]
+        + w[a + 2] * w[b + 2]
+        + w[a + 3] * w[b + 3]
+        + w[a + 4] * w[b + 4]
+        + (w[a + 5] * w[b + 5])
     )
 
 
@@ -635,8 +640,8 @@ def aba_core(
     The armature G^2 Jm adds to D_i = S^T I^A_i S, as the rotor's inertia on the joint.
     """
     n = int(m[0])
-    transforms, vel, bias, IA, pA, U, acc = w0, w0 + 12 * n, w0 + 18 * n, w0 + 24 * n, w0 + 60 * n, w0 + 66 * n, w0 + 72 * n
-    Du, tmp = w0 + 78 * n, w0 + 80 * n
+    transforms, vel, bias, IA = w0, w0 + 12 * n, w0 + 18 * n, w0 + 24 * n
+    pA, U, acc, Du, tmp = w0 + 60 * n, w0 + 66 * n, w0 + 72 * n, w0 + 78 * n, w0 + 80 * n
     X, T1 = tmp, tmp + 36
     for i in range(n):
         b = HEADER + STRIDE * i
