@@ -50,7 +50,7 @@ NONLINEAR = WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
 CORIOLIS = WITH_VELOCITY
 GRAVITY_ONLY = WITH_GRAVITY
 
-_OPTS = {"cache": True, "fastmath": False, "error_model": "numpy", "boundscheck": False}
+_OPTS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
 
 
 # ----- small pieces ------------------------------------------------------------------------
@@ -160,72 +160,131 @@ def rnea_core(
     """tau = M qdd + Vm qd + F + G (+ J^T wrench), the parts selected by ``flags`` (Featherstone 5.3).
 
     Forward: v_i = X_i v_p + S qd_i, a_i = X_i a_p + S qdd_i + (X_i v_p) x S qd_i, a_0 = -g;
-    f_i = I_i a_i + v_i x* I_i v_i. Backward: tau_i = S^T f_i (+ armature, friction),
-    f_p += X_i^T f_i.
+    f_i = I_i a_i + v_i x* I_i v_i. Backward: tau_i = S^T f_i (+ armature qdd_i, friction),
+    f_p += X_i^T f_i. Written out in scalars: this is the hot loop of every simulation.
+    Work space per joint at w[w0 + 30 i:]: R (9), p (3), v (6), a (6), f (6).
     """
     n = int(m[0])
-    transforms, vel, acc, force, tmp = w0, w0 + 12 * n, w0 + 18 * n, w0 + 24 * n, w0 + 30 * n
-    use_velocity = (flags & WITH_VELOCITY) != 0
-    use_qdd = (flags & WITH_QDD) != 0
-    g = 1.0 if (flags & WITH_GRAVITY) != 0 else 0.0
+    gscale = 1.0 if (flags & WITH_GRAVITY) != 0 else 0.0
+    vscale = 1.0 if (flags & WITH_VELOCITY) != 0 else 0.0
+    ascale = 1.0 if (flags & WITH_QDD) != 0 else 0.0
+    gx, gy, gz = -gscale * m[GRAVITY], -gscale * m[GRAVITY + 1], -gscale * m[GRAVITY + 2]
     for i in range(n):
         b = HEADER + STRIDE * i
-        parent = int(m[b + PARENT])
-        prismatic = m[b + KIND] != 0.0
-        t = transforms + 12 * i
-        _joint_transform(m, i, q[i], w, t)
-        v, a = vel + 6 * i, acc + 6 * i
-        if parent < 0:
-            for k in range(3):
-                w[tmp + k] = 0.0
-                w[tmp + 3 + k] = -g * m[GRAVITY + k]
-                w[tmp + 6 + k] = 0.0
-                w[tmp + 9 + k] = 0.0
-            _motion_to_child(w, t, w, tmp + 6, w, v)
-            _motion_to_child(w, t, w, tmp, w, a)
+        r = b + ROTATION
+        parent = int(m[b])
+        p00, p01, p02 = m[r], m[r + 1], m[r + 2]
+        p10, p11, p12 = m[r + 3], m[r + 4], m[r + 5]
+        p20, p21, p22 = m[r + 6], m[r + 7], m[r + 8]
+        px, py, pz = m[b + POSITION], m[b + POSITION + 1], m[b + POSITION + 2]
+        qi = q[i]
+        if m[b + KIND] == 0.0:
+            c, s = math.cos(qi), math.sin(qi)
+            r00 = p00 * c + p01 * s
+            r01 = p01 * c - p00 * s
+            r10 = p10 * c + p11 * s
+            r11 = p11 * c - p10 * s
+            r20 = p20 * c + p21 * s
+            r21 = p21 * c - p20 * s
+            prism = 0.0
         else:
-            _motion_to_child(w, t, w, vel + 6 * parent, w, v)
-            _motion_to_child(w, t, w, acc + 6 * parent, w, a)
-        rate = qd[i] if use_velocity else 0.0
-        accel = qdd[i] if use_qdd else 0.0
-        if prismatic:  # (X v_p) x e6 qd = [0; w x e3 qd]
-            w[a + 3] += w[v + 1] * rate
-            w[a + 4] -= w[v] * rate
-            w[a + 5] += accel
-            w[v + 5] += rate
-        else:  # (X v_p) x e3 qd = [w x e3 qd; l x e3 qd]
-            w[a] += w[v + 1] * rate
-            w[a + 1] -= w[v] * rate
-            w[a + 2] += accel
-            w[a + 3] += w[v + 4] * rate
-            w[a + 4] -= w[v + 3] * rate
-            w[v + 2] += rate
-        f = force + 6 * i
-        _inertia_times(m, i, w, a, w, f)
-        if use_velocity:
-            _inertia_times(m, i, w, v, w, tmp)  # momentum [k; l]; v x* [k; l] = [w x k + v x l; w x l]
-            wx, wy, wz, vx, vy, vz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
-            kx, ky, kz, lx, ly, lz = w[tmp], w[tmp + 1], w[tmp + 2], w[tmp + 3], w[tmp + 4], w[tmp + 5]
-            w[f] += wy * kz - wz * ky + vy * lz - vz * ly
-            w[f + 1] += wz * kx - wx * kz + vz * lx - vx * lz
-            w[f + 2] += wx * ky - wy * kx + vx * ly - vy * lx
-            w[f + 3] += wy * lz - wz * ly
-            w[f + 4] += wz * lx - wx * lz
-            w[f + 5] += wx * ly - wy * lx
+            r00, r01, r10, r11, r20, r21 = p00, p01, p10, p11, p20, p21
+            px += qi * p02
+            py += qi * p12
+            pz += qi * p22
+            prism = 1.0
+        r02, r12, r22 = p02, p12, p22
+        o = w0 + 30 * i
+        w[o], w[o + 1], w[o + 2], w[o + 3], w[o + 4], w[o + 5] = r00, r01, r02, r10, r11, r12
+        w[o + 6], w[o + 7], w[o + 8], w[o + 9], w[o + 10], w[o + 11] = r20, r21, r22, px, py, pz
+        if parent >= 0:
+            op = w0 + 30 * parent + 12
+            wx, wy, wz, vx, vy, vz = w[op], w[op + 1], w[op + 2], w[op + 3], w[op + 4], w[op + 5]
+            ax, ay, az, lx, ly, lz = w[op + 6], w[op + 7], w[op + 8], w[op + 9], w[op + 10], w[op + 11]
+        else:
+            wx = wy = wz = vx = vy = vz = ax = ay = az = 0.0
+            lx, ly, lz = gx, gy, gz
+        # l + a x p, v + w x p
+        tx = vx + wy * pz - wz * py
+        ty = vy + wz * px - wx * pz
+        tz = vz + wx * py - wy * px
+        ux = lx + ay * pz - az * py
+        uy = ly + az * px - ax * pz
+        uz = lz + ax * py - ay * px
+        Wx = r00 * wx + r10 * wy + r20 * wz
+        Wy = r01 * wx + r11 * wy + r21 * wz
+        Wz = r02 * wx + r12 * wy + r22 * wz
+        Vx = r00 * tx + r10 * ty + r20 * tz
+        Vy = r01 * tx + r11 * ty + r21 * tz
+        Vz = r02 * tx + r12 * ty + r22 * tz
+        Ax = r00 * ax + r10 * ay + r20 * az
+        Ay = r01 * ax + r11 * ay + r21 * az
+        Az = r02 * ax + r12 * ay + r22 * az
+        Lx = r00 * ux + r10 * uy + r20 * uz
+        Ly = r01 * ux + r11 * uy + r21 * uz
+        Lz = r02 * ux + r12 * uy + r22 * uz
+        rate = vscale * qd[i]
+        acc = ascale * qdd[i]
+        rev = 1.0 - prism
+        # (X v_p) x S qd: revolute [W x e3; V x e3] qd, prismatic [0; W x e3] qd
+        Ax += rev * Wy * rate
+        Ay -= rev * Wx * rate
+        Az += rev * acc
+        Lx += (rev * Vy + prism * Wy) * rate
+        Ly -= (rev * Vx + prism * Wx) * rate
+        Lz += prism * acc
+        Wz += rev * rate
+        Vz += prism * rate
+        w[o + 12], w[o + 13], w[o + 14], w[o + 15], w[o + 16], w[o + 17] = Wx, Wy, Wz, Vx, Vy, Vz
+        w[o + 18], w[o + 19], w[o + 20], w[o + 21], w[o + 22], w[o + 23] = Ax, Ay, Az, Lx, Ly, Lz
+        mass = m[b + MASS]
+        hx, hy, hz = m[b + FIRST_MOMENT], m[b + FIRST_MOMENT + 1], m[b + FIRST_MOMENT + 2]
+        k = b + INERTIA
+        i0, i1, i2, i3, i4, i5 = m[k], m[k + 1], m[k + 2], m[k + 3], m[k + 4], m[k + 5]
+        # momentum of v: kk = Io W + h x V ; ll = m V - h x W
+        kx = i0 * Wx + i1 * Wy + i2 * Wz + hy * Vz - hz * Vy
+        ky = i1 * Wx + i3 * Wy + i4 * Wz + hz * Vx - hx * Vz
+        kz = i2 * Wx + i4 * Wy + i5 * Wz + hx * Vy - hy * Vx
+        llx = mass * Vx - (hy * Wz - hz * Wy)
+        lly = mass * Vy - (hz * Wx - hx * Wz)
+        llz = mass * Vz - (hx * Wy - hy * Wx)
+        # f = I a + v x* momentum
+        w[o + 24] = i0 * Ax + i1 * Ay + i2 * Az + hy * Lz - hz * Ly + Wy * kz - Wz * ky + Vy * llz - Vz * lly
+        w[o + 25] = i1 * Ax + i3 * Ay + i4 * Az + hz * Lx - hx * Lz + Wz * kx - Wx * kz + Vz * llx - Vx * llz
+        w[o + 26] = i2 * Ax + i4 * Ay + i5 * Az + hx * Ly - hy * Lx + Wx * ky - Wy * kx + Vx * lly - Vy * llx
+        w[o + 27] = mass * Lx - (hy * Az - hz * Ay) + Wy * llz - Wz * lly
+        w[o + 28] = mass * Ly - (hz * Ax - hx * Az) + Wz * llx - Wx * llz
+        w[o + 29] = mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx
     if (flags & WITH_WRENCH) != 0:
-        _add_tool_wrench(m, w, force + 6 * int(m[TOOL_LINK]), wrench, tmp)
+        _add_tool_wrench(m, w, w0 + 30 * int(m[TOOL_LINK]) + 24, wrench, w0 + 30 * n)
     for i in range(n - 1, -1, -1):
         b = HEADER + STRIDE * i
-        f = force + 6 * i
-        value = w[f + 5] if m[b + KIND] != 0.0 else w[f + 2]
-        if use_qdd:
-            value += m[b + ARMATURE] * qdd[i]
+        o = w0 + 30 * i
+        nx, ny, nz, fx, fy, fz = w[o + 24], w[o + 25], w[o + 26], w[o + 27], w[o + 28], w[o + 29]
+        prism = m[b + KIND]
+        value = prism * fz + (1.0 - prism) * nz + ascale * m[b + ARMATURE] * qdd[i]
         if (flags & WITH_FRICTION) != 0:
-            value += _friction(m, i, qd[i])
+            d = qd[i]
+            value += m[b + VISCOUS] * d
+            if d > 0.0:
+                value += m[b + COULOMB_POS]
+            elif d < 0.0:
+                value += m[b + COULOMB_NEG]
         tau[i] = value
-        parent = int(m[b + PARENT])
+        parent = int(m[b])
         if parent >= 0:
-            _add_force_to_parent(w, transforms + 12 * i, w, f, w, force + 6 * parent)
+            r00, r01, r02, r10, r11, r12 = w[o], w[o + 1], w[o + 2], w[o + 3], w[o + 4], w[o + 5]
+            r20, r21, r22, px, py, pz = w[o + 6], w[o + 7], w[o + 8], w[o + 9], w[o + 10], w[o + 11]
+            Fx = r00 * fx + r01 * fy + r02 * fz
+            Fy = r10 * fx + r11 * fy + r12 * fz
+            Fz = r20 * fx + r21 * fy + r22 * fz
+            op = w0 + 30 * parent + 24
+            w[op] += r00 * nx + r01 * ny + r02 * nz + py * Fz - pz * Fy
+            w[op + 1] += r10 * nx + r11 * ny + r12 * nz + pz * Fx - px * Fz
+            w[op + 2] += r20 * nx + r21 * ny + r22 * nz + px * Fy - py * Fx
+            w[op + 3] += Fx
+            w[op + 4] += Fy
+            w[op + 5] += Fz
 
 
 @njit(inline="always", **_OPTS)
@@ -241,7 +300,7 @@ def _add_tool_wrench(m: np.ndarray, w: np.ndarray, f: int, wrench: np.ndarray, t
     _add_force_to_parent(w, tmp, w, tmp + 12, w, f)
 
 
-@njit(**_OPTS)
+@njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], int64, float64[::1])", **_OPTS)
 def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> int:
     """One state: tau (checked), the parts chosen by flags; the buffer's scratch is the work space."""
     n = int(m[0])
@@ -256,7 +315,7 @@ def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flag
     return 0
 
 
-@njit(**_OPTS)
+@njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
 def rnea_wrench_one(
     m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, tau: np.ndarray
 ) -> int:
@@ -275,7 +334,12 @@ def rnea_wrench_one(
     return 0
 
 
-@njit(parallel=True, **_OPTS)
+_BATCH_RNEA = (
+    "void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], int64, float64[:, ::1])"
+)
+
+
+@njit(_BATCH_RNEA, parallel=True, **_OPTS)
 def rnea_batch(
     m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, flags: int, tau: np.ndarray
 ) -> None:
@@ -389,7 +453,7 @@ def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarra
             parent = int(m[bj + PARENT])
 
 
-@njit(**_OPTS)
+@njit("int64(float64[::1], float64[::1], float64[:, ::1])", **_OPTS)
 def crba_one(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
     n = int(m[0])
     status = _check(q, n, 1)
@@ -399,7 +463,7 @@ def crba_one(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
     return 0
 
 
-@njit(parallel=True, **_OPTS)
+@njit("void(float64[::1], float64[:, ::1], float64[:, :, ::1])", parallel=True, **_OPTS)
 def crba_batch(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
@@ -592,7 +656,7 @@ def coriolis_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.n
                 w[BC + 36 * parent + k] += w[bc + k]
 
 
-@njit(**_OPTS)
+@njit("int64(float64[::1], float64[::1], float64[::1], float64[:, ::1])", **_OPTS)
 def coriolis_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> int:
     n = int(m[0])
     status = _check(q, n, 1)
@@ -604,7 +668,7 @@ def coriolis_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) ->
     return 0
 
 
-@njit(parallel=True, **_OPTS)
+@njit("void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, :, ::1])", parallel=True, **_OPTS)
 def coriolis_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
@@ -742,7 +806,7 @@ def aba_core(
         w[a + axis] += result
 
 
-@njit(**_OPTS)
+@njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
 def aba_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> int:
     n = int(m[0])
     status = _check(q, n, 1)
@@ -756,7 +820,7 @@ def aba_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: 
     return 0
 
 
-@njit(parallel=True, **_OPTS)
+@njit("void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1])", parallel=True, **_OPTS)
 def aba_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
@@ -800,7 +864,7 @@ def energy_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.nda
     out[1] = potential
 
 
-@njit(**_OPTS)
+@njit("int64(float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
 def energy_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     n = int(m[0])
     status = _check(q, n, 1)
@@ -812,7 +876,7 @@ def energy_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) ->
     return 0
 
 
-@njit(parallel=True, **_OPTS)
+@njit("void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1])", parallel=True, **_OPTS)
 def energy_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)

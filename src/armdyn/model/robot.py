@@ -326,12 +326,12 @@ class Robot:
 
     @property
     def configurations(self) -> dict[str, np.ndarray]:
-        return dict(self._configurations)
+        return {key: value.copy() for key, value in self._configurations.items()}
 
     def configuration(self, name: str) -> np.ndarray:
-        """A named joint configuration (for the PUMA 560: qz, qr, qs, qn)."""
+        """A named joint configuration (for the PUMA 560: qz, qr, qs, qn), as a new array."""
         try:
-            return self._configurations[name]
+            return self._configurations[name].copy()
         except KeyError:
             raise ModelError(
                 f"robot '{self.name}' has no configuration '{name}' (it has {sorted(self._configurations)})"
@@ -340,7 +340,7 @@ class Robot:
     def __getattr__(self, name: str) -> np.ndarray:
         configurations = self.__dict__.get("_configurations", {})
         if name in configurations:
-            return configurations[name]
+            return configurations[name].copy()
         raise AttributeError(f"'Robot' object has no attribute '{name}'")
 
     def __repr__(self) -> str:
@@ -351,6 +351,71 @@ class Robot:
         if key not in self._cache:
             self._cache[key] = build()
         return self._cache[key]
+
+    # ----- dynamics (armdyn.dynamics.engine: compiled kernels) --------------------------------
+    def _engine(self) -> Any:
+        """Compile the arm once; its bound engine methods then shadow these wrappers on the instance."""
+        engine = self.__dict__.get("_compiled_engine")
+        if engine is None:
+            from armdyn.dynamics.engine import Engine
+
+            engine = Engine(self)
+            self.__dict__["_compiled_engine"] = engine
+            for name in Engine.PUBLIC:
+                self.__dict__[name] = getattr(engine, name)
+        return engine
+
+    def __getstate__(self) -> dict[str, Any]:
+        from armdyn.dynamics.engine import Engine
+
+        skip = {"_compiled_engine", *Engine.PUBLIC}
+        return {key: value for key, value in self.__dict__.items() if key not in skip}
+
+    def inverse_dynamics(self, q: Any, qd: Any, qdd: Any, f_ext: Any = None, out: Any = None) -> np.ndarray:
+        """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (RNEA, O(n)), friction and reflected motor
+        inertia included; plus J^T f_ext for a wrench f_ext = [force; moment] the tool exerts
+        (tool frame, about the tool point)."""
+        return self._engine().inverse_dynamics(q, qd, qdd, f_ext, out)
+
+    def forward_dynamics(self, q: Any, qd: Any, tau: Any, out: Any = None) -> np.ndarray:
+        """qdd = M(q)^-1 (tau - N(q, qd)) (ABA, O(n))."""
+        return self._engine().forward_dynamics(q, qd, tau, out)
+
+    def inertia_matrix(self, q: Any, out: Any = None) -> np.ndarray:
+        """M(q), shape (..., n, n) (CRBA), with G^2 Jm on the diagonal."""
+        return self._engine().inertia_matrix(q, out)
+
+    def inertia_matrix_dot(self, q: Any, qd: Any) -> np.ndarray:
+        """dM/dt = Vm + Vm^T, shape (..., n, n)."""
+        return self._engine().inertia_matrix_dot(q, qd)
+
+    def coriolis_matrix(self, q: Any, qd: Any, out: Any = None) -> np.ndarray:
+        """The Christoffel form Vm(q, qd) (3.3.48), (..., n, n): Mdot - 2 Vm is skew symmetric."""
+        return self._engine().coriolis_matrix(q, qd, out)
+
+    def coriolis_vector(self, q: Any, qd: Any, out: Any = None) -> np.ndarray:
+        """V(q, qd) = Vm(q, qd) qd."""
+        return self._engine().coriolis_vector(q, qd, out)
+
+    def gravity_vector(self, q: Any, out: Any = None) -> np.ndarray:
+        """G(q)."""
+        return self._engine().gravity_vector(q, out)
+
+    def friction(self, qd: Any, out: Any = None) -> np.ndarray:
+        """F(qd) = Fv qd + Fd(qd), joint side (G^2 B qd and |G| Tc+ or |G| Tc-)."""
+        return self._engine().friction(qd, out)
+
+    def nonlinear_terms(self, q: Any, qd: Any, out: Any = None) -> np.ndarray:
+        """N(q, qd) = Vm qd + F + G."""
+        return self._engine().nonlinear_terms(q, qd, out)
+
+    def kinetic_energy(self, q: Any, qd: Any) -> Any:
+        """K = 1/2 qd^T M(q) qd: a float for one state, an array (...) for a batch."""
+        return self._engine().kinetic_energy(q, qd)
+
+    def potential_energy(self, q: Any) -> Any:
+        """P(q) = -sum m_i g^T p_ci: a float for one state, an array (...) for a batch."""
+        return self._engine().potential_energy(q)
 
     # ----- kinematics (armdyn.kinematics) ----------------------------------------------
     def link_transforms(self, q: np.ndarray) -> np.ndarray:
