@@ -219,3 +219,20 @@ def test_kernels_equal_pinocchio(urdf_path: object) -> None:
         taup[vi] = tau
         close(arm.forward_dynamics(q, qd, tau), pin.aba(model, data, qp, vp, taup)[vi], 1e-9)
         close(np.array(arm.kinetic_energy(q, qd)), np.array(pin.computeKineticEnergy(model, data, qp, vp)), 1e-9)
+
+
+def test_vectorizable_sin_cos_is_accurate() -> None:
+    from armdyn.dynamics.vectorized import sin_cos
+
+    for x in np.concatenate([np.linspace(-100, 100, 20001), [0.0, np.pi / 4, np.pi / 2, np.pi, -np.pi / 2]]):
+        s, c = sin_cos(x)
+        assert abs(s - np.sin(x)) <= 4e-16 and abs(c - np.cos(x)) <= 4e-16
+
+
+def test_vectorized_batch_equals_the_one_state_kernel() -> None:
+    arm = random_robot(21, 7)
+    rng = np.random.default_rng(2)
+    q, qd, qdd = (rng.uniform(-3, 3, (77, 7)) for _ in range(3))  # not a whole number of blocks
+    batch = arm.inverse_dynamics(q, qd, qdd)
+    for k in (0, 31, 32, 76):
+        close(batch[k], arm.inverse_dynamics(q[k], qd[k], qdd[k]), 1e-13)

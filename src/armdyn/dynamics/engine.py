@@ -1,9 +1,11 @@
 """The public dynamics calls of one Robot: input handling around the compiled kernels.
 
-A one-state call (1-D float64 arrays) goes straight to a Numba kernel that checks shapes
-and finiteness itself and reports a status code; anything else (lists, other dtypes,
-leading batch dimensions) takes the general path, which converts, broadcasts and runs
-one parallel batch kernel over all states.
+A one-state call (1-D C-contiguous float64 arrays) goes straight to a Numba kernel that
+checks shapes and finiteness itself and reports a status code; the kernel signatures
+are explicit, so any other input (lists, other dtypes, leading batch dimensions) fails
+the type match and takes the general path, which converts, checks, broadcasts and runs
+one parallel batch kernel over all states. The fast paths are closures over the compiled
+model, installed on the Robot instance, so a control loop pays one Python call.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from armdyn.dynamics import kernels as K
+from armdyn.dynamics import vectorized as V
 from armdyn.dynamics.compiled import compile_robot
 from armdyn.errors import ModelError
 from armdyn.model.robot import Robot
@@ -44,9 +47,96 @@ class Engine:
         self.robot = robot
         self.n = robot.n
         self.model = compile_robot(robot)
-        self._no_wrench = np.zeros((1, 6))
+        self.inverse_dynamics = self._inverse_dynamics()
+        vector, matrix = (self.n,), (self.n, self.n)
+        self.gravity_vector = self._fast(K.gravity_one, ("q",), vector, self._rnea_batch(K.GRAVITY_ONLY, ("q",)))
+        self.coriolis_vector = self._fast(
+            K.coriolis_vector_one, ("q", "qd"), vector, self._rnea_batch(K.CORIOLIS, ("q", "qd"))
+        )
+        self.nonlinear_terms = self._fast(
+            K.nonlinear_one, ("q", "qd"), vector, self._rnea_batch(K.NONLINEAR, ("q", "qd"))
+        )
+        self.friction = self._fast(K.friction_one, ("qd",), vector, self._batch(K.friction_batch, ("qd",), vector))
+        self.inertia_matrix = self._fast(K.crba_one, ("q",), matrix, self._batch(K.crba_batch, ("q",), matrix))
+        self.coriolis_matrix = self._fast(
+            K.coriolis_one, ("q", "qd"), matrix, self._batch(K.coriolis_batch, ("q", "qd"), matrix)
+        )
+        self.forward_dynamics = self._fast(
+            K.aba_one, ("q", "qd", "tau"), vector, self._batch(K.aba_batch, ("q", "qd", "tau"), vector)
+        )
+        self._energies = self._fast(K.energy_one, ("q", "qd"), (2,), self._batch(K.energy_batch, ("q", "qd"), (2,)))
 
-    # ----- errors and the general path --------------------------------------------------------
+    # ----- building the calls -------------------------------------------------------------------
+    def _fast(
+        self, kernel: Callable[..., int], names: tuple[str, ...], shape: tuple[int, ...], general: Callable
+    ) -> Callable:
+        """A call that tries the one-state kernel first and falls back to the general path."""
+        model, empty, fail, ndarray = self.model, np.empty, self._raise, np.ndarray
+
+        if len(names) == 1:
+
+            def call(a: object, out: np.ndarray | None = None) -> np.ndarray:
+                if a.__class__ is not ndarray or a.ndim != 1:
+                    return general((a,), out)
+                result = empty(shape) if out is None else out
+                try:
+                    status = kernel(model, a, result)
+                except TypeError:  # another argument is not a 1-D float64 array
+                    return general((a,), out)
+                if status:
+                    fail(status, names, shape)
+                return result
+
+        elif len(names) == 2:
+
+            def call(a: object, b: object, out: np.ndarray | None = None) -> np.ndarray:
+                if a.__class__ is not ndarray or a.ndim != 1:
+                    return general((a, b), out)
+                result = empty(shape) if out is None else out
+                try:
+                    status = kernel(model, a, b, result)
+                except TypeError:  # another argument is not a 1-D float64 array
+                    return general((a, b), out)
+                if status:
+                    fail(status, names, shape)
+                return result
+
+        else:
+
+            def call(a: object, b: object, c: object, out: np.ndarray | None = None) -> np.ndarray:
+                if a.__class__ is not ndarray or a.ndim != 1:
+                    return general((a, b, c), out)
+                result = empty(shape) if out is None else out
+                try:
+                    status = kernel(model, a, b, c, result)
+                except TypeError:  # another argument is not a 1-D float64 array
+                    return general((a, b, c), out)
+                if status:
+                    fail(status, names, shape)
+                return result
+
+        return call
+
+    def _inverse_dynamics(self) -> Callable:
+        model, empty, n, fail, kernel, ndarray = self.model, np.empty, self.n, self._raise, K.rnea_one, np.ndarray
+        general = self._rnea_batch(K.INVERSE_DYNAMICS, ("q", "qd", "qdd"))
+
+        def inverse_dynamics(
+            q: object, qd: object, qdd: object, f_ext: object = None, out: np.ndarray | None = None
+        ) -> np.ndarray:
+            if f_ext is None and q.__class__ is ndarray and q.ndim == 1:
+                result = empty(n) if out is None else out
+                try:
+                    status = kernel(model, q, qd, qdd, result)
+                except TypeError:
+                    return general((q, qd, qdd), out)
+                if status:
+                    fail(status, ("q", "qd", "qdd"), (n,))
+                return result
+            return general((q, qd, qdd), out, f_ext)
+
+        return inverse_dynamics
+
     def _raise(self, status: int, names: tuple[str, ...], out_shape: tuple[int, ...]) -> None:
         """A kernel's status code as a ModelError: which argument, and what was expected."""
         code = status % 10
@@ -56,10 +146,11 @@ class Engine:
         expected = {"out": out_shape, "f_ext": (6,)}.get(name, (self.n,))
         raise ModelError(f"{name} must have shape {expected} for '{self.robot.name}' (n = {self.n})")
 
-    def _states(self, names: tuple[str, ...], *values: object) -> tuple[tuple[int, ...], list[np.ndarray]]:
+    # ----- the general path ----------------------------------------------------------------------
+    def _states(self, names: tuple[str, ...], values: tuple[object, ...]) -> tuple[tuple[int, ...], list[np.ndarray]]:
         """Convert, check and broadcast state arguments to (B, n) C arrays; return the batch shape."""
         arrays = []
-        for name, value in zip(names, values, strict=False):
+        for name, value in zip(names, values, strict=True):
             try:
                 array = np.asarray(value, dtype=float)
             except (TypeError, ValueError):
@@ -72,67 +163,13 @@ class Engine:
         try:
             batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
         except ValueError:
-            shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=False))
+            shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
             raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
         flat = [_writable(np.broadcast_to(a, (*batch, self.n))).reshape(-1, self.n) for a in arrays]
         return batch, flat
 
-    def _batched(
-        self,
-        kernel: Callable[..., None],
-        names: tuple[str, ...],
-        values: tuple[object, ...],
-        trailing: tuple[int, ...],
-        out: np.ndarray | None,
-    ) -> np.ndarray:
-        batch, flat = self._states(names, *values)
-        result = self._result(out, (*batch, *trailing))
-        target = result.reshape(-1, *trailing)
-        if target.shape[0]:
-            kernel(self.model, *flat, target)
-        return result
-
-    # ----- the robot equation ------------------------------------------------------------------
-    def inverse_dynamics(
-        self, q: object, qd: object, qdd: object, f_ext: object = None, out: np.ndarray | None = None
-    ) -> np.ndarray:
-        """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q), plus J^T f_ext for a wrench f_ext = [force; moment]
-        that the tool exerts on its surroundings (tool frame, about the tool point). RNEA, O(n)."""
-        if f_ext is None:
-            result = np.empty(self.n) if out is None else out
-            try:
-                status = K.rnea_one(self.model, q, qd, qdd, K.INVERSE_DYNAMICS, result)
-            except TypeError:
-                return self._rnea_general((q, qd, qdd), K.INVERSE_DYNAMICS, None, out)
-            if status:
-                self._raise(status, ("q", "qd", "qdd"), (self.n,))
-            return result
-        return self._rnea_general((q, qd, qdd), K.INVERSE_DYNAMICS | K.WITH_WRENCH, f_ext, out)
-
-    def _rnea_general(self, values: tuple, flags: int, f_ext: object, out: np.ndarray | None) -> np.ndarray:
-        names = ("q", "qd", "qdd")[: len(values)]
-        batch, flat = self._states(names, *values)
-        while len(flat) < 3:
-            flat.append(flat[0])
-        wrench = self._no_wrench
-        if f_ext is not None:
-            wrench = np.asarray(f_ext, dtype=float)
-            if wrench.ndim == 0 or wrench.shape[-1] != 6 or not np.all(np.isfinite(wrench)):
-                raise ModelError(f"f_ext must be a finite wrench [f; moment] of shape (..., 6), got {wrench.shape}")
-            try:
-                wrench_batch = np.broadcast_shapes(wrench.shape[:-1], batch)
-            except ValueError:
-                raise ModelError(f"f_ext batch shape {wrench.shape[:-1]} does not match the states' {batch}") from None
-            if wrench_batch != batch:
-                raise ModelError(f"f_ext batch shape {wrench.shape[:-1]} does not match the states' {batch}")
-            wrench = _writable(np.broadcast_to(wrench, (*batch, 6))).reshape(-1, 6)
-        result = self._result(out, (*batch, self.n))
-        target = result.reshape(-1, self.n)
-        if target.shape[0]:
-            K.rnea_batch(self.model, flat[0], flat[1], flat[2], wrench, flags, target)
-        return result
-
-    def _result(self, out: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
+    @staticmethod
+    def _result(out: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
         if out is None:
             return np.empty(shape)
         if not (
@@ -146,80 +183,53 @@ class Engine:
             raise ModelError(f"out must be a writable C-contiguous float64 array of shape {shape}, got {got}")
         return out
 
-    def _rnea_part(self, flags: int, q: object, qd: object, out: np.ndarray | None) -> np.ndarray:
-        result = np.empty(self.n) if out is None else out
-        try:
-            status = K.rnea_one(self.model, q, qd, qd, flags, result)
-        except TypeError:
-            values = (q,) if qd is q else (q, qd)
-            return self._rnea_general(values, flags, None, out)
-        if status:
-            self._raise(status, ("q", "qd", "qdd"), (self.n,))
-        return result
+    def _batch(self, kernel: Callable[..., None], names: tuple[str, ...], trailing: tuple[int, ...]) -> Callable:
+        def general(values: tuple[object, ...], out: np.ndarray | None) -> np.ndarray:
+            batch, flat = self._states(names, values)
+            result = self._result(out, (*batch, *trailing))
+            target = result.reshape(-1, *trailing)
+            if target.shape[0]:
+                kernel(self.model, *flat, target)
+            return result
 
-    def gravity_vector(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
-        """G(q) = dP/dq (3.2.43), by RNEA with gravity alone."""
-        return self._rnea_part(K.GRAVITY_ONLY, q, q, out)
+        return general
 
-    def coriolis_vector(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-        """V(q, qd) = Vm(q, qd) qd, by RNEA with velocities alone."""
-        return self._rnea_part(K.CORIOLIS, q, qd, out)
+    def _rnea_batch(self, flags: int, names: tuple[str, ...]) -> Callable:
+        no_wrench = np.zeros((1, 6))
 
-    def nonlinear_terms(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-        """N(q, qd) = Vm qd + F(qd) + G(q) (3.3.4, without disturbance)."""
-        return self._rnea_part(K.NONLINEAR, q, qd, out)
+        def general(values: tuple[object, ...], out: np.ndarray | None, f_ext: object = None) -> np.ndarray:
+            batch, flat = self._states(names, values)
+            while len(flat) < 3:
+                flat.append(flat[-1])
+            wrench, mode = no_wrench, flags
+            if f_ext is not None:
+                wrench, mode = self._wrenches(f_ext, batch), flags | K.WITH_WRENCH
+            result = self._result(out, (*batch, self.n))
+            target = result.reshape(-1, self.n)
+            if not target.shape[0]:
+                return result
+            if f_ext is None:  # vectorized across states
+                V.rnea_blocks(self.model, flat[0], flat[1], flat[2], mode, target)
+            else:
+                K.rnea_batch(self.model, flat[0], flat[1], flat[2], wrench, mode, target)
+            return result
 
-    def friction(self, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-        """F(qd) = Fv qd + Fd(qd) (3.3.2): joint-side viscous plus Coulomb (Tc+ or Tc-), 0 at rest."""
-        return self._rnea_part(K.WITH_FRICTION, qd, qd, out)
+        return general
 
-    def inertia_matrix(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
-        """M(q) by the composite-rigid-body algorithm, reflected motor inertia on the diagonal."""
-        result = np.empty((self.n, self.n)) if out is None else out
-        try:
-            status = K.crba_one(self.model, q, result)
-        except TypeError:
-            return self._batched(K.crba_batch, ("q",), (q,), (self.n, self.n), out)
-        if status:
-            self._raise(status, ("q",), (self.n, self.n))
-        return result
+    @staticmethod
+    def _wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
+        wrench = np.asarray(f_ext, dtype=float)
+        if wrench.ndim == 0 or wrench.shape[-1] != 6 or not np.all(np.isfinite(wrench)):
+            raise ModelError(f"f_ext must be a finite wrench [force; moment] of shape (..., 6), got {wrench.shape}")
+        if wrench.ndim > 1 and wrench.shape[:-1] != batch:
+            raise ModelError(f"f_ext batch shape {wrench.shape[:-1]} does not match the states' {batch}")
+        return _writable(np.broadcast_to(wrench, (*batch, 6))).reshape(-1, 6)
 
-    def coriolis_matrix(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-        """The Christoffel Vm(q, qd) (3.3.48): Mdot - 2 Vm is skew and Vm(q, x) y = Vm(q, y) x."""
-        result = np.empty((self.n, self.n)) if out is None else out
-        try:
-            status = K.coriolis_one(self.model, q, qd, result)
-        except TypeError:
-            return self._batched(K.coriolis_batch, ("q", "qd"), (q, qd), (self.n, self.n), out)
-        if status:
-            self._raise(status, ("q", "qd"), (self.n, self.n))
-        return result
-
+    # ----- derived quantities --------------------------------------------------------------------
     def inertia_matrix_dot(self, q: object, qd: object) -> np.ndarray:
         """Mdot(q, qd) = Vm + Vm^T, exact for the Christoffel Vm (Mdot - 2 Vm skew)."""
         Vm = self.coriolis_matrix(q, qd)
         return Vm + np.swapaxes(Vm, -1, -2)
-
-    def forward_dynamics(self, q: object, qd: object, tau: object, out: np.ndarray | None = None) -> np.ndarray:
-        """qdd = M^-1 (tau - N(q, qd)) by the articulated-body algorithm, O(n)."""
-        result = np.empty(self.n) if out is None else out
-        try:
-            status = K.aba_one(self.model, q, qd, tau, result)
-        except TypeError:
-            return self._batched(K.aba_batch, ("q", "qd", "tau"), (q, qd, tau), (self.n,), out)
-        if status:
-            self._raise(status, ("q", "qd", "tau"), (self.n,))
-        return result
-
-    def _energies(self, q: object, qd: object) -> np.ndarray:
-        values = np.empty(2)
-        try:
-            status = K.energy_one(self.model, q, qd, values)
-        except TypeError:
-            return self._batched(K.energy_batch, ("q", "qd"), (q, qd), (2,), None)
-        if status:
-            self._raise(status, ("q", "qd"), (2,))
-        return values
 
     def kinetic_energy(self, q: object, qd: object) -> float | np.ndarray:
         """K = 1/2 qd^T M(q) qd (3.2.29), from the link velocities."""
@@ -227,6 +237,6 @@ class Engine:
         return float(values[0]) if values.ndim == 1 else values[..., 0]
 
     def potential_energy(self, q: object) -> float | np.ndarray:
-        """P(q) = -sum_i m_i g^T p_ci (3.2.35); zero at the arm's zero configuration is not implied."""
+        """P(q) = -sum_i m_i g^T p_ci (3.2.35)."""
         values = self._energies(q, q)
         return float(values[1]) if values.ndim == 1 else values[..., 1]

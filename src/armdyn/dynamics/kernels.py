@@ -300,19 +300,120 @@ def _add_tool_wrench(m: np.ndarray, w: np.ndarray, f: int, wrench: np.ndarray, t
     _add_force_to_parent(w, tmp, w, tmp + 12, w, f)
 
 
-@njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], int64, float64[::1])", **_OPTS)
-def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> int:
-    """One state: tau (checked), the parts chosen by flags; the buffer's scratch is the work space."""
+_ONE_3 = "int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])"
+_ONE_2 = "int64(float64[::1], float64[::1], float64[::1], float64[::1])"
+_ONE_1 = "int64(float64[::1], float64[::1], float64[::1])"
+
+
+@njit(_ONE_3, **_OPTS)
+def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, tau: np.ndarray) -> int:
+    """One state, checked: tau = M qdd + Vm qd + F + G; the buffer's scratch is the work space."""
     n = int(m[0])
     status = _check(q, n, 1)
-    if status == 0 and (flags & (WITH_VELOCITY | WITH_FRICTION)) != 0:
+    if status == 0:
         status = _check(qd, n, 2)
-    if status == 0 and (flags & WITH_QDD) != 0:
+    if status == 0:
         status = _check(qdd, n, 3)
-    if status != 0 or tau.shape[0] != n:
-        return status if status != 0 else 4
-    rnea_core(m, m, HEADER + STRIDE * n, q, qd, qdd, qd, flags, tau)
-    return 0
+    if status == 0 and tau.shape[0] != n:
+        status = 4
+    if status == 0:
+        rnea_core(m, m, HEADER + STRIDE * n, q, qd, qdd, qd, INVERSE_DYNAMICS, tau)
+    return status
+
+
+@njit(_ONE_2, **_OPTS)
+def nonlinear_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    """N = Vm qd + F + G."""
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0:
+        status = _check(qd, n, 2)
+    if status == 0 and out.shape[0] != n:
+        status = 4
+    if status == 0:
+        rnea_core(m, m, HEADER + STRIDE * n, q, qd, qd, qd, NONLINEAR, out)
+    return status
+
+
+@njit(_ONE_2, **_OPTS)
+def coriolis_vector_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    """V = Vm qd."""
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0:
+        status = _check(qd, n, 2)
+    if status == 0 and out.shape[0] != n:
+        status = 4
+    if status == 0:
+        rnea_core(m, m, HEADER + STRIDE * n, q, qd, qd, qd, CORIOLIS, out)
+    return status
+
+
+@njit(inline="always", **_OPTS)
+def gravity_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, G: np.ndarray) -> None:
+    """G(q): RNEA with no motion. Each body's acceleration is then -g in its own axes, a_i = [0; R_i^T l_p],
+    its force f_i = [h x l_i; m l_i]; tau_i = S^T f_i and f_p += X_i^T f_i (Featherstone 5.3)."""
+    n = int(m[0])
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        parent = int(m[b + PARENT])
+        o = w0 + 21 * i
+        _joint_transform(m, i, q[i], w, o)
+        if parent >= 0:
+            op = w0 + 21 * parent + 12
+            lx, ly, lz = w[op], w[op + 1], w[op + 2]
+        else:
+            lx, ly, lz = -m[GRAVITY], -m[GRAVITY + 1], -m[GRAVITY + 2]
+        Lx = w[o] * lx + w[o + 3] * ly + w[o + 6] * lz
+        Ly = w[o + 1] * lx + w[o + 4] * ly + w[o + 7] * lz
+        Lz = w[o + 2] * lx + w[o + 5] * ly + w[o + 8] * lz
+        mass, hx, hy, hz = m[b + MASS], m[b + FIRST_MOMENT], m[b + FIRST_MOMENT + 1], m[b + FIRST_MOMENT + 2]
+        w[o + 12], w[o + 13], w[o + 14] = Lx, Ly, Lz
+        w[o + 15], w[o + 16], w[o + 17] = hy * Lz - hz * Ly, hz * Lx - hx * Lz, hx * Ly - hy * Lx
+        w[o + 18], w[o + 19], w[o + 20] = mass * Lx, mass * Ly, mass * Lz
+    for i in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * i
+        o = w0 + 21 * i
+        G[i] = w[o + 20] if m[b + KIND] != 0.0 else w[o + 17]
+        parent = int(m[b + PARENT])
+        if parent >= 0:
+            _add_force_to_parent(w, o, w, o + 15, w, w0 + 21 * parent + 15)
+
+
+@njit(_ONE_1, **_OPTS)
+def gravity_one(m: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
+    """G(q)."""
+    n = int(m[0])
+    status = _check(q, n, 1)
+    if status == 0 and out.shape[0] != n:
+        status = 4
+    if status == 0:
+        gravity_core(m, m, HEADER + STRIDE * n, q, out)
+    return status
+
+
+@njit(inline="always", **_OPTS)
+def friction_core(m: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
+    for i in range(int(m[0])):
+        out[i] = _friction(m, i, qd[i])
+
+
+@njit(_ONE_1, **_OPTS)
+def friction_one(m: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    """F(qd) = Fv qd + Fd(qd)."""
+    n = int(m[0])
+    status = _check(qd, n, 1)
+    if status == 0 and out.shape[0] != n:
+        status = 4
+    if status == 0:
+        friction_core(m, qd, out)
+    return status
+
+
+@njit(parallel=True, **_OPTS)
+def friction_batch(m: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
+    for s in prange(qd.shape[0]):
+        friction_core(m, qd[s], out[s])
 
 
 @njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
@@ -334,12 +435,7 @@ def rnea_wrench_one(
     return 0
 
 
-_BATCH_RNEA = (
-    "void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], int64, float64[:, ::1])"
-)
-
-
-@njit(_BATCH_RNEA, parallel=True, **_OPTS)
+@njit(parallel=True, **_OPTS)
 def rnea_batch(
     m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, flags: int, tau: np.ndarray
 ) -> None:
@@ -409,7 +505,7 @@ def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarra
     then F is carried to each ancestor j: M_ij = M_ji = S_j^T F.
     """
     n = int(m[0])
-    transforms, composite, force = w0, w0 + 12 * n, w0 + 22 * n
+    transforms, composite = w0, w0 + 12 * n
     for i in range(n):
         _joint_transform(m, i, q[i], w, transforms + 12 * i)
         b = HEADER + STRIDE * i
@@ -425,29 +521,32 @@ def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarra
         parent = int(m[HEADER + STRIDE * i + PARENT])
         if parent >= 0:
             _add_inertia_to_parent(w, transforms + 12 * i, composite + 10 * i, composite + 10 * parent)
-    f = force
     for i in range(n):
         b = HEADER + STRIDE * i
         c = composite + 10 * i
         mass, hx, hy = w[c], w[c + 1], w[c + 2]
         if m[b + KIND] != 0.0:  # F = I^c e6 = [h x e3; m e3]
-            w[f], w[f + 1], w[f + 2], w[f + 3], w[f + 4], w[f + 5] = hy, -hx, 0.0, 0.0, 0.0, mass
+            nx, ny, nz, fx, fy, fz = hy, -hx, 0.0, 0.0, 0.0, mass
             M[i, i] = mass + m[b + ARMATURE]
         else:  # F = I^c e3 = [I_O e3; -h x e3]
-            w[f], w[f + 1], w[f + 2] = w[c + 6], w[c + 8], w[c + 9]
-            w[f + 3], w[f + 4], w[f + 5] = -hy, hx, 0.0
+            nx, ny, nz, fx, fy, fz = w[c + 6], w[c + 8], w[c + 9], -hy, hx, 0.0
             M[i, i] = w[c + 9] + m[b + ARMATURE]
         j = i
         parent = int(m[b + PARENT])
-        while parent >= 0:
-            for k in range(6):
-                w[f + 6 + k] = 0.0
-            _add_force_to_parent(w, transforms + 12 * j, w, f, w, f + 6)
-            for k in range(6):
-                w[f + k] = w[f + 6 + k]
+        while parent >= 0:  # F <- X_j^T F, carried to the parent: [R n + p x (R f); R f]
+            t = transforms + 12 * j
+            r00, r01, r02, r10, r11, r12 = w[t], w[t + 1], w[t + 2], w[t + 3], w[t + 4], w[t + 5]
+            r20, r21, r22, px, py, pz = w[t + 6], w[t + 7], w[t + 8], w[t + 9], w[t + 10], w[t + 11]
+            Fx = r00 * fx + r01 * fy + r02 * fz
+            Fy = r10 * fx + r11 * fy + r12 * fz
+            Fz = r20 * fx + r21 * fy + r22 * fz
+            Nx = r00 * nx + r01 * ny + r02 * nz + py * Fz - pz * Fy
+            Ny = r10 * nx + r11 * ny + r12 * nz + pz * Fx - px * Fz
+            Nz = r20 * nx + r21 * ny + r22 * nz + px * Fy - py * Fx
+            nx, ny, nz, fx, fy, fz = Nx, Ny, Nz, Fx, Fy, Fz
             j = parent
             bj = HEADER + STRIDE * j
-            value = w[f + 5] if m[bj + KIND] != 0.0 else w[f + 2]
+            value = fz if m[bj + KIND] != 0.0 else nz
             M[i, j] = value
             M[j, i] = value
             parent = int(m[bj + PARENT])
@@ -463,7 +562,7 @@ def crba_one(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
     return 0
 
 
-@njit("void(float64[::1], float64[:, ::1], float64[:, :, ::1])", parallel=True, **_OPTS)
+@njit(parallel=True, **_OPTS)
 def crba_batch(m: np.ndarray, q: np.ndarray, M: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
@@ -497,34 +596,6 @@ def _world_pose(m: np.ndarray, w: np.ndarray, local: int, parent_pose: int, pose
 
 
 @njit(inline="always", **_OPTS)
-def _world_inertia(m: np.ndarray, j: int, w: np.ndarray, pose: int, tmp: int, out: int) -> None:
-    """The 6x6 spatial inertia of body j in world coordinates, [[I_O, h^], [h^T, m 1]], at w[out:out+36]."""
-    b = HEADER + STRIDE * j
-    w[tmp] = m[b + MASS]
-    for k in range(3):
-        w[tmp + 1 + k] = m[b + FIRST_MOMENT + k]
-    for k in range(6):
-        w[tmp + 4 + k] = m[b + INERTIA + k]
-    for k in range(10):
-        w[tmp + 10 + k] = 0.0
-    _add_inertia_to_parent(w, pose, tmp, tmp + 10)
-    mass, hx, hy, hz = w[tmp + 10], w[tmp + 11], w[tmp + 12], w[tmp + 13]
-    i0, i1, i2, i3, i4, i5 = w[tmp + 14], w[tmp + 15], w[tmp + 16], w[tmp + 17], w[tmp + 18], w[tmp + 19]
-    values = (
-        (i0, i1, i2, 0.0, -hz, hy),
-        (i1, i3, i4, hz, 0.0, -hx),
-        (i2, i4, i5, -hy, hx, 0.0),
-        (0.0, hz, -hy, mass, 0.0, 0.0),
-        (-hz, 0.0, hx, 0.0, mass, 0.0),
-        (hy, -hx, 0.0, 0.0, 0.0, mass),
-    )
-    for r in range(6):
-        row = values[r]
-        for c in range(6):
-            w[out + 6 * r + c] = row[c]
-
-
-@njit(inline="always", **_OPTS)
 def _motion_cross(w: np.ndarray, v: int, s: int, out: int) -> None:
     """out = v x s for motion vectors [w; u] x [a; l] = [w x a; w x l + u x a]."""
     wx, wy, wz, ux, uy, uz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
@@ -538,48 +609,45 @@ def _motion_cross(w: np.ndarray, v: int, s: int, out: int) -> None:
 
 
 @njit(inline="always", **_OPTS)
-def _body_coriolis(w: np.ndarray, v: int, inertia: int, tmp: int, out: int) -> None:
-    """B = 1/2 [(v x*) I + (I v) xbar* - I (v x)] (Echeandia and Wensing 2021, eq. 19).
+def _body_coriolis(w: np.ndarray, v: int, inertia: int, out: int) -> None:
+    """The body Coriolis matrix B = 1/2 [(v x*) I + (I v) xbar* - I (v x)] (Echeandia and Wensing
+    2021), with B v = v x* I v and B + B^T = dI/dt, which makes Mdot - 2 Vm skew.
 
-    B v = v x* I v and B + B^T = dI/dt, which is what makes Mdot - 2 Vm skew.
+    For I = (m, h, I_O) and v = [w; u] it reduces to B = [[B11, 0], [-[l]x, 0]] with
+    l = m u + w x h, k = I_O w + h x u and
+    B11 = 1/2 ([w]x I_O - I_O [w]x - h u^T - u h^T + 2 (u.h) 1 - [k]x).
+    Stored as B11 (9, row major) then l (3).
     """
     wx, wy, wz, ux, uy, uz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
-    # cross = v x (motion) as 6x6 at tmp: [[w^, 0], [u^, w^]]
-    for k in range(36):
-        w[tmp + k] = 0.0
-    skews = ((wx, wy, wz, 0, 0), (wx, wy, wz, 3, 3), (ux, uy, uz, 3, 0))
-    for block in skews:
-        x, y, z, r0, c0 = block
-        w[tmp + 6 * (r0 + 0) + c0 + 1] = -z
-        w[tmp + 6 * (r0 + 0) + c0 + 2] = y
-        w[tmp + 6 * (r0 + 1) + c0 + 0] = z
-        w[tmp + 6 * (r0 + 1) + c0 + 2] = -x
-        w[tmp + 6 * (r0 + 2) + c0 + 0] = -y
-        w[tmp + 6 * (r0 + 2) + c0 + 1] = x
-    # h = I v at tmp + 36
-    for r in range(6):
-        total = 0.0
-        for c in range(6):
-            total += w[inertia + 6 * r + c] * w[v + c]
-        w[tmp + 36 + r] = total
-    for r in range(6):
-        for c in range(6):
-            total = 0.0
-            for k in range(6):  # (v x*) = -(v x)^T, so (v x*) I = -(v x)^T I
-                total -= w[tmp + 6 * k + r] * w[inertia + 6 * k + c]
-                total -= w[inertia + 6 * r + k] * w[tmp + 6 * k + c]
-            w[out + 6 * r + c] = 0.5 * total
-    nx, ny, nz, fx, fy, fz = w[tmp + 36], w[tmp + 37], w[tmp + 38], w[tmp + 39], w[tmp + 40], w[tmp + 41]
-    # (f xbar*) = [[-n^, -f^], [-f^, 0]]
-    bar = ((nx, ny, nz, 0, 0), (fx, fy, fz, 0, 3), (fx, fy, fz, 3, 0))
-    for block in bar:
-        x, y, z, r0, c0 = block
-        w[out + 6 * (r0 + 0) + c0 + 1] += 0.5 * z
-        w[out + 6 * (r0 + 0) + c0 + 2] -= 0.5 * y
-        w[out + 6 * (r0 + 1) + c0 + 0] -= 0.5 * z
-        w[out + 6 * (r0 + 1) + c0 + 2] += 0.5 * x
-        w[out + 6 * (r0 + 2) + c0 + 0] += 0.5 * y
-        w[out + 6 * (r0 + 2) + c0 + 1] -= 0.5 * x
+    mass, hx, hy, hz = w[inertia], w[inertia + 1], w[inertia + 2], w[inertia + 3]
+    i0, i1, i2 = w[inertia + 4], w[inertia + 5], w[inertia + 6]
+    i3, i4, i5 = w[inertia + 7], w[inertia + 8], w[inertia + 9]
+    kx = i0 * wx + i1 * wy + i2 * wz + hy * uz - hz * uy
+    ky = i1 * wx + i3 * wy + i4 * wz + hz * ux - hx * uz
+    kz = i2 * wx + i4 * wy + i5 * wz + hx * uy - hy * ux
+    # W = [w]x I_O: column c is w x I_O[:, c]
+    w00 = wy * i2 - wz * i1
+    w10 = wz * i0 - wx * i2
+    w20 = wx * i1 - wy * i0
+    w01 = wy * i4 - wz * i3
+    w11 = wz * i1 - wx * i4
+    w21 = wx * i3 - wy * i1
+    w02 = wy * i5 - wz * i4
+    w12 = wz * i2 - wx * i5
+    w22 = wx * i4 - wy * i2
+    uh = ux * hx + uy * hy + uz * hz
+    w[out] = w00 - hx * ux + uh
+    w[out + 1] = 0.5 * (w01 + w10 - hx * uy - ux * hy + kz)
+    w[out + 2] = 0.5 * (w02 + w20 - hx * uz - ux * hz - ky)
+    w[out + 3] = 0.5 * (w10 + w01 - hy * ux - uy * hx - kz)
+    w[out + 4] = w11 - hy * uy + uh
+    w[out + 5] = 0.5 * (w12 + w21 - hy * uz - uy * hz + kx)
+    w[out + 6] = 0.5 * (w20 + w02 - hz * ux - uz * hx + ky)
+    w[out + 7] = 0.5 * (w21 + w12 - hz * uy - uz * hy - kx)
+    w[out + 8] = w22 - hz * uz + uh
+    w[out + 9] = mass * ux + wy * hz - wz * hy
+    w[out + 10] = mass * uy + wz * hx - wx * hz
+    w[out + 11] = mass * uz + wx * hy - wy * hx
 
 
 @njit(inline="always", **_OPTS)
@@ -615,45 +683,74 @@ def coriolis_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.n
     World frame: v_i = v_p + S_i qd_i, Sdot_i = v_i x S_i; composite I^c and B^c summed up the tree;
     for j and each ancestor i: C_ij = S_i^T (I^c_j Sdot_j + B^c_j S_j),
     C_ji = Sdot_i^T I^c_j S_j + S_i^T B^c_j^T S_j.
+    Work per joint: local transform 12, world pose 12, S 6, Sdot 6, v 6, I^c 10, B^c 12.
     """
     n = int(m[0])
     local, pose, S, Sdot, vel = w0, w0 + 12 * n, w0 + 24 * n, w0 + 30 * n, w0 + 36 * n
-    IC, BC, tmp = w0 + 42 * n, w0 + 78 * n, w0 + 114 * n
+    IC, BC, tmp = w0 + 42 * n, w0 + 52 * n, w0 + 64 * n
     for i in range(n):
-        parent = int(m[HEADER + STRIDE * i + PARENT])
+        b = HEADER + STRIDE * i
+        parent = int(m[b + PARENT])
         _joint_transform(m, i, q[i], w, local + 12 * i)
         _world_pose(m, w, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
         _world_motion_subspace(m, i, w, pose + 12 * i, S + 6 * i)
         for k in range(6):
             w[vel + 6 * i + k] = (w[vel + 6 * parent + k] if parent >= 0 else 0.0) + w[S + 6 * i + k] * qd[i]
         _motion_cross(w, vel + 6 * i, S + 6 * i, Sdot + 6 * i)
-        _world_inertia(m, i, w, pose + 12 * i, tmp, IC + 36 * i)
-        _body_coriolis(w, vel + 6 * i, IC + 36 * i, tmp, BC + 36 * i)
+        w[tmp] = m[b + MASS]
+        for k in range(3):
+            w[tmp + 1 + k] = m[b + FIRST_MOMENT + k]
+        for k in range(6):
+            w[tmp + 4 + k] = m[b + INERTIA + k]
+        for k in range(10):
+            w[IC + 10 * i + k] = 0.0
+        _add_inertia_to_parent(w, pose + 12 * i, tmp, IC + 10 * i)
+        _body_coriolis(w, vel + 6 * i, IC + 10 * i, BC + 12 * i)
         for j in range(n):
             C[i, j] = 0.0
-    f1, f2, f3 = tmp, tmp + 6, tmp + 12
     for j in range(n - 1, -1, -1):
-        ic, bc, sj, sdj = IC + 36 * j, BC + 36 * j, S + 6 * j, Sdot + 6 * j
-        for r in range(6):
-            a1 = 0.0
-            a2 = 0.0
-            a3 = 0.0
-            for c in range(6):
-                a1 += w[ic + 6 * r + c] * w[sdj + c] + w[bc + 6 * r + c] * w[sj + c]
-                a2 += w[ic + 6 * r + c] * w[sj + c]
-                a3 += w[bc + 6 * c + r] * w[sj + c]
-            w[f1 + r], w[f2 + r], w[f3 + r] = a1, a2, a3
-        C[j, j] = _dot6(w, sj, f1)
+        ic, bc, sj, dj = IC + 10 * j, BC + 12 * j, S + 6 * j, Sdot + 6 * j
+        mass, hx, hy, hz = w[ic], w[ic + 1], w[ic + 2], w[ic + 3]
+        i0, i1, i2, i3, i4, i5 = w[ic + 4], w[ic + 5], w[ic + 6], w[ic + 7], w[ic + 8], w[ic + 9]
+        ax, ay, az, sx, sy, sz = w[sj], w[sj + 1], w[sj + 2], w[sj + 3], w[sj + 4], w[sj + 5]
+        dax, day, daz, dsx, dsy, dsz = w[dj], w[dj + 1], w[dj + 2], w[dj + 3], w[dj + 4], w[dj + 5]
+        b00, b01, b02, b10, b11, b12 = w[bc], w[bc + 1], w[bc + 2], w[bc + 3], w[bc + 4], w[bc + 5]
+        b20, b21, b22, lx, ly, lz = w[bc + 6], w[bc + 7], w[bc + 8], w[bc + 9], w[bc + 10], w[bc + 11]
+        # F2 = I^c S
+        f2a = i0 * ax + i1 * ay + i2 * az + hy * sz - hz * sy
+        f2b = i1 * ax + i3 * ay + i4 * az + hz * sx - hx * sz
+        f2c = i2 * ax + i4 * ay + i5 * az + hx * sy - hy * sx
+        f2d = mass * sx - (hy * az - hz * ay)
+        f2e = mass * sy - (hz * ax - hx * az)
+        f2f = mass * sz - (hx * ay - hy * ax)
+        # F1 = I^c Sdot + B^c S, B^c S = [B11 a; -l x a]
+        f1a = i0 * dax + i1 * day + i2 * daz + hy * dsz - hz * dsy + b00 * ax + b01 * ay + b02 * az
+        f1b = i1 * dax + i3 * day + i4 * daz + hz * dsx - hx * dsz + b10 * ax + b11 * ay + b12 * az
+        f1c = i2 * dax + i4 * day + i5 * daz + hx * dsy - hy * dsx + b20 * ax + b21 * ay + b22 * az
+        f1d = mass * dsx - (hy * daz - hz * day) - (ly * az - lz * ay)
+        f1e = mass * dsy - (hz * dax - hx * daz) - (lz * ax - lx * az)
+        f1f = mass * dsz - (hx * day - hy * dax) - (lx * ay - ly * ax)
+        # F3 = B^c^T S = [B11^T a + l x s; 0]
+        f3a = b00 * ax + b10 * ay + b20 * az + ly * sz - lz * sy
+        f3b = b01 * ax + b11 * ay + b21 * az + lz * sx - lx * sz
+        f3c = b02 * ax + b12 * ay + b22 * az + lx * sy - ly * sx
+        C[j, j] = ax * f1a + ay * f1b + az * f1c + sx * f1d + sy * f1e + sz * f1f
         parent = int(m[HEADER + STRIDE * j + PARENT])
         i = parent
         while i >= 0:
-            C[i, j] = _dot6(w, S + 6 * i, f1)
-            C[j, i] = _dot6(w, Sdot + 6 * i, f2) + _dot6(w, S + 6 * i, f3)
+            si, di = S + 6 * i, Sdot + 6 * i
+            C[i, j] = (
+                w[si] * f1a + w[si + 1] * f1b + w[si + 2] * f1c + w[si + 3] * f1d + w[si + 4] * f1e + w[si + 5] * f1f
+            )
+            C[j, i] = (
+                w[di] * f2a + w[di + 1] * f2b + w[di + 2] * f2c + w[di + 3] * f2d + w[di + 4] * f2e + w[di + 5] * f2f
+            ) + (w[si] * f3a + w[si + 1] * f3b + w[si + 2] * f3c)
             i = int(m[HEADER + STRIDE * i + PARENT])
         if parent >= 0:
-            for k in range(36):
-                w[IC + 36 * parent + k] += w[ic + k]
-                w[BC + 36 * parent + k] += w[bc + k]
+            for k in range(10):
+                w[IC + 10 * parent + k] += w[ic + k]
+            for k in range(12):
+                w[BC + 12 * parent + k] += w[bc + k]
 
 
 @njit("int64(float64[::1], float64[::1], float64[::1], float64[:, ::1])", **_OPTS)
@@ -668,142 +765,128 @@ def coriolis_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) ->
     return 0
 
 
-@njit("void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, :, ::1])", parallel=True, **_OPTS)
+@njit(parallel=True, **_OPTS)
 def coriolis_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
     for c in prange(chunks):
-        w = np.empty(160 * n + 64)
+        w = np.empty(70 * n + 32)
         for s in range(c * count // chunks, (c + 1) * count // chunks):
             coriolis_core(m, w, 0, q[s], qd[s], C[s])
 
 
 # ----- ABA: forward dynamics -------------------------------------------------------------------
 @njit(inline="always", **_OPTS)
-def _motion_matrix(w: np.ndarray, t: int, X: int) -> None:
-    """X = [[E, 0], [-E p^, E]], E = R^T: the 6x6 motion transform parent -> child."""
-    px, py, pz = w[t + 9], w[t + 10], w[t + 11]
-    for r in range(3):
-        e0, e1, e2 = w[t + r], w[t + 3 + r], w[t + 6 + r]  # row r of R^T
-        for c in range(3):
-            w[X + 6 * r + c] = w[t + 3 * c + r]
-            w[X + 6 * r + 3 + c] = 0.0
-            w[X + 6 * (r + 3) + 3 + c] = w[t + 3 * c + r]
-        # row r of -E p^: -(e x p)... (E p^)_rc = sum_k E_rk p^_kc
-        w[X + 6 * (r + 3)] = -(e1 * 0.0 + e1 * pz - e2 * py) + 0.0
-        w[X + 6 * (r + 3) + 1] = -(-e0 * pz + e2 * px)
-        w[X + 6 * (r + 3) + 2] = -(e0 * py - e1 * px)
+def _rigid_times(w: np.ndarray, i: int, v: int, out: int) -> None:
+    """out = I v for a rigid-body inertia (m, h, I_O) stored at w[i:i+10]: [I_O a + h x l; m l - h x a]."""
+    mass, hx, hy, hz = w[i], w[i + 1], w[i + 2], w[i + 3]
+    ax, ay, az, lx, ly, lz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
+    w[out] = w[i + 4] * ax + w[i + 5] * ay + w[i + 6] * az + hy * lz - hz * ly
+    w[out + 1] = w[i + 5] * ax + w[i + 7] * ay + w[i + 8] * az + hz * lx - hx * lz
+    w[out + 2] = w[i + 6] * ax + w[i + 8] * ay + w[i + 9] * az + hx * ly - hy * lx
+    w[out + 3] = mass * lx - (hy * az - hz * ay)
+    w[out + 4] = mass * ly - (hz * ax - hx * az)
+    w[out + 5] = mass * lz - (hx * ay - hy * ax)
 
 
 @njit(inline="always", **_OPTS)
 def aba_core(
     m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray
 ) -> None:
-    """qdd = M^-1 (tau - Vm qd - F - G) by the articulated-body algorithm (Featherstone 7.3).
+    """qdd = M^-1 (tau - Vm qd - F - G) by the articulated-body algorithm (Featherstone 7.3), in the
+    world frame, where articulated inertias add up the tree without transforms.
 
-    The armature G^2 Jm adds to D_i = S^T I^A_i S, as the rotor's inertia on the joint.
+    Pass 1: v_i = v_p + S_i qd_i, c_i = v_i x S_i qd_i, I^A_i = I_i, p^A_i = v_i x* I_i v_i.
+    Pass 2 (leaves first): U = I^A S, D = S^T U + G^2 Jm, u = tau - F - S^T p^A;
+    I^A_p += I^A - U U^T / D, p^A_p += p^A + (I^A - U U^T / D) c + U u / D.
+    Pass 3: a = a_p + c (a_0 = -g), qdd = (u - U^T a) / D, a += S qdd.
     """
     n = int(m[0])
-    transforms, vel, bias, IA = w0, w0 + 12 * n, w0 + 18 * n, w0 + 24 * n
-    pA, U, acc, Du, tmp = w0 + 60 * n, w0 + 66 * n, w0 + 72 * n, w0 + 78 * n, w0 + 80 * n
-    X, T1 = tmp, tmp + 36
+    local, pose, S, vel, bias = w0, w0 + 12 * n, w0 + 24 * n, w0 + 30 * n, w0 + 36 * n
+    IA, pA, U, acc, Du, tmp = w0 + 42 * n, w0 + 78 * n, w0 + 84 * n, w0 + 90 * n, w0 + 96 * n, w0 + 98 * n
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(m[b + PARENT])
-        t, v, c = transforms + 12 * i, vel + 6 * i, bias + 6 * i
-        _joint_transform(m, i, q[i], w, t)
-        if parent < 0:
-            for k in range(6):
-                w[v + k] = 0.0
-        else:
-            _motion_to_child(w, t, w, vel + 6 * parent, w, v)
+        s, v, c, ia = S + 6 * i, vel + 6 * i, bias + 6 * i, IA + 36 * i
+        _joint_transform(m, i, q[i], w, local + 12 * i)
+        _world_pose(m, w, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
+        _world_motion_subspace(m, i, w, pose + 12 * i, s)
         rate = qd[i]
         for k in range(6):
-            w[c + k] = 0.0
-        if m[b + KIND] != 0.0:
-            w[c + 3] = w[v + 1] * rate
-            w[c + 4] = -w[v] * rate
-            w[v + 5] += rate
-        else:
-            w[c] = w[v + 1] * rate
-            w[c + 1] = -w[v] * rate
-            w[c + 3] = w[v + 4] * rate
-            w[c + 4] = -w[v + 3] * rate
-            w[v + 2] += rate
-        # I^A = I (6x6 in body coordinates), p^A = v x* I v
-        unit = T1
+            w[tmp + k] = w[s + k] * rate
+            w[v + k] = (w[vel + 6 * parent + k] if parent >= 0 else 0.0) + w[tmp + k]
+        _motion_cross(w, v, tmp, c)
+        # the body's inertia in world coordinates, 10 parameters at tmp + 6, then as 6x6
+        w[tmp + 16] = m[b + MASS]
+        for k in range(3):
+            w[tmp + 17 + k] = m[b + FIRST_MOMENT + k]
         for k in range(6):
-            for r in range(6):
-                w[unit + r] = 1.0 if r == k else 0.0
-            _inertia_times(m, i, w, unit, w, IA + 36 * i + 6 * k)  # column k (I symmetric: row k)
-        _inertia_times(m, i, w, v, w, unit)
-        wx, wy, wz, vx, vy, vz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
-        kx, ky, kz, lx, ly, lz = w[unit], w[unit + 1], w[unit + 2], w[unit + 3], w[unit + 4], w[unit + 5]
+            w[tmp + 20 + k] = m[b + INERTIA + k]
+        for k in range(10):
+            w[tmp + 6 + k] = 0.0
+        _add_inertia_to_parent(w, pose + 12 * i, tmp + 16, tmp + 6)
+        mass, hx, hy, hz = w[tmp + 6], w[tmp + 7], w[tmp + 8], w[tmp + 9]
+        i0, i1, i2, i3, i4, i5 = w[tmp + 10], w[tmp + 11], w[tmp + 12], w[tmp + 13], w[tmp + 14], w[tmp + 15]
+        rows = (
+            (i0, i1, i2, 0.0, -hz, hy),
+            (i1, i3, i4, hz, 0.0, -hx),
+            (i2, i4, i5, -hy, hx, 0.0),
+            (0.0, hz, -hy, mass, 0.0, 0.0),
+            (-hz, 0.0, hx, 0.0, mass, 0.0),
+            (hy, -hx, 0.0, 0.0, 0.0, mass),
+        )
+        for r in range(6):
+            row = rows[r]
+            for k in range(6):
+                w[ia + 6 * r + k] = row[k]
+        _rigid_times(w, tmp + 6, v, tmp + 16)  # momentum [k; l]; p^A = v x* [k; l] = [w x k + u x l; w x l]
+        wx, wy, wz, ux, uy, uz = w[v], w[v + 1], w[v + 2], w[v + 3], w[v + 4], w[v + 5]
+        kx, ky, kz, lx, ly, lz = w[tmp + 16], w[tmp + 17], w[tmp + 18], w[tmp + 19], w[tmp + 20], w[tmp + 21]
         p = pA + 6 * i
-        w[p] = wy * kz - wz * ky + vy * lz - vz * ly
-        w[p + 1] = wz * kx - wx * kz + vz * lx - vx * lz
-        w[p + 2] = wx * ky - wy * kx + vx * ly - vy * lx
+        w[p] = wy * kz - wz * ky + uy * lz - uz * ly
+        w[p + 1] = wz * kx - wx * kz + uz * lx - ux * lz
+        w[p + 2] = wx * ky - wy * kx + ux * ly - uy * lx
         w[p + 3] = wy * lz - wz * ly
         w[p + 4] = wz * lx - wx * lz
         w[p + 5] = wx * ly - wy * lx
     for i in range(n - 1, -1, -1):
         b = HEADER + STRIDE * i
-        axis = 5 if m[b + KIND] != 0.0 else 2
-        ia, p, u = IA + 36 * i, pA + 6 * i, U + 6 * i
-        for k in range(6):
-            w[u + k] = w[ia + 6 * k + axis]
-        D = w[u + axis] + m[b + ARMATURE]
-        value = tau[i] - _friction(m, i, qd[i]) - w[p + axis]
+        s, ia, p, u, c = S + 6 * i, IA + 36 * i, pA + 6 * i, U + 6 * i, bias + 6 * i
+        for r in range(6):
+            total = 0.0
+            for k in range(6):
+                total += w[ia + 6 * r + k] * w[s + k]
+            w[u + r] = total
+        D = _dot6(w, s, u) + m[b + ARMATURE]
+        value = tau[i] - _friction(m, i, qd[i]) - _dot6(w, s, p)
         w[Du + 2 * i] = D
         w[Du + 2 * i + 1] = value
         parent = int(m[b + PARENT])
         if parent < 0:
             continue
-        # Ia = I^A - U U^T / D ; pa = p^A + Ia c + U u / D
-        c = bias + 6 * i
+        target, pt = IA + 36 * parent, pA + 6 * parent
+        uc = _dot6(w, u, c) / D
+        gain = value / D
         for r in range(6):
-            for k in range(6):
-                w[ia + 6 * r + k] -= w[u + r] * w[u + k] / D
-        for r in range(6):
-            total = w[p + r] + w[u + r] * value / D
+            ur = w[u + r] / D
+            total = w[p + r] + w[u + r] * (gain - uc)
             for k in range(6):
                 total += w[ia + 6 * r + k] * w[c + k]
-            w[T1 + r] = total
-        _add_force_to_parent(w, transforms + 12 * i, w, T1, w, pA + 6 * parent)
-        # I^A_parent += X^T Ia X
-        _motion_matrix(w, transforms + 12 * i, X)
-        target = IA + 36 * parent
-        for r in range(6):
-            for k in range(6):
-                total = 0.0
-                for l in range(6):
-                    total += w[ia + 6 * r + l] * w[X + 6 * l + k]
-                w[T1 + 6 * r + k] = total
-        for r in range(6):
-            for k in range(6):
-                total = 0.0
-                for l in range(6):
-                    total += w[X + 6 * l + r] * w[T1 + 6 * l + k]
-                w[target + 6 * r + k] += total
+                w[target + 6 * r + k] += w[ia + 6 * r + k] - ur * w[u + k]
+            w[pt + r] += total
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(m[b + PARENT])
-        a, t = acc + 6 * i, transforms + 12 * i
-        if parent < 0:
-            for k in range(3):
-                w[T1 + k] = 0.0
-                w[T1 + 3 + k] = -m[GRAVITY + k]
-            _motion_to_child(w, t, w, T1, w, a)
-        else:
-            _motion_to_child(w, t, w, acc + 6 * parent, w, a)
+        a, s, c = acc + 6 * i, S + 6 * i, bias + 6 * i
         for k in range(6):
-            w[a + k] += w[bias + 6 * i + k]
-        axis = 5 if m[b + KIND] != 0.0 else 2
-        u = U + 6 * i
-        value = w[Du + 2 * i + 1] - _dot6(w, u, a)
-        result = value / w[Du + 2 * i]
+            if parent >= 0:
+                w[a + k] = w[acc + 6 * parent + k] + w[c + k]
+            else:
+                w[a + k] = (-m[GRAVITY + k - 3] if k >= 3 else 0.0) + w[c + k]
+        result = (w[Du + 2 * i + 1] - _dot6(w, U + 6 * i, a)) / w[Du + 2 * i]
         qdd[i] = result
-        w[a + axis] += result
+        for k in range(6):
+            w[a + k] += w[s + k] * result
 
 
 @njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
@@ -820,7 +903,7 @@ def aba_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: 
     return 0
 
 
-@njit("void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1])", parallel=True, **_OPTS)
+@njit(parallel=True, **_OPTS)
 def aba_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
@@ -876,7 +959,7 @@ def energy_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) ->
     return 0
 
 
-@njit("void(float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1])", parallel=True, **_OPTS)
+@njit(parallel=True, **_OPTS)
 def energy_batch(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
     n, count = int(m[0]), q.shape[0]
     chunks = min(count, 64)
