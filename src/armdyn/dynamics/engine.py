@@ -157,7 +157,7 @@ class Engine:
                 raise ModelError(f"{name} must be an array of numbers of shape (..., {self.n})") from None
             if array.ndim == 0 or array.shape[-1] != self.n:
                 raise ModelError(f"{name} must have shape (..., {self.n}) for '{self.robot.name}', got {array.shape}")
-            if not np.all(np.isfinite(array)):
+            if array.size and not (np.isfinite(array.min()) and np.isfinite(array.max())):  # NaN propagates
                 raise ModelError(f"{name} must be finite (it holds NaN or infinity)")
             arrays.append(array)
         try:
@@ -165,7 +165,8 @@ class Engine:
         except ValueError:
             shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
             raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
-        flat = [_writable(np.broadcast_to(a, (*batch, self.n))).reshape(-1, self.n) for a in arrays]
+        shape = (*batch, self.n)
+        flat = [_writable(a if a.shape == shape else np.broadcast_to(a, shape)).reshape(-1, self.n) for a in arrays]
         return batch, flat
 
     @staticmethod

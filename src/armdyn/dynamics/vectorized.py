@@ -10,8 +10,6 @@ that vectorizes (libm's do not).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit, prange
 
@@ -42,33 +40,34 @@ _S1, _S2, _S3 = -1.66666666666666307295e-1, 8.33333333332211858878e-3, -1.984126
 _S4, _S5, _S6 = 2.75573136213857245213e-6, -2.50507477628578072866e-8, 1.58962301576546568060e-10
 _C1, _C2, _C3 = 4.16666666666665929218e-2, -1.38888888888730564116e-3, 2.48015872888517045348e-5
 _C4, _C5, _C6 = -2.75573141792967388112e-7, 2.08757008419747316778e-9, -1.13585365213876817300e-11
+_ROUND = 6755399441055744.0  # 1.5 * 2**52: adding and subtracting it rounds to an integer
 
 
 @njit(inline="always", **_OPTS)
 def sin_cos(x: float) -> tuple[float, float]:
-    """(sin x, cos x) to about one unit in the last place for |x| < 1e5, without branches."""
-    k = math.floor(x * 0.6366197723675814 + 0.5)
+    """(sin x, cos x) to about one unit in the last place for |x| < 1e5, with selects, not branches."""
+    k = (x * 0.6366197723675814 + _ROUND) - _ROUND  # nearest integer, in arithmetic
     r = ((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3
     z = r * r
     s = r + r * z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
     c = 1.0 - 0.5 * z + z * z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    quadrant = int(k) & 3
+    quadrant = np.int64(k) & 3
     swap = (quadrant & 1) == 1
     sine = c if swap else s
     cosine = s if swap else c
     sine = -sine if quadrant >= 2 else sine
-    cosine = -cosine if quadrant == 1 or quadrant == 2 else cosine
+    cosine = -cosine if (quadrant == 1) | (quadrant == 2) else cosine
     return sine, cosine
 
 
 @njit(inline="always", **_OPTS)
-def _forward_block(
-    m: np.ndarray, i: int, gin: np.ndarray, out: np.ndarray, vscale: float, ascale: float, gscale: float
-) -> None:
+def _forward_block(m: np.ndarray, i: int, x: np.ndarray, vscale: float, ascale: float) -> None:
     """One joint's forward step of RNEA for a block of states (see kernels.rnea_core).
 
-    gin rows: 0-11 the parent's v and a (or zeros and -g for the root), 12-14 q, qd, qdd.
-    out rows: R (9), p (3), v (6), a (6), f (6).
+    x holds rows of BLOCK values. In: 0-11 the parent's v and a (or zeros and -g for the
+    root), 12-14 q, qd, qdd. Out: 15-23 R, 24-26 p, 27-32 v, 33-38 a, 39-44 f. One flat
+    buffer with rows at constant offsets lets LLVM see that the rows never overlap, so the
+    loop over the block's states vectorizes.
     """
     b = HEADER + STRIDE * i
     r = b + ROTATION
@@ -82,7 +81,7 @@ def _forward_block(
     k = b + INERTIA
     i0, i1, i2, i3, i4, i5 = m[k], m[k + 1], m[k + 2], m[k + 3], m[k + 4], m[k + 5]
     for s in range(BLOCK):
-        qi = gin[12, s]
+        qi = x[12 * BLOCK + s]
         sn, cs = sin_cos(qi)
         c = rev * cs + prism
         sn = rev * sn
@@ -96,8 +95,22 @@ def _forward_block(
         px = Px + lift * p02
         py = Py + lift * p12
         pz = Pz + lift * p22
-        wx, wy, wz, vx, vy, vz = gin[0, s], gin[1, s], gin[2, s], gin[3, s], gin[4, s], gin[5, s]
-        ax, ay, az, lx, ly, lz = gin[6, s], gin[7, s], gin[8, s], gin[9, s], gin[10, s], gin[11, s]
+        wx, wy, wz, vx, vy, vz = (
+            x[0 * BLOCK + s],
+            x[1 * BLOCK + s],
+            x[2 * BLOCK + s],
+            x[3 * BLOCK + s],
+            x[4 * BLOCK + s],
+            x[5 * BLOCK + s],
+        )
+        ax, ay, az, lx, ly, lz = (
+            x[6 * BLOCK + s],
+            x[7 * BLOCK + s],
+            x[8 * BLOCK + s],
+            x[9 * BLOCK + s],
+            x[10 * BLOCK + s],
+            x[11 * BLOCK + s],
+        )
         tx = vx + wy * pz - wz * py
         ty = vy + wz * px - wx * pz
         tz = vz + wx * py - wy * px
@@ -116,8 +129,8 @@ def _forward_block(
         Lx = r00 * ux + r10 * uy + r20 * uz
         Ly = r01 * ux + r11 * uy + r21 * uz
         Lz = p02 * ux + p12 * uy + p22 * uz
-        rate = vscale * gin[13, s]
-        acc = ascale * gin[14, s]
+        rate = vscale * x[13 * BLOCK + s]
+        acc = ascale * x[14 * BLOCK + s]
         Ax += rev * Wy * rate
         Ay -= rev * Wx * rate
         Az += rev * acc
@@ -132,32 +145,65 @@ def _forward_block(
         llx = mass * Vx - (hy * Wz - hz * Wy)
         lly = mass * Vy - (hz * Wx - hx * Wz)
         llz = mass * Vz - (hx * Wy - hy * Wx)
-        out[0, s], out[1, s], out[2, s], out[3, s], out[4, s], out[5, s] = r00, r01, p02, r10, r11, p12
-        out[6, s], out[7, s], out[8, s], out[9, s], out[10, s], out[11, s] = r20, r21, p22, px, py, pz
-        out[12, s], out[13, s], out[14, s], out[15, s], out[16, s], out[17, s] = Wx, Wy, Wz, Vx, Vy, Vz
-        out[18, s], out[19, s], out[20, s], out[21, s], out[22, s], out[23, s] = Ax, Ay, Az, Lx, Ly, Lz
-        out[24, s] = i0 * Ax + i1 * Ay + i2 * Az + hy * Lz - hz * Ly + Wy * kz - Wz * ky + Vy * llz - Vz * lly
-        out[25, s] = i1 * Ax + i3 * Ay + i4 * Az + hz * Lx - hx * Lz + Wz * kx - Wx * kz + Vz * llx - Vx * llz
-        out[26, s] = i2 * Ax + i4 * Ay + i5 * Az + hx * Ly - hy * Lx + Wx * ky - Wy * kx + Vx * lly - Vy * llx
-        out[27, s] = mass * Lx - (hy * Az - hz * Ay) + Wy * llz - Wz * lly
-        out[28, s] = mass * Ly - (hz * Ax - hx * Az) + Wz * llx - Wx * llz
-        out[29, s] = mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx
+        (
+            x[15 * BLOCK + s],
+            x[16 * BLOCK + s],
+            x[17 * BLOCK + s],
+            x[18 * BLOCK + s],
+            x[19 * BLOCK + s],
+            x[20 * BLOCK + s],
+        ) = r00, r01, p02, r10, r11, p12
+        (
+            x[21 * BLOCK + s],
+            x[22 * BLOCK + s],
+            x[23 * BLOCK + s],
+            x[24 * BLOCK + s],
+            x[25 * BLOCK + s],
+            x[26 * BLOCK + s],
+        ) = r20, r21, p22, px, py, pz
+        (
+            x[27 * BLOCK + s],
+            x[28 * BLOCK + s],
+            x[29 * BLOCK + s],
+            x[30 * BLOCK + s],
+            x[31 * BLOCK + s],
+            x[32 * BLOCK + s],
+        ) = Wx, Wy, Wz, Vx, Vy, Vz
+        (
+            x[33 * BLOCK + s],
+            x[34 * BLOCK + s],
+            x[35 * BLOCK + s],
+            x[36 * BLOCK + s],
+            x[37 * BLOCK + s],
+            x[38 * BLOCK + s],
+        ) = Ax, Ay, Az, Lx, Ly, Lz
+        x[39 * BLOCK + s] = i0 * Ax + i1 * Ay + i2 * Az + hy * Lz - hz * Ly + Wy * kz - Wz * ky + Vy * llz - Vz * lly
+        x[40 * BLOCK + s] = i1 * Ax + i3 * Ay + i4 * Az + hz * Lx - hx * Lz + Wz * kx - Wx * kz + Vz * llx - Vx * llz
+        x[41 * BLOCK + s] = i2 * Ax + i4 * Ay + i5 * Az + hx * Ly - hy * Lx + Wx * ky - Wy * kx + Vx * lly - Vy * llx
+        x[42 * BLOCK + s] = mass * Lx - (hy * Az - hz * Ay) + Wy * llz - Wz * lly
+        x[43 * BLOCK + s] = mass * Ly - (hz * Ax - hx * Az) + Wz * llx - Wx * llz
+        x[44 * BLOCK + s] = mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx
 
 
 @njit(inline="always", **_OPTS)
-def _force_to_parent_block(src: np.ndarray, out: np.ndarray) -> None:
-    """X^T f for a block: src rows R (9), p (3), f (6) at 24-29 -> out rows 0-5."""
+def _force_to_parent_block(x: np.ndarray) -> None:
+    """X^T f for a block: rows R (0-8), p (9-11), f (12-17) -> rows 18-23."""
     for s in range(BLOCK):
-        r00, r01, r02, r10, r11, r12 = src[0, s], src[1, s], src[2, s], src[3, s], src[4, s], src[5, s]
-        r20, r21, r22, px, py, pz = src[6, s], src[7, s], src[8, s], src[9, s], src[10, s], src[11, s]
-        nx, ny, nz, fx, fy, fz = src[24, s], src[25, s], src[26, s], src[27, s], src[28, s], src[29, s]
+        r00, r01, r02 = x[0 * BLOCK + s], x[1 * BLOCK + s], x[2 * BLOCK + s]
+        r10, r11, r12 = x[3 * BLOCK + s], x[4 * BLOCK + s], x[5 * BLOCK + s]
+        r20, r21, r22 = x[6 * BLOCK + s], x[7 * BLOCK + s], x[8 * BLOCK + s]
+        px, py, pz = x[9 * BLOCK + s], x[10 * BLOCK + s], x[11 * BLOCK + s]
+        nx, ny, nz = x[12 * BLOCK + s], x[13 * BLOCK + s], x[14 * BLOCK + s]
+        fx, fy, fz = x[15 * BLOCK + s], x[16 * BLOCK + s], x[17 * BLOCK + s]
         Fx = r00 * fx + r01 * fy + r02 * fz
         Fy = r10 * fx + r11 * fy + r12 * fz
         Fz = r20 * fx + r21 * fy + r22 * fz
-        out[0, s] = r00 * nx + r01 * ny + r02 * nz + py * Fz - pz * Fy
-        out[1, s] = r10 * nx + r11 * ny + r12 * nz + pz * Fx - px * Fz
-        out[2, s] = r20 * nx + r21 * ny + r22 * nz + px * Fy - py * Fx
-        out[3, s], out[4, s], out[5, s] = Fx, Fy, Fz
+        x[18 * BLOCK + s] = r00 * nx + r01 * ny + r02 * nz + py * Fz - pz * Fy
+        x[19 * BLOCK + s] = r10 * nx + r11 * ny + r12 * nz + pz * Fx - px * Fz
+        x[20 * BLOCK + s] = r20 * nx + r21 * ny + r22 * nz + px * Fy - py * Fx
+        x[21 * BLOCK + s] = Fx
+        x[22 * BLOCK + s] = Fy
+        x[23 * BLOCK + s] = Fz
 
 
 @njit(parallel=True, **_OPTS)
@@ -175,32 +221,26 @@ def rnea_blocks(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f
     for block in prange(blocks):
         first = block * BLOCK
         size = min(BLOCK, count - first)
-        store = np.empty((n, 30, BLOCK))
-        gin = np.zeros((15, BLOCK))
-        out = np.empty((30, BLOCK))
+        store = np.empty((n, 30, BLOCK))  # per joint: R, p, v, a, f
+        x = np.zeros(45 * BLOCK)
         for i in range(n):
             parent = int(m[HEADER + STRIDE * i + PARENT])
             for s in range(size):
-                gin[12, s] = q[first + s, i]
-                gin[13, s] = qd[first + s, i]
-                gin[14, s] = qdd[first + s, i]
-            for s in range(size, BLOCK):
-                gin[12, s] = 0.0
-                gin[13, s] = 0.0
-                gin[14, s] = 0.0
-            if parent >= 0:
-                for row in range(12):
+                x[12 * BLOCK + s] = q[first + s, i]
+                x[13 * BLOCK + s] = qd[first + s, i]
+                x[14 * BLOCK + s] = qdd[first + s, i]
+            for row in range(12):
+                if parent >= 0:
                     for s in range(BLOCK):
-                        gin[row, s] = store[parent, 12 + row, s]
-            else:
-                for row in range(12):
+                        x[row * BLOCK + s] = store[parent, 12 + row, s]
+                else:
                     value = -gscale * m[GRAVITY + row - 9] if row >= 9 else 0.0
                     for s in range(BLOCK):
-                        gin[row, s] = value
-            _forward_block(m, i, gin, out, vscale, ascale, gscale)
+                        x[row * BLOCK + s] = value
+            _forward_block(m, i, x, vscale, ascale)
             for row in range(30):
                 for s in range(BLOCK):
-                    store[i, row, s] = out[row, s]
+                    store[i, row, s] = x[(15 + row) * BLOCK + s]
         for i in range(n - 1, -1, -1):
             b = HEADER + STRIDE * i
             prism = m[b + KIND]
@@ -217,7 +257,13 @@ def rnea_blocks(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f
                 tau[first + s, i] = value
             parent = int(m[b + PARENT])
             if parent >= 0:
-                _force_to_parent_block(store[i], out)
+                for row in range(12):
+                    for s in range(BLOCK):
+                        x[row * BLOCK + s] = store[i, row, s]
                 for row in range(6):
                     for s in range(BLOCK):
-                        store[parent, 24 + row, s] += out[row, s]
+                        x[(12 + row) * BLOCK + s] = store[i, 24 + row, s]
+                _force_to_parent_block(x)
+                for row in range(6):
+                    for s in range(BLOCK):
+                        store[parent, 24 + row, s] += x[(18 + row) * BLOCK + s]
