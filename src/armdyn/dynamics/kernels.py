@@ -19,8 +19,6 @@ wrong (1, 2, 3 for the shape of q, qd, qdd/tau; 11, 12, 13 for a NaN or infinity
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit, prange
 
@@ -43,6 +41,7 @@ from armdyn.dynamics.compiled import (
     TOOL_ROTATION,
     VISCOUS,
 )
+from armdyn.dynamics.vectorized import sin_cos
 
 WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION, WITH_WRENCH = 1, 2, 4, 8, 16
 INVERSE_DYNAMICS = WITH_QDD | WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
@@ -71,7 +70,7 @@ def _joint_transform(m: np.ndarray, j: int, qj: float, w: np.ndarray, o: int) ->
     b = HEADER + STRIDE * j
     r = b + ROTATION
     if m[b + KIND] == 0.0:
-        c, s = math.cos(qj), math.sin(qj)
+        s, c = sin_cos(qj)
         for row in range(3):
             x, y = m[r + 3 * row], m[r + 3 * row + 1]
             w[o + 3 * row] = x * c + y * s
@@ -179,7 +178,7 @@ def rnea_core(
         px, py, pz = m[b + POSITION], m[b + POSITION + 1], m[b + POSITION + 2]
         qi = q[i]
         if m[b + KIND] == 0.0:
-            c, s = math.cos(qi), math.sin(qi)
+            s, c = sin_cos(qi)
             r00 = p00 * c + p01 * s
             r01 = p01 * c - p00 * s
             r10 = p10 * c + p11 * s
