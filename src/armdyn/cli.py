@@ -129,6 +129,42 @@ def _dynamics_table(arm: Robot) -> Table:
     return table
 
 
+@app.command()
+def derive(
+    name: str,
+    latex: bool = typer.Option(False, "--latex", help="Print LaTeX instead of the terminal form."),
+    output: str | None = typer.Option(None, "--output", "-o", help="Write to this file instead of printing."),
+    code: str | None = typer.Option(None, "--code", help="Generate code instead: 'python' or 'c'."),
+    symbolic: bool = typer.Option(
+        True, help="For the book's arms: keep their parameters as symbols (m1, m2, a1, ...)."
+    ),
+    method: str = typer.Option("auto", help="'lagrange' (the book's trace formula), 'recursive' or 'auto'."),
+) -> None:
+    """Derive an arm's robot equation in closed form: M, Vm, V, G (and F), as text, LaTeX or code."""
+    from armdyn.symbolic import derive as derive_closed_form
+
+    book = {"two_link_planar", "polar_rp", "cylindrical"}
+    arm = getattr(catalog, name)(symbolic=True) if symbolic and name in book else _arm(name)
+    try:
+        form = derive_closed_form(arm, method=method)
+    except ModelError as error:
+        console.print(f"[red]error:[/red] {error}")
+        raise typer.Exit(2) from None
+    if code is not None:
+        if code not in ("python", "c"):
+            console.print("[red]error:[/red] --code must be 'python' or 'c'")
+            raise typer.Exit(2)
+        text = form.to_python() if code == "python" else form.to_c()
+    else:
+        text = form.latex() if latex else form.pretty()
+    if output:
+        with open(output, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        console.print(f"wrote {output}")
+    else:
+        print(text)
+
+
 def main() -> None:
     app()
 

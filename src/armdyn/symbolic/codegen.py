@@ -1,0 +1,213 @@
+"""Code generation from the closed form: common-subexpression elimination (SymEngine),
+Python and C source, and Numba-compiled functions that take one state or a batch."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numba
+import numpy as np
+import symengine as se
+import sympy
+
+from armdyn.errors import ModelError
+from armdyn.symbolic.derive import Derivation
+
+FUNCTIONS = {  # name -> (state arguments, shape of the result)
+    "M": (("q",), "matrix"),
+    "Vm": (("q", "qd"), "matrix"),
+    "G": (("q",), "vector"),
+    "tau": (("q", "qd", "qdd"), "vector"),
+}
+
+
+def _entries(raw: Derivation, name: str) -> list[tuple[tuple[int, ...], se.Basic]]:
+    n = len(raw.q)
+    if name == "M":
+        return [((i, j), raw.M[i][j]) for i in range(n) for j in range(n)]
+    if name == "Vm":
+        return [((i, j), raw.Vm[i][j]) for i in range(n) for j in range(n)]
+    return [((i,), x) for i, x in enumerate(raw.G if name == "G" else raw.tau)]
+
+
+def count_operations(expr: se.Basic) -> int:
+    """Additions, multiplications, powers (as multiplications) and function calls in an expression."""
+    if not expr.args:
+        return 0
+    own = len(expr.args) - 1 if isinstance(expr, (se.Add, se.Mul)) else 1
+    if isinstance(expr, se.Pow) and expr.args[1].is_Integer:
+        own = max(abs(int(expr.args[1])) - 1, 1)
+    return own + sum(count_operations(a) for a in expr.args)
+
+
+def _cse(exprs: list[se.Basic]) -> tuple[list[tuple[se.Symbol, se.Basic]], list[se.Basic]]:
+    replacements, reduced = se.cse(exprs)
+    return list(replacements), list(reduced)
+
+
+def operation_counts(raw: Derivation, cse: bool) -> dict[str, int]:
+    counts = {}
+    for name in FUNCTIONS:
+        exprs = [x for _, x in _entries(raw, name)]
+        if cse:
+            replacements, reduced = _cse(exprs)
+            exprs = [x for _, x in replacements] + reduced
+        counts[name] = sum(count_operations(x) for x in exprs)
+    return counts
+
+
+def _body(raw: Derivation, name: str, line: Callable[[str, str], str], value: Callable[[se.Basic], str]) -> list[str]:
+    """Statements: trigonometric and state variables that the expressions use, CSE temporaries, results."""
+    entries = _entries(raw, name)
+    replacements, reduced = _cse([x for _, x in entries])
+    used = set()
+    for expr in [x for _, x in replacements] + reduced:
+        used |= {s.name for s in expr.free_symbols}
+    lines = []
+    for i, (c, s) in raw.trig.items():
+        if c.name in used:
+            lines.append(line(c.name, f"cos(q[{i}])"))
+        if s.name in used:
+            lines.append(line(s.name, f"sin(q[{i}])"))
+    for group in (raw.q, raw.qd, raw.qdd):
+        for i, symbol in enumerate(group):
+            if symbol.name in used:
+                array = symbol.name.rstrip("0123456789")
+                lines.append(line(symbol.name, f"{array}[{i}]"))
+    lines += [line(str(symbol), value(expr)) for symbol, expr in replacements]
+    for (index, _), expr in zip(entries, reduced, strict=True):
+        target = f"out[{', '.join(map(str, index))}]" if len(index) > 1 else f"out[{index[0]}]"
+        lines.append(line(target, value(expr)))
+    return lines
+
+
+def _python_value(expr: se.Basic) -> str:
+    return str(expr)
+
+
+def python_source(raw: Derivation, parameters: list[str]) -> str:
+    """The four functions as Python source; ``out`` receives the result."""
+    extra = "".join(f", {p}" for p in parameters)
+    parts = ["from math import cos, sin", "from numpy import sign", ""]
+    for name, (args, _) in FUNCTIONS.items():
+        parts.append(f"def {name}({', '.join(args)}, out{extra}):")
+        parts += [f"    {s}" for s in _body(raw, name, lambda t, v: f"{t} = {v}", _python_value)]
+        parts += ["    return out", "", ""]
+    return "\n".join(parts).rstrip() + "\n"
+
+
+def c_source(raw: Derivation, parameters: list[str]) -> str:
+    """The four functions as C99; matrices are row major (out[i * n + j])."""
+    n = len(raw.q)
+    extra = "".join(f", double {p}" for p in parameters)
+
+    def c_line(target: str, value: str) -> str:
+        if target.startswith("out["):
+            index = target[4:-1].split(", ")
+            flat = index[0] if len(index) == 1 else f"{int(index[0]) * n + int(index[1])}"
+            return f"out[{flat}] = {value};"
+        return f"const double {target} = {value};"
+
+    def c_value(expr: se.Basic) -> str:
+        text = sympy.ccode(sympy.sympify(expr), standard="c99")
+        return text
+
+    parts = ["#include <math.h>", ""]
+    for name, (args, _) in FUNCTIONS.items():
+        signature = ", ".join(f"const double *{a}" for a in args)
+        parts.append(f"void {name}({signature}, double *out{extra}) {{")
+        parts += [f"    {s}" for s in _body(raw, name, c_line, c_value)]
+        parts += ["}", ""]
+    return "\n".join(parts)
+
+
+class CompiledClosedForm:
+    """The closed form as Numba functions: each takes one state (n,) or a batch (..., n)."""
+
+    def __init__(self, n: int, one: dict[str, Callable], batch: dict[str, Callable]) -> None:
+        self.n = n
+        self._one, self._batch = one, batch
+
+    def _call(self, name: str, *states: object, out: np.ndarray | None = None) -> np.ndarray:
+        n = self.n
+        shape = (n, n) if FUNCTIONS[name][1] == "matrix" else (n,)
+        first = states[0]
+        if first.__class__ is np.ndarray and first.ndim == 1:
+            result = np.empty(shape) if out is None else out
+            try:
+                self._one[name](*states, result)
+                return result
+            except (TypeError, numba.core.errors.TypingError):
+                pass
+        arrays = [np.asarray(s, dtype=float) for s in states]
+        for arg, a in zip(FUNCTIONS[name][0], arrays, strict=True):
+            if a.ndim == 0 or a.shape[-1] != n or not np.all(np.isfinite(a)):
+                raise ModelError(f"{arg} must be a finite array of shape (..., {n}), got {a.shape}")
+        batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
+        full = (*batch, n)
+        flat = [
+            np.require(a if a.shape == full else np.broadcast_to(a, full), np.float64, ["C", "W"]).reshape(-1, n)
+            for a in arrays
+        ]
+        result = np.empty((*batch, *shape)) if out is None else out
+        self._batch[name](*flat, result.reshape(-1, *shape))
+        return result
+
+    def M(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
+        return self._call("M", q, out=out)
+
+    def Vm(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
+        return self._call("Vm", q, qd, out=out)
+
+    def G(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
+        return self._call("G", q, out=out)
+
+    def tau(self, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
+        return self._call("tau", q, qd, qdd, out=out)
+
+
+def _batch_loop(one: Callable, arity: int) -> Callable:
+    if arity == 1:
+
+        def loop1(a: np.ndarray, out: np.ndarray) -> None:
+            for k in numba.prange(a.shape[0]):
+                one(a[k], out[k])
+
+        return numba.njit(parallel=True)(loop1)
+    if arity == 2:
+
+        def loop2(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+            for k in numba.prange(a.shape[0]):
+                one(a[k], b[k], out[k])
+
+        return numba.njit(parallel=True)(loop2)
+
+    def loop3(a: np.ndarray, b: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:
+        for k in numba.prange(a.shape[0]):
+            one(a[k], b[k], c[k], out[k])
+
+    return numba.njit(parallel=True)(loop3)
+
+
+def compile_closed_form(raw: Derivation, values: dict[str, float]) -> CompiledClosedForm:
+    """Generate Python with the parameter values as constants, and compile it with Numba."""
+    substituted = Derivation(
+        **{
+            **raw.__dict__,
+            "M": [[x.subs({se.Symbol(k): v for k, v in values.items()}) for x in row] for row in raw.M],
+            "Vm": [[x.subs({se.Symbol(k): v for k, v in values.items()}) for x in row] for row in raw.Vm],
+            "G": [x.subs({se.Symbol(k): v for k, v in values.items()}) for x in raw.G],
+            "tau": [x.subs({se.Symbol(k): v for k, v in values.items()}) for x in raw.tau],
+        }
+    )
+    namespace: dict[str, object] = {"cos": math.cos, "sin": math.sin, "sign": np.sign}
+    exec(compile(python_source(substituted, []), "<armdyn closed form>", "exec"), namespace)
+    vector, matrix = "float64[::1]", "float64[:, ::1]"
+    one, batch = {}, {}
+    for name, (args, kind) in FUNCTIONS.items():
+        result = matrix if kind == "matrix" else vector
+        signature = f"{result}({', '.join([vector] * len(args))}, {result})"
+        one[name] = numba.njit(signature, fastmath={"contract"}, error_model="numpy")(namespace[name])
+        batch[name] = _batch_loop(one[name], len(args))
+    return CompiledClosedForm(len(raw.q), one, batch)
