@@ -86,14 +86,14 @@ def _python_value(expr: se.Basic) -> str:
     return str(expr)
 
 
-def python_source(raw: Derivation, parameters: list[str]) -> str:
-    """The four functions as Python source; ``out`` receives the result."""
+def python_source(raw: Derivation, parameters: list[str], returns: bool = True) -> str:
+    """The four functions as Python source; ``out`` receives the result (and is returned)."""
     extra = "".join(f", {p}" for p in parameters)
     parts = ["from math import cos, sin", "from numpy import sign", ""]
     for name, (args, _) in FUNCTIONS.items():
         parts.append(f"def {name}({', '.join(args)}, out{extra}):")
         parts += [f"    {s}" for s in _body(raw, name, lambda t, v: f"{t} = {v}", _python_value)]
-        parts += ["    return out", "", ""]
+        parts += ["    return out" if returns else "    return", "", ""]
     return "\n".join(parts).rstrip() + "\n"
 
 
@@ -123,48 +123,72 @@ def c_source(raw: Derivation, parameters: list[str]) -> str:
 
 
 class CompiledClosedForm:
-    """The closed form as Numba functions: each takes one state (n,) or a batch (..., n)."""
+    """The closed form as Numba functions M(q), Vm(q, qd), G(q), tau(q, qd, qdd): each takes one
+    state (n,) or a batch (..., n) and an optional ``out`` array."""
 
     def __init__(self, n: int, one: dict[str, Callable], batch: dict[str, Callable]) -> None:
         self.n = n
-        self._one, self._batch = one, batch
+        for name, (args, kind) in FUNCTIONS.items():
+            shape = (n, n) if kind == "matrix" else (n,)
+            general = self._general(name, batch[name], shape)
+            setattr(self, name, _fast_call(len(args), one[name], general, shape))
 
-    def _call(self, name: str, *states: object, out: np.ndarray | None = None) -> np.ndarray:
+    def _general(self, name: str, kernel: Callable, shape: tuple[int, ...]) -> Callable:
         n = self.n
-        shape = (n, n) if FUNCTIONS[name][1] == "matrix" else (n,)
-        first = states[0]
-        if first.__class__ is np.ndarray and first.ndim == 1:
-            result = np.empty(shape) if out is None else out
-            try:
-                self._one[name](*states, result)
-                return result
-            except (TypeError, numba.core.errors.TypingError):
-                pass
-        arrays = [np.asarray(s, dtype=float) for s in states]
-        for arg, a in zip(FUNCTIONS[name][0], arrays, strict=True):
-            if a.ndim == 0 or a.shape[-1] != n or not np.all(np.isfinite(a)):
-                raise ModelError(f"{arg} must be a finite array of shape (..., {n}), got {a.shape}")
-        batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
-        full = (*batch, n)
-        flat = [
-            np.require(a if a.shape == full else np.broadcast_to(a, full), np.float64, ["C", "W"]).reshape(-1, n)
-            for a in arrays
-        ]
-        result = np.empty((*batch, *shape)) if out is None else out
-        self._batch[name](*flat, result.reshape(-1, *shape))
+
+        def general(states: tuple[object, ...], out: np.ndarray | None) -> np.ndarray:
+            arrays = [np.asarray(s, dtype=float) for s in states]
+            for arg, a in zip(FUNCTIONS[name][0], arrays, strict=True):
+                if a.ndim == 0 or a.shape[-1] != n or not np.all(np.isfinite(a)):
+                    raise ModelError(f"{arg} must be a finite array of shape (..., {n}), got {a.shape}")
+            batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
+            full = (*batch, n)
+            flat = [
+                np.require(a if a.shape == full else np.broadcast_to(a, full), np.float64, ["C", "W"]).reshape(-1, n)
+                for a in arrays
+            ]
+            result = np.empty((*batch, *shape)) if out is None else out
+            kernel(*flat, result.reshape(-1, *shape))
+            return result
+
+        return general
+
+
+def _fast_call(arity: int, one: Callable, general: Callable, shape: tuple[int, ...]) -> Callable:
+    """A call that runs the one-state function on 1-D float64 arrays and the batch path otherwise."""
+    empty, ndarray = np.empty, np.ndarray
+
+    def fast(states: tuple[object, ...], out: np.ndarray | None) -> np.ndarray:
+        result = empty(shape) if out is None else out
+        try:
+            one(*states, result)
+        except TypeError:  # not 1-D C-contiguous float64 arrays
+            return general(states, out)
         return result
 
-    def M(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
-        return self._call("M", q, out=out)
+    if arity == 1:
 
-    def Vm(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-        return self._call("Vm", q, qd, out=out)
+        def call1(q: object, out: np.ndarray | None = None) -> np.ndarray:
+            if q.__class__ is ndarray and q.ndim == 1 and q.shape == shape[-1:]:
+                return fast((q,), out)
+            return general((q,), out)
 
-    def G(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
-        return self._call("G", q, out=out)
+        return call1
+    if arity == 2:
 
-    def tau(self, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
-        return self._call("tau", q, qd, qdd, out=out)
+        def call2(q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
+            if q.__class__ is ndarray and q.ndim == 1:
+                return fast((q, qd), out)
+            return general((q, qd), out)
+
+        return call2
+
+    def call3(q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
+        if q.__class__ is ndarray and q.ndim == 1:
+            return fast((q, qd, qdd), out)
+        return general((q, qd, qdd), out)
+
+    return call3
 
 
 def _batch_loop(one: Callable, arity: int) -> Callable:
@@ -202,12 +226,12 @@ def compile_closed_form(raw: Derivation, values: dict[str, float]) -> CompiledCl
         }
     )
     namespace: dict[str, object] = {"cos": math.cos, "sin": math.sin, "sign": np.sign}
-    exec(compile(python_source(substituted, []), "<armdyn closed form>", "exec"), namespace)
+    exec(compile(python_source(substituted, [], returns=False), "<armdyn closed form>", "exec"), namespace)
     vector, matrix = "float64[::1]", "float64[:, ::1]"
     one, batch = {}, {}
     for name, (args, kind) in FUNCTIONS.items():
         result = matrix if kind == "matrix" else vector
-        signature = f"{result}({', '.join([vector] * len(args))}, {result})"
+        signature = f"void({', '.join([vector] * len(args))}, {result})"
         one[name] = numba.njit(signature, fastmath={"contract"}, error_model="numpy")(namespace[name])
         batch[name] = _batch_loop(one[name], len(args))
     return CompiledClosedForm(len(raw.q), one, batch)
