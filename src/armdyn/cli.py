@@ -165,6 +165,50 @@ def derive(
         print(text)
 
 
+@app.command()
+def check(
+    name: str,
+    samples: int = typer.Option(300, help="Random joint configurations to sample before refining."),
+    seed: int = typer.Option(0, help="Random seed."),
+) -> None:
+    """Check the properties of Table 3.3.1 on an arm and compute its bounds."""
+    from armdyn.properties import check as check_properties
+
+    report = check_properties(_arm(name), samples=samples, seed=seed)
+    console.print(report.table())
+    console.print("bounds: " + ", ".join(f"{key} = {value:.6g}" for key, value in report.bounds.items()))
+    for note in report.notes:
+        console.print(f"note: {note}")
+    console.print("[green]all properties hold[/green]" if report.all_hold else "[red]some properties fail[/red]")
+    if not report.all_hold:
+        raise typer.Exit(1)
+
+
+@app.command()
+def identify(
+    name: str,
+    csv: str = typer.Argument(..., help="CSV with columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun (a header row)."),
+) -> None:
+    """Identify an arm's base parameters by least squares from measured samples in a CSV file."""
+    from armdyn.dynamics.regressor import identify as identify_parameters
+
+    arm = _arm(name)
+    try:
+        data = np.genfromtxt(csv, delimiter=",", names=True)
+    except OSError as error:
+        console.print(f"[red]error:[/red] {error}")
+        raise typer.Exit(2) from None
+    columns = {prefix: [f"{prefix}{i + 1}" for i in range(arm.n)] for prefix in ("q", "qd", "qdd", "tau")}
+    missing = [c for group in columns.values() for c in group if c not in (data.dtype.names or ())]
+    if missing:
+        console.print(f"[red]error:[/red] {csv} lacks the columns {missing}")
+        raise typer.Exit(2)
+    arrays = {key: np.column_stack([data[c] for c in group]) for key, group in columns.items()}
+    result = identify_parameters(arm, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"])
+    console.print(result.table())
+    console.print(f"residual rms {result.residual_rms:.3g} N m over {result.samples} samples")
+
+
 def main() -> None:
     app()
 

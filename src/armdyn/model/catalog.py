@@ -64,7 +64,9 @@ def polar_rp(m: object = 1.0, g: object = 9.8, symbolic: bool = False) -> Robot:
     """Example 3.2-1: the two-link polar (RP) arm, a point mass m at radius r.
 
     q = [theta, r]: theta turns the arm in the vertical x-y plane (gravity -g y), r is
-    the extension along the arm; the mass sits at the end of the prismatic link.
+    the extension along the arm; the mass sits at the end of the prismatic link. The
+    extension is limited to [0.1, 1.5] m: at r = 0 the point mass would sit on the axis,
+    where M = diag(m r^2, m) is singular.
     """
     if symbolic:
         (m,) = _symbols("m,")
@@ -76,7 +78,7 @@ def polar_rp(m: object = 1.0, g: object = 9.8, symbolic: bool = False) -> Robot:
             Joint("prismatic", axis=np.array([1.0, 0.0, 0.0]), name="r"),
             Inertial(m, name="r"),
             parent=0,
-            limits=(0.0, np.inf),
+            limits=(0.1, 1.5),
         ),
     ]
     return Robot(

@@ -417,6 +417,19 @@ class Robot:
         """P(q) = -sum m_i g^T p_ci: a float for one state, an array (...) for a batch."""
         return self._engine().potential_energy(q)
 
+    def regressor(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+        """W(q, qd, qdd), shape (..., n, 14 n), with W @ parameters() = inverse_dynamics (recursive, O(n d))."""
+        from armdyn.dynamics import regressor
+
+        return regressor.regressor(self, q, qd, qdd)
+
+    def parameters(self) -> np.ndarray:
+        """phi: per link [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz] (about the link origin),
+        then per joint [Fv, Fc+, Fc-, Ia] (joint-side friction, reflected motor inertia)."""
+        from armdyn.dynamics import regressor
+
+        return regressor.parameters(self)
+
     # ----- kinematics (armdyn.kinematics) ----------------------------------------------
     def link_transforms(self, q: np.ndarray) -> np.ndarray:
         """T_i(q) of every link in the world frame, shape (..., n, 4, 4)."""

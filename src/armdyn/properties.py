@@ -1,0 +1,307 @@
+"""The properties of the robot equation (Table 3.3.1, BOOK.md section 3): checks and bounds.
+
+Every bound is computed: the quantity is evaluated on random samples of the joint range
+(the arm's limits; the whole circle for revolute joints without limits; a span from the
+lower limit for prismatic joints without limits, where bounds depend on q), and the
+extremes are then refined by a bounded local optimizer (scipy.optimize, L-BFGS-B) started
+from the best samples. The report says for each bound how it was found.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize
+
+from armdyn.errors import ModelError
+from armdyn.model.robot import Robot
+
+TOLERANCE = 1e-9
+
+
+@dataclass
+class Row:
+    """One property: its statement, whether it holds, the worst value found and the bound."""
+
+    name: str
+    statement: str
+    holds: bool
+    worst: float
+    bound: float | None
+    how: str
+
+
+@dataclass
+class Report:
+    """The properties of Table 3.3.1 for one arm over a joint range."""
+
+    arm: str
+    rows: list[Row]
+    bounds: dict[str, float]
+    ranges: list[tuple[float, float]]
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def all_hold(self) -> bool:
+        return all(row.holds for row in self.rows)
+
+    def row(self, name: str) -> Row:
+        for row in self.rows:
+            if row.name == name:
+                return row
+        raise KeyError(name)
+
+    def table(self) -> object:
+        """A rich Table of the report."""
+        from rich.table import Table
+
+        table = Table(title=f"Table 3.3.1 for {self.arm}")
+        for column in ("property", "statement", "holds", "worst found", "bound", "how"):
+            table.add_column(column, overflow="fold")
+        for row in self.rows:
+            bound = "" if row.bound is None else f"{row.bound:.6g}"
+            table.add_row(
+                row.name, row.statement, "[green]yes[/green]" if row.holds else "[red]NO[/red]",
+                f"{row.worst:.3g}", bound, row.how,
+            )  # fmt: skip
+        return table
+
+
+def joint_ranges(
+    robot: Robot, limits: Sequence[tuple[float, float]] | None = None, prismatic_span: float = 1.0
+) -> list[tuple[float, float]]:
+    """The range sampled for each joint (see the module docstring)."""
+    if limits is not None:
+        ranges = [(float(lo), float(hi)) for lo, hi in limits]
+        if len(ranges) != robot.n or any(not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi) for lo, hi in ranges):
+            raise ModelError(f"limits must be {robot.n} finite (lower, upper) pairs with lower <= upper")
+        return ranges
+    ranges = []
+    for (lower, upper), kind in zip(robot.qlim.T, robot.kinds, strict=True):
+        if np.isfinite(lower) and np.isfinite(upper):
+            ranges.append((float(lower), float(upper)))
+        elif kind == "revolute":
+            ranges.append((-np.pi, np.pi))
+        elif np.isfinite(lower):
+            ranges.append((float(lower), float(lower) + prismatic_span))
+        elif np.isfinite(upper):
+            ranges.append((float(upper) - prismatic_span, float(upper)))
+        else:
+            ranges.append((-prismatic_span / 2, prismatic_span / 2))
+    return ranges
+
+
+def _extreme(
+    f: Callable[[np.ndarray], float], starts: np.ndarray, values: np.ndarray, bounds: list, largest: bool
+) -> tuple[float, str]:
+    """Refine the extreme of f from the best sampled points with L-BFGS-B; (value, how)."""
+    sign = -1.0 if largest else 1.0
+    best = sign * values.min() if not largest else values.max()
+    order = np.argsort(sign * values)[:3]
+    for start in starts[order]:
+        result = minimize(lambda x: sign * f(x), start, method="L-BFGS-B", bounds=bounds)
+        if result.success or result.status == 2:
+            value = sign * result.fun
+            best = max(best, value) if largest else min(best, value)
+    how = f"{len(values)} samples, refined by L-BFGS-B from the best 3"
+    return float(best), how
+
+
+def _unit(x: np.ndarray) -> np.ndarray:
+    norm = np.linalg.norm(x)
+    return x / norm if norm > 0 else x
+
+
+def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequence | None = None) -> tuple:
+    """(mu1, mu2) with mu1 I <= M(q) <= mu2 I over the joint range (3.3.6)."""
+    report = check(robot, samples=samples, seed=seed, limits=limits, only=("inertia",))
+    return report.bounds["mu1"], report.bounds["mu2"]
+
+
+def check(
+    robot: Robot,
+    samples: int = 300,
+    seed: int = 0,
+    limits: Sequence[tuple[float, float]] | None = None,
+    only: Sequence[str] | None = None,
+) -> Report:
+    """Evaluate the properties of Table 3.3.1 on ``robot`` (see the module docstring).
+
+    limits: (lower, upper) per joint to use instead of the arm's own; only: restrict to
+    some groups ("inertia", "coriolis", "skew", "friction", "gravity", "linearity",
+    "passivity") for speed.
+    """
+    if samples < 4:
+        raise ModelError(f"samples must be at least 4, got {samples}")
+    groups = set(only or ("inertia", "coriolis", "skew", "friction", "gravity", "linearity", "passivity"))
+    n = robot.n
+    ranges = joint_ranges(robot, limits)
+    box = [(lo, hi) for lo, hi in ranges]
+    rng = np.random.default_rng(seed)
+    low, high = np.array(ranges).T
+    q = rng.uniform(low, high, (samples, n))
+    x = np.array([_unit(v) for v in rng.normal(size=(samples, n))])
+    y = np.array([_unit(v) for v in rng.normal(size=(samples, n))])
+    rows: list[Row] = []
+    bounds: dict[str, float] = {}
+    notes = []
+    prismatic = [i for i, kind in enumerate(robot.kinds) if kind == "prismatic"]
+    if prismatic:
+        notes.append(
+            "the arm has prismatic joints, so its bounds depend on q; they hold over the range "
+            + ", ".join(f"q{i + 1} in [{ranges[i][0]:.3g}, {ranges[i][1]:.3g}]" for i in prismatic)
+        )
+
+    if "inertia" in groups:
+        _inertia_rows(robot, q, box, rows, bounds)
+    if "coriolis" in groups or "skew" in groups:
+        _coriolis_rows(robot, q, x, y, box, rows, bounds, groups)
+    if "friction" in groups:
+        _friction_rows(robot, x, rng, rows, bounds)
+    if "gravity" in groups:
+        G = robot.gravity_vector(q)
+        norms = np.linalg.norm(G, axis=-1)
+        gb, how = _extreme(lambda p: float(np.linalg.norm(robot.gravity_vector(p))), q, norms, box, True)
+        bounds["gb"] = gb
+        rows.append(
+            Row("gravity bound", "||G(q)|| <= gb", bool(np.all(norms <= gb * (1 + 1e-12))), norms.max(), gb, how)
+        )
+    if "linearity" in groups:
+        qd, qdd = rng.uniform(-2, 2, (2, samples, n))
+        W = robot.regressor(q, qd, qdd)
+        tau = robot.inverse_dynamics(q, qd, qdd)
+        error = np.abs(W @ robot.parameters() - tau).max() / (np.abs(tau).max() + 1e-300)
+        rows.append(Row("linearity", "M qdd + Vm qd + F + G = W(q, qd, qdd) phi", error < 1e-10, error, None,
+                        f"{samples} samples, recursive regressor"))  # fmt: skip
+    if "passivity" in groups:
+        _passivity_rows(robot, ranges, rows)
+    return Report(robot.name, rows, bounds, ranges, notes)
+
+
+def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bounds: dict[str, float]) -> None:
+    M = robot.inertia_matrix(q)
+    scale = np.abs(M).max()
+    asymmetry = np.abs(M - np.swapaxes(M, -1, -2)).max() / scale
+    rows.append(Row("symmetry", "M(q) = M(q)^T", asymmetry < TOLERANCE, asymmetry, None, f"{len(q)} samples"))
+    eig = np.linalg.eigvalsh(0.5 * (M + np.swapaxes(M, -1, -2)))
+
+    def smallest(p: np.ndarray) -> float:
+        return float(np.linalg.eigvalsh(robot.inertia_matrix(p))[0])
+
+    def largest(p: np.ndarray) -> float:
+        return float(np.linalg.eigvalsh(robot.inertia_matrix(p))[-1])
+
+    mu1, how1 = _extreme(smallest, q, eig[:, 0], box, False)
+    mu2, how2 = _extreme(largest, q, eig[:, -1], box, True)
+    bounds["mu1"], bounds["mu2"] = mu1, mu2
+    rows.append(Row("positive definite", "M(q) > 0", mu1 > 0, eig[:, 0].min(), mu1, how1))
+    rows.append(Row("inertia bounds", "mu1 I <= M(q) <= mu2 I, (1/mu2) I <= M^-1 <= (1/mu1) I",
+                    mu1 > 0 and mu1 <= eig[:, 0].min() + 1e-12 and eig[:, -1].max() <= mu2 + 1e-12,
+                    eig[:, -1].max(), mu2, how2))  # fmt: skip
+    ones = np.abs(M).sum(axis=-2).max(axis=-1)  # induced 1-norm: the largest column sum
+
+    def norm1(p: np.ndarray) -> float:
+        return float(np.abs(robot.inertia_matrix(p)).sum(axis=0).max())
+
+    m1, _ = _extreme(norm1, q, ones, box, False)
+    m2, how = _extreme(norm1, q, ones, box, True)
+    bounds["m1"], bounds["m2"] = m1, m2
+    rows.append(Row("norm bounds", "m1 <= ||M(q)||_1 <= m2 (induced 1-norm)", 0 < m1 <= m2, ones.max(), m2, how))
+
+
+def _coriolis_rows(
+    robot: Robot, q: np.ndarray, x: np.ndarray, y: np.ndarray, box: list, rows: list[Row], bounds: dict, groups: set
+) -> None:
+    n = robot.n
+    Vm = robot.coriolis_matrix(q, x)
+    V = robot.coriolis_vector(q, x)
+    scale = np.abs(Vm).max() + 1e-300
+    if "coriolis" in groups:
+        stretched = robot.coriolis_vector(q, 2.5 * x)
+        quadratic = np.abs(stretched - 6.25 * V).max() / (6.25 * np.abs(V).max() + 1e-300)
+        rows.append(Row("quadratic", "V(q, s qd) = s^2 V(q, qd)", quadratic < TOLERANCE, quadratic, None,
+                        f"{len(q)} samples, s = 2.5"))  # fmt: skip
+        norms = np.linalg.norm(Vm, ord=2, axis=(-2, -1))
+
+        def vm_norm(p: np.ndarray) -> float:
+            return float(np.linalg.norm(robot.coriolis_matrix(p[:n], _unit(p[n:])), ord=2))
+
+        starts = np.hstack([q, x])
+        vb, how = _extreme(vm_norm, starts, norms, box + [(-1.0, 1.0)] * n, True)
+        bounds["vb"] = vb
+        v_ratio = np.linalg.norm(V, axis=-1)  # |x| = 1
+        holds = bool(np.all(v_ratio <= vb * (1 + 1e-9)) and np.all(norms <= vb * (1 + 1e-9)))
+        rows.append(Row("Coriolis bound", "||V|| <= vb ||qd||^2 and ||Vm(q, qd)||_2 <= vb ||qd||", holds,
+                        norms.max(), vb, how))  # fmt: skip
+        symmetric = (
+            np.abs(
+                np.einsum("...ij,...j->...i", robot.coriolis_matrix(q, x), y)
+                - np.einsum("...ij,...j->...i", robot.coriolis_matrix(q, y), x)
+            ).max()
+            / scale
+        )
+        rows.append(Row("Christoffel symmetry", "Vm(q, x) y = Vm(q, y) x", symmetric < TOLERANCE, symmetric, None,
+                        f"{len(q)} samples"))  # fmt: skip
+    if "skew" in groups:
+        S = robot.inertia_matrix_dot(q, x) - 2 * Vm
+        skew = np.abs(S + np.swapaxes(S, -1, -2)).max() / scale
+        rows.append(Row("skew symmetry", "Mdot - 2 Vm is skew: x^T (Mdot - 2 Vm) x = 0", skew < TOLERANCE, skew, None,
+                        f"{len(q)} samples"))  # fmt: skip
+
+
+def _friction_rows(robot: Robot, x: np.ndarray, rng: np.random.Generator, rows: list[Row], bounds: dict) -> None:
+    speeds = x * rng.uniform(0.0, 5.0, (len(x), 1))
+    F = robot.friction(speeds)
+    v = float(np.max(robot.viscous_friction, initial=0.0))
+    k = float(np.linalg.norm(np.abs(robot.coulomb_friction).max(axis=1)))
+    bounds["v"], bounds["k"] = v, k
+    lhs = np.linalg.norm(F, axis=-1)
+    rhs = v * np.linalg.norm(speeds, axis=-1) + k
+    rows.append(Row("friction bound", "||Fv qd + Fd|| <= v ||qd|| + k", bool(np.all(lhs <= rhs * (1 + 1e-12) + 1e-15)),
+                    float((lhs - rhs).max()), None, "v = max Fv_ii, k = ||max |Fd_i|||, on samples"))  # fmt: skip
+    power = np.einsum("...i,...i->...", speeds, F)
+    rows.append(Row("dissipation", "qd^T F(qd) >= 0", bool(np.all(power >= -1e-12)), float(power.min()), 0.0,
+                    f"{len(x)} samples"))  # fmt: skip
+
+
+def _passivity_rows(robot: Robot, ranges: list[tuple[float, float]], rows: list[Row]) -> None:
+    """K(t) - K(0) = integral of qd^T (tau - G) dt along a trajectory (fixed-step RK4, 1 ms, 1 s)."""
+    n = robot.n
+    q0 = np.array([(lo + hi) / 2 for lo, hi in ranges])
+    frequencies = 1.0 + np.arange(n) * 0.37
+    amplitude = np.maximum(np.abs(robot.gravity_vector(q0)), 1.0)
+
+    def torque(t: float) -> np.ndarray:
+        return amplitude * np.sin(2 * np.pi * frequencies * t)
+
+    for arm, label in ((robot.without_friction(), "lossless"), (robot, "with friction")):
+        if label == "with friction" and not (np.any(robot.viscous_friction) or np.any(robot.coulomb_friction)):
+            continue
+
+        def rate(t: float, state: np.ndarray, arm: Robot = arm) -> np.ndarray:
+            q, qd = state[:n], state[n : 2 * n]
+            tau = torque(t)
+            qdd = arm.forward_dynamics(q, qd, tau)
+            return np.concatenate([qd, qdd, [qd @ (tau - arm.gravity_vector(q))]])
+
+        state, dt = np.concatenate([q0, np.zeros(n), [0.0]]), 1e-3
+        for step in range(1000):
+            t = step * dt
+            k1 = rate(t, state)
+            k2 = rate(t + dt / 2, state + dt / 2 * k1)
+            k3 = rate(t + dt / 2, state + dt / 2 * k2)
+            k4 = rate(t + dt, state + dt * k3)
+            state = state + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        gained = arm.kinetic_energy(state[:n], state[n : 2 * n])
+        supplied = state[-1]
+        scale = abs(supplied) + abs(gained) + 1e-300
+        if label == "lossless":
+            error = abs(gained - supplied) / scale
+            rows.append(Row("passivity", "K(t) - K(0) = integral qd^T (tau - G) dt", error < 1e-6, error, None,
+                            "RK4, 1 ms steps over 1 s, sinusoidal torques, no friction"))  # fmt: skip
+        else:
+            rows.append(Row("passivity with friction", "K(t) - K(0) <= integral qd^T (tau - G) dt",
+                            gained <= supplied + 1e-9 * scale, (gained - supplied) / scale, None,
+                            "the same run with the arm's friction"))  # fmt: skip

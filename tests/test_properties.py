@@ -1,0 +1,108 @@
+"""Table 3.3.1: the properties hold on every arm, fail on broken ones, and the bounds are exact."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from scipy.optimize import minimize_scalar
+from typer.testing import CliRunner
+
+import armdyn as ad
+from armdyn.cli import app
+from armdyn.properties import check, inertia_bounds
+from tests.strategies import random_robot
+
+BOOK_RANGE = [(-np.pi / 2, np.pi / 2)] * 2  # Example 3.3-1: |theta_i| <= pi/2
+
+
+@pytest.mark.parametrize("name", ad.models.names())
+def test_every_built_in_arm_has_the_properties(name: str) -> None:
+    report = check(ad.models.load(name), samples=100)
+    assert report.all_hold, [row for row in report.rows if not row.holds]
+    assert set(report.bounds) >= {"mu1", "mu2", "vb", "gb", "v", "k"}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_random_trees_have_the_properties(seed: int) -> None:
+    report = check(random_robot(seed, 5), samples=60)
+    assert report.all_hold, [row for row in report.rows if not row.holds]
+
+
+def test_rr_arm_bounds_are_the_exact_extremes_of_example_3_3_1() -> None:
+    arm = ad.models.two_link_planar(1.0, 1.0, 1.0, 1.0, g=9.8)
+    report = check(arm, limits=BOOK_RANGE)
+    b = report.bounds
+    # exact extremes from the closed form: M = [[3 + 2 c2, 1 + c2], [1 + c2, 1]], extremes at theta2 = 0
+    assert_allclose(b["mu1"], 3 - np.sqrt(8), atol=1e-6)
+    assert_allclose(b["mu2"], 3 + np.sqrt(8), atol=1e-6)
+    assert_allclose([b["m1"], b["m2"]], [4.0, 7.0], atol=1e-6)  # the book's ||M||_1 bounds, both attained
+    assert_allclose(b["gb"], 9.8 * np.sqrt(10.0), atol=1e-6)  # ||G|| largest at theta = 0
+    # vb: the largest 2-norm of Vm = s2 [[-x2, -(x1 + x2)], [x1, 0]] over unit x, at |s2| = 1
+
+    def vm_norm(t: float) -> float:
+        x1, x2 = np.cos(t), np.sin(t)
+        return -np.linalg.norm([[-x2, -(x1 + x2)], [x1, 0.0]], 2)
+
+    exact_vb = -minimize_scalar(vm_norm, bounds=(0, np.pi), method="bounded", options={"xatol": 1e-12}).fun
+    grid = max(-vm_norm(t) for t in np.linspace(0, np.pi, 20001))
+    assert exact_vb >= grid - 1e-9
+    assert_allclose(b["vb"], exact_vb, atol=1e-6)
+    # inside the book's conservative bounds: ||M||_1 in [4, 7], mu2 <= 7, gb <= (m1 + m2) g a1 + 2 m2 g a2
+    assert b["m1"] >= 4.0 and b["m2"] <= 7.0 and b["mu2"] <= 7.0
+    assert b["gb"] <= 2 * 9.8 + 2 * 9.8
+    assert inertia_bounds(arm, limits=BOOK_RANGE) == pytest.approx((3 - np.sqrt(8), 3 + np.sqrt(8)), abs=1e-6)
+
+
+def test_a_non_christoffel_factorization_fails_the_skew_row() -> None:
+    arm = ad.models.puma560()
+    christoffel = arm.coriolis_matrix
+
+    def other(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """Vm + u w^T with w orthogonal to qd: the same V = Vm qd, but not the Christoffel form."""
+        qd = np.asarray(qd, dtype=float)
+        ones = np.ones_like(qd)
+        w = ones - (np.sum(ones * qd, -1) / (np.sum(qd * qd, -1) + 1e-300))[..., None] * qd
+        return christoffel(q, qd) + np.einsum("...i,...j->...ij", np.roll(qd, 1, axis=-1), w)
+
+    arm.coriolis_matrix = other  # a deliberately wrong Vm, set on this instance only
+    report = check(arm, samples=40, only=("coriolis", "skew"))
+    assert not report.row("skew symmetry").holds
+    assert not report.all_hold
+
+
+def test_an_indefinite_inertia_fails_the_positive_definite_row() -> None:
+    arm = ad.models.scara()
+    honest = arm.inertia_matrix
+    arm.inertia_matrix = lambda q, out=None: -honest(q)  # forced past validation, in this test only
+    report = check(arm, samples=30, only=("inertia",))
+    assert not report.row("positive definite").holds
+    assert not report.all_hold
+
+
+def test_prismatic_bounds_are_given_over_the_range() -> None:
+    report = check(ad.models.polar_rp(m=1.0), samples=80)
+    assert report.all_hold
+    assert any("depend on q" in note for note in report.notes)
+    assert report.ranges[1] == (0.1, 1.5)
+    assert_allclose(report.bounds["mu2"], 1.5**2, atol=1e-6)  # M = diag(m r^2, m), r <= 1.5 m
+    assert_allclose(report.bounds["mu1"], 0.1**2, atol=1e-6)
+
+
+def test_check_command() -> None:
+    result = CliRunner().invoke(app, ["check", "two_link_planar", "--samples", "50"])
+    assert result.exit_code == 0 and "all properties hold" in result.output and "mu1" in result.output
+
+
+def test_identify_command(tmp_path: object) -> None:
+    from tests.test_regressor import exciting
+
+    arm = ad.models.puma560()
+    q, qd, qdd = exciting(6, 400)
+    tau = arm.inverse_dynamics(q, qd, qdd)
+    header = ",".join(f"{p}{i + 1}" for p in ("q", "qd", "qdd", "tau") for i in range(6))
+    path = tmp_path / "samples.csv"
+    np.savetxt(path, np.hstack([q, qd, qdd, tau]), delimiter=",", header=header, comments="")
+    result = CliRunner().invoke(app, ["identify", "puma560", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "Identified base parameters" in result.output
