@@ -13,8 +13,11 @@ from armdyn.model.robot import Robot
 
 
 def as_state(robot: Robot, value: object, name: str = "q") -> np.ndarray:
-    """A float array of shape (..., n), or a ModelError naming the argument."""
-    array = np.asarray(value, dtype=float)
+    """A float array of shape (..., n), or a ModelError naming the argument.
+
+    Complex arrays stay complex: the Lagrange reference then takes complex-step derivatives.
+    """
+    array = np.asarray(value, dtype=complex if np.iscomplexobj(value) else float)
     if array.ndim == 0 or array.shape[-1] != robot.n:
         raise ModelError(f"{name} must have shape (..., {robot.n}) for '{robot.name}', got {array.shape}")
     if not np.all(np.isfinite(array)):
@@ -37,7 +40,7 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 def joint_motion(revolute: bool, axis: np.ndarray, q: np.ndarray) -> np.ndarray:
     """The 4x4 motion of a joint: rotation about (Rodrigues) or translation along its axis."""
-    motion = np.zeros(q.shape + (4, 4))
+    motion = np.zeros((*q.shape, 4, 4), dtype=q.dtype)
     motion[..., 3, 3] = 1.0
     if revolute:
         k = skew(axis)
@@ -57,7 +60,7 @@ def joint_frames(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     q = as_state(robot, q)
     shape = q.shape[:-1] + (robot.n, 4, 4)
-    links, joints = np.empty(shape), np.empty(shape)
+    links, joints = np.empty(shape, dtype=q.dtype), np.empty(shape, dtype=q.dtype)
     for i, link in enumerate(robot.links):
         parent = robot.base if link.parent < 0 else links[..., link.parent, :, :]
         joint = link.joint
@@ -176,7 +179,7 @@ def twist_generators(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarra
     links, joints = joint_frames(robot, q)
     z, o = joint_axes(robot, joints)
     revolute = np.array([kind == "revolute" for kind in robot.kinds])
-    generators = np.zeros(z.shape[:-1] + (4, 4))
+    generators = np.zeros((*z.shape[:-1], 4, 4), dtype=z.dtype)
     zhat = skew(z)
     generators[..., :3, :3] = np.where(revolute[:, None, None], zhat, 0.0)
     generators[..., :3, 3] = np.where(revolute[:, None], -np.einsum("...ab,...b->...a", zhat, o), z)
