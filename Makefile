@@ -13,8 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/armdyn models
-	$(BIN)/armdyn show puma560
+	$(BIN)/armdyn demo
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks examples

@@ -27,7 +27,7 @@ from numba import njit
 from armdyn import control as C
 from armdyn import trajectories as T
 from armdyn.dynamics import kernels as K
-from armdyn.dynamics.compiled import COULOMB_NEG, COULOMB_POS, HEADER, STRIDE, compile_robot
+from armdyn.dynamics.compiled import COULOMB_NEG, COULOMB_POS, HEADER, STRIDE
 from armdyn.errors import ModelError
 from armdyn.model.robot import Robot
 
@@ -107,30 +107,70 @@ def _desired(kind: int, traj: np.ndarray, t: float, q0: np.ndarray, out: np.ndar
             out[2, i] = 0.0
 
 
+@njit(inline="always", **_OPTS)
+def smooth_coulomb(coulomb: np.ndarray, eps: float, i: int, rate: float) -> float:
+    """Fd_i: tanh(qd / eps) Tc+ for qd >= 0, -tanh(qd / eps) Tc- for qd < 0 (exact sgn for eps = 0)."""
+    if eps > 0.0:
+        x = rate / eps
+        smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)  # tanh(20) = 1 - 8e-18
+        return smooth * coulomb[i, 0] if rate >= 0.0 else -smooth * coulomb[i, 1]
+    return coulomb[i, 0] if rate > 0.0 else coulomb[i, 1] if rate < 0.0 else 0.0
+
+
 @njit(**_OPTS)
 def _accelerations(
     plant: np.ndarray, coulomb: np.ndarray, eps: float, w: np.ndarray, q: np.ndarray, qd: np.ndarray,
-    tau: np.ndarray, net: np.ndarray, qdd: np.ndarray,
+    tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
 ) -> None:  # fmt: skip
-    """qdd = FD(q, qd, tau - Fd_smooth(qd)); ``tau`` already carries the disturbance."""
-    for i in range(q.shape[0]):
-        rate = qd[i]
-        if eps > 0.0:
-            smooth = math.tanh(rate / eps)
-            friction = smooth * coulomb[i, 0] if rate >= 0.0 else -smooth * coulomb[i, 1]
-        else:
-            friction = coulomb[i, 0] if rate > 0.0 else coulomb[i, 1] if rate < 0.0 else 0.0
-        net[i] = tau[i] - friction
-    K.aba_core(plant, w, 0, q, qd, net, qdd)
+    """qdd = M^-1 (tau - N - Fd_smooth) by CRBA, RNEA and a Cholesky solve.
+
+    For the arms of this library (n up to about ten) this is faster than the O(n)
+    articulated-body algorithm and equal to it to rounding; ``tau`` carries the disturbance.
+    """
+    K.crba_core(plant, w, 0, q, M)
+    K.rnea_core(plant, w, 0, q, qd, qd, qd, K.NONLINEAR, N)
+    _solve(M, N, tau, coulomb, eps, qd, qdd)
+
+
+@njit(**_OPTS)
+def _solve(
+    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: float, qd: np.ndarray, qdd: np.ndarray
+) -> None:
+    """qdd = M^-1 (tau - N - Fd_smooth) by Cholesky factorization (M is overwritten)."""
+    n = qd.shape[0]
+    for j in range(n):
+        total = M[j, j]
+        for k in range(j):
+            total -= M[j, k] * M[j, k]
+        pivot = math.sqrt(total)
+        M[j, j] = pivot
+        for i in range(j + 1, n):
+            total = M[i, j]
+            for k in range(j):
+                total -= M[i, k] * M[j, k]
+            M[i, j] = total / pivot
+    for i in range(n):
+        total = tau[i] - N[i] - smooth_coulomb(coulomb, eps, i, qd[i])
+        for k in range(i):
+            total -= M[i, k] * qdd[k]
+        qdd[i] = total / M[i, i]
+    for i in range(n - 1, -1, -1):
+        total = qdd[i]
+        for k in range(i + 1, n):
+            total -= M[k, i] * qdd[k]
+        qdd[i] = total / M[i, i]
 
 
 @njit(**_OPTS)
 def _control(
-    kind: int, model: np.ndarray, wc: np.ndarray, q: np.ndarray, qd: np.ndarray, desired: np.ndarray,
-    e_int: np.ndarray, kp: np.ndarray, kv: np.ndarray, ki: np.ndarray, limit: np.ndarray, u: np.ndarray,
-    M_: np.ndarray, Nv: np.ndarray, tau: np.ndarray,
+    kind: int, model: np.ndarray, model_coulomb: np.ndarray, eps: float, wc: np.ndarray, q: np.ndarray,
+    qd: np.ndarray, desired: np.ndarray, e_int: np.ndarray, kp: np.ndarray, kv: np.ndarray, ki: np.ndarray,
+    limit: np.ndarray, u: np.ndarray, M_: np.ndarray, Nv: np.ndarray, tau: np.ndarray,
 ) -> None:  # fmt: skip
-    """The built-in controllers (armdyn.control) on the controller's own model, then saturation."""
+    """The built-in controllers (armdyn.control) on the controller's own model, then saturation.
+
+    The model's Coulomb friction is compensated with the same smooth law as the plant's.
+    """
     n = q.shape[0]
     if kind == C.COMPUTED_TORQUE:
         for i in range(n):
@@ -138,7 +178,7 @@ def _control(
         K.crba_core(model, wc, 0, q, M_)
         K.rnea_core(model, wc, 0, q, qd, qd, qd, K.NONLINEAR, Nv)
         for i in range(n):
-            total = Nv[i]
+            total = Nv[i] + smooth_coulomb(model_coulomb, eps, i, qd[i])
             for j in range(n):
                 total += M_[i, j] * u[j]
             tau[i] = total
@@ -154,18 +194,13 @@ def _control(
 
 
 @njit(**_OPTS)
-def _energy(plant: np.ndarray, w: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
-    K.energy_core(plant, w, 0, q, qd, out)
-
-
-@njit(**_OPTS)
 def run_rk4(
-    plants: np.ndarray, coulombs: np.ndarray, switches: np.ndarray, model: np.ndarray, kind: int,
+    plants: np.ndarray, coulombs: np.ndarray, switches: np.ndarray, model: np.ndarray, model_coulomb: np.ndarray,
+    shared: bool, kind: int,
     kp: np.ndarray, kv: np.ndarray, ki: np.ndarray, limit: np.ndarray, hold: int, traj_kind: int,
     traj: np.ndarray, q0: np.ndarray, disturbance: np.ndarray, eps: float, t0: float, dt: float,
     first: int, last: int, state: np.ndarray, tau_held: np.ndarray, e_int: np.ndarray,
     T_: np.ndarray, Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray, TAU: np.ndarray, QDES: np.ndarray,
-    ENERGY: np.ndarray,
 ) -> None:  # fmt: skip
     """Steps first..last-1 of fixed-step RK4 (the book's TRESP), recording each step's start.
 
@@ -181,7 +216,7 @@ def run_rk4(
         stages[6], stages[7]  # fmt: skip
     scratch = np.empty((6, n))
     qs, vs, net, applied, u, Nv = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
-    M_, energy = np.empty((n, n)), np.empty(2)
+    M_, Mp = np.empty((n, n)), np.empty((n, n))
     for k in range(first, last):
         t = t0 + k * dt
         p = 0
@@ -189,30 +224,34 @@ def run_rk4(
             p += 1
         plant, coulomb = plants[p], coulombs[p]
         _desired(traj_kind, traj, t, q0, desired)
+        fresh = kind == C.COMPUTED_TORQUE and shared and p == 0 and k % hold == 0
         if kind > 0 and k % hold == 0:
             for i in range(n):
                 e_int[i] += (desired[0, i] - q[i]) * dt * hold
-            _control(kind, model, wc, q, qd, desired, e_int, kp, kv, ki, limit, u, M_, Nv, tau_held)
+            _control(kind, model, model_coulomb, eps, wc, q, qd, desired, e_int, kp, kv, ki, limit, u, M_, Nv,
+                     tau_held)  # fmt: skip
         for i in range(n):
             applied[i] = tau_held[i] - disturbance[i]
-        _accelerations(plant, coulomb, eps, w, q, qd, applied, net, k1v)
-        _energy(plant, w, q, qd, energy)
+        if fresh:  # the controller has just computed this state's M and N on the plant itself
+            Mp[:, :] = M_
+            _solve(Mp, Nv, applied, coulomb, eps, qd, k1v)
+        else:
+            _accelerations(plant, coulomb, eps, w, q, qd, applied, Mp, net, k1v)
         T_[k] = t
         for i in range(n):
             Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], desired[0, i]
-        ENERGY[k] = energy[0] + energy[1]
         for i in range(n):
             k1q[i] = qd[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k1q[i], qd[i] + 0.5 * dt * k1v[i]
-        _accelerations(plant, coulomb, eps, w, qs, vs, applied, net, k2v)
+        _accelerations(plant, coulomb, eps, w, qs, vs, applied, Mp, net, k2v)
         for i in range(n):
             k2q[i] = vs[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k2q[i], qd[i] + 0.5 * dt * k2v[i]
-        _accelerations(plant, coulomb, eps, w, qs, vs, applied, net, k3v)
+        _accelerations(plant, coulomb, eps, w, qs, vs, applied, Mp, net, k3v)
         for i in range(n):
             k3q[i] = vs[i]
             qs[i], vs[i] = q[i] + dt * k3q[i], qd[i] + dt * k3v[i]
-        _accelerations(plant, coulomb, eps, w, qs, vs, applied, net, k4v)
+        _accelerations(plant, coulomb, eps, w, qs, vs, applied, Mp, net, k4v)
         for i in range(n):
             k4q[i] = vs[i]
             q[i] += dt / 6.0 * (k1q[i] + 2.0 * k2q[i] + 2.0 * k3q[i] + k4q[i])
@@ -226,7 +265,7 @@ def _plant_buffers(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     """Compiled plants with their Coulomb friction taken out (the loop adds the smoothed one)."""
     plants, coulombs = [], []
     for arm in arms:
-        buffer = compile_robot(arm)
+        buffer = arm._engine().model.copy()  # compiled once per Robot
         for i in range(arm.n):
             base = HEADER + STRIDE * i
             buffer[base + COULOMB_POS] = buffer[base + COULOMB_NEG] = 0.0
@@ -313,7 +352,8 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
     switches = np.array([e[0] for e in events], dtype=float)
     if spec.model is not None and spec.model.n != n:
         raise ModelError("the controller's model must have the plant's joints")
-    model = compile_robot(spec.model if spec.model is not None else arm)
+    models, model_coulombs = _plant_buffers([spec.model if spec.model is not None else arm])
+    model, model_coulomb = models[0], model_coulombs[0]
     kp, kv, ki = (C._gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki")))
     limit = np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,)).copy()
     hold = max(1, round(period / dt)) if period else 1
@@ -326,19 +366,34 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
         traj_kind, traj = T.QUINTIC, trajectory.arrays(n)
     tau_d = np.zeros(n) if disturbance is None else np.broadcast_to(np.asarray(disturbance, float), (n,)).copy()
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
-    times, energy = np.empty(steps + 1), np.empty(steps + 1)
+    times = np.empty(steps + 1)
     state, tau_held, e_int = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n)
     chunks = 20 if progress is not None else 1
     bounds = np.linspace(0, steps + 1, chunks + 1).astype(int)
     for a, b in itertools.pairwise(bounds):
-        run_rk4(plants, coulombs, switches, model, spec.kind, kp, kv, ki, limit, hold, traj_kind, traj, q0, tau_d,
-                float(eps), 0.0, dt, int(a), int(b), state, tau_held, e_int, times, arrays["q"], arrays["qd"],
-                arrays["qdd"], arrays["tau"], arrays["q_d"], energy)  # fmt: skip
+        run_rk4(
+            plants, coulombs, switches, model, model_coulomb, spec.model is None, spec.kind, kp, kv, ki, limit,
+            hold, traj_kind, traj, q0, tau_d, float(eps), 0.0, dt, int(a), int(b), state, tau_held, e_int, times,
+            arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"],
+        )  # fmt: skip
         if progress is not None:
             progress(b / (steps + 1))
     q_d = arrays["q_d"] if trajectory is not None else None
+    energy = _energies(arms, events, times, arrays["q"], arrays["qd"])
     return Result(times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], q_d, energy, arm,
                   {"method": "rk4 (compiled)", "dt": dt, "integral": e_int})  # fmt: skip
+
+
+def _energies(arms: list[Robot], events: list, times: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """K + P at every sample, each by the arm in force at that time (one batch call per arm)."""
+    phase = np.searchsorted(np.array([e[0] for e in events], dtype=float), times, side="right")
+    energy = np.empty(len(times))
+    for index, arm in enumerate(arms):
+        mask = phase == index
+        if np.any(mask):
+            kinetic_and_potential = arm._engine()._energies(q[mask], qd[mask])
+            energy[mask] = kinetic_and_potential[:, 0] + kinetic_and_potential[:, 1]
+    return energy
 
 
 def _smooth_coulomb(arm: Robot, qd: np.ndarray, eps: float) -> np.ndarray:
@@ -400,7 +455,7 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
     qdd_of = _dynamics(arms, events, eps)
     hold = max(1, round(period / dt)) if period else 1
     out = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
-    times, energy = np.empty(steps + 1), np.empty(steps + 1)
+    times = np.empty(steps + 1)
     q, qd, tau, e_int = q0.copy(), qd0.copy(), np.zeros(n), np.zeros(n)
     for k in range(steps + 1):
         t = k * dt
@@ -413,7 +468,6 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
         k1v = qdd_of(t, q, qd, applied)
         times[k] = t
         out["q"][k], out["qd"][k], out["qdd"][k], out["tau"][k], out["q_d"][k] = q, qd, k1v, tau, desired[0]
-        energy[k] = plant.kinetic_energy(q, qd) + plant.potential_energy(q)
         k2v = qdd_of(t + dt / 2, q + dt / 2 * qd, qd + dt / 2 * k1v, applied)
         k3v = qdd_of(t + dt / 2, q + dt / 2 * (qd + dt / 2 * k1v), qd + dt / 2 * k2v, applied)
         k4v = qdd_of(t + dt, q + dt * (qd + dt / 2 * k2v), qd + dt * k3v, applied)
@@ -421,6 +475,7 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
         q = q + dt / 6 * (qd + 2 * k2q + 2 * k3q + k4q)
         qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
     q_d = out["q_d"] if trajectory is not None else None
+    energy = _energies(arms, events, times, out["q"], out["qd"])
     return Result(times, out["q"], out["qd"], out["qdd"], out["tau"], q_d, energy, arms[0],
                   {"method": "rk4 (Python)", "dt": dt, "integral": e_int})  # fmt: skip
 
@@ -445,13 +500,13 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
         raise ModelError(f"the {method} solver failed: {solution.message}")
     x = solution.y.T
     q, qd, e_int = x[:, :n], x[:, n : 2 * n], x[:, 2 * n :]
-    qdd, tau, q_d, energy = np.empty_like(q), np.empty_like(q), np.empty_like(q), np.empty(len(times))
+    qdd, tau, q_d = np.empty_like(q), np.empty_like(q), np.empty_like(q)
     for k, t in enumerate(times):
         desired = _desired_of(trajectory, t, q0)
         plant = _plant_at(arms, events, t)
         tau[k] = _torque(controller, plant, t, q[k], qd[k], desired, e_int[k])
         qdd[k] = qdd_of(t, q[k], qd[k], tau[k] - _tau_d(disturbance, t, q[k], qd[k]))
         q_d[k] = desired[0]
-        energy[k] = plant.kinetic_energy(q[k], qd[k]) + plant.potential_energy(q[k])
+    energy = _energies(arms, events, times, q, qd)
     return Result(times, q, qd, qdd, tau, q_d if trajectory is not None else None, energy, arms[0],
                   {"method": method, "dt": dt, "evaluations": solution.nfev})  # fmt: skip
