@@ -65,6 +65,19 @@ def _check(x: np.ndarray, n: int, code: int) -> int:
 
 
 @njit(inline="always", **_OPTS)
+def _check_all(n: int, a: np.ndarray, b: np.ndarray, c: np.ndarray, count: int, out: np.ndarray) -> int:
+    """The status of the first ``count`` state arguments (a, b, c) and of the output's length."""
+    status = _check(a, n, 1)
+    if status == 0 and count > 1:
+        status = _check(b, n, 2)
+    if status == 0 and count > 2:
+        status = _check(c, n, 3)
+    if status == 0 and out.shape[0] != n:
+        status = 4
+    return status
+
+
+@njit(inline="always", **_OPTS)
 def _joint_transform(m: np.ndarray, j: int, qj: float, w: np.ndarray, o: int) -> None:
     """R_j = P_R Rz(q) (revolute) or P_R (prismatic), p_j = P_p (+ q P_R e_z): w[o:o+9], w[o+9:o+12]."""
     b = HEADER + STRIDE * j
@@ -308,13 +321,7 @@ _ONE_1 = "int64(float64[::1], float64[::1], float64[::1])"
 def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, tau: np.ndarray) -> int:
     """One state, checked: tau = M qdd + Vm qd + F + G; the buffer's scratch is the work space."""
     n = int(m[0])
-    status = _check(q, n, 1)
-    if status == 0:
-        status = _check(qd, n, 2)
-    if status == 0:
-        status = _check(qdd, n, 3)
-    if status == 0 and tau.shape[0] != n:
-        status = 4
+    status = _check_all(n, q, qd, qdd, 3, tau)
     if status == 0:
         rnea_core(m, m, HEADER + STRIDE * n, q, qd, qdd, qd, INVERSE_DYNAMICS, tau)
     return status
@@ -324,11 +331,7 @@ def rnea_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, tau:
 def nonlinear_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """N = Vm qd + F + G."""
     n = int(m[0])
-    status = _check(q, n, 1)
-    if status == 0:
-        status = _check(qd, n, 2)
-    if status == 0 and out.shape[0] != n:
-        status = 4
+    status = _check_all(n, q, qd, qd, 2, out)
     if status == 0:
         rnea_core(m, m, HEADER + STRIDE * n, q, qd, qd, qd, NONLINEAR, out)
     return status
@@ -338,11 +341,7 @@ def nonlinear_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray)
 def coriolis_vector_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """V = Vm qd."""
     n = int(m[0])
-    status = _check(q, n, 1)
-    if status == 0:
-        status = _check(qd, n, 2)
-    if status == 0 and out.shape[0] != n:
-        status = 4
+    status = _check_all(n, q, qd, qd, 2, out)
     if status == 0:
         rnea_core(m, m, HEADER + STRIDE * n, q, qd, qd, qd, CORIOLIS, out)
     return status
@@ -383,9 +382,7 @@ def gravity_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, G: np.nda
 def gravity_one(m: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     """G(q)."""
     n = int(m[0])
-    status = _check(q, n, 1)
-    if status == 0 and out.shape[0] != n:
-        status = 4
+    status = _check_all(n, q, q, q, 1, out)
     if status == 0:
         gravity_core(m, m, HEADER + STRIDE * n, q, out)
     return status
@@ -401,9 +398,7 @@ def friction_core(m: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
 def friction_one(m: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """F(qd) = Fv qd + Fd(qd)."""
     n = int(m[0])
-    status = _check(qd, n, 1)
-    if status == 0 and out.shape[0] != n:
-        status = 4
+    status = _check_all(n, qd, qd, qd, 1, out)
     if status == 0:
         friction_core(m, qd, out)
     return status
@@ -891,15 +886,10 @@ def aba_core(
 @njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
 def aba_one(m: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> int:
     n = int(m[0])
-    status = _check(q, n, 1)
+    status = _check_all(n, q, qd, tau, 3, qdd)
     if status == 0:
-        status = _check(qd, n, 2)
-    if status == 0:
-        status = _check(tau, n, 3)
-    if status != 0 or qdd.shape[0] != n:
-        return status if status != 0 else 4
-    aba_core(m, m, HEADER + STRIDE * n, q, qd, tau, qdd)
-    return 0
+        aba_core(m, m, HEADER + STRIDE * n, q, qd, tau, qdd)
+    return status
 
 
 @njit(parallel=True, **_OPTS)

@@ -26,6 +26,11 @@ def _as_published(build: Callable[[], Robot]) -> Robot:
         return build()
 
 
+def _named(table: list[dict], strict: bool = True) -> list[dict]:
+    """DH rows with joint names q1..qn (and the triangle-inequality check on or off)."""
+    return [{**row, "name": f"q{index + 1}", "strict": strict} for index, row in enumerate(table)]
+
+
 def _symbols(names: str) -> tuple:
     import sympy
 
@@ -148,12 +153,9 @@ def puma560() -> Robot:
         {"mass": 0.09, "com": [0, 0, 0.032], "inertia": [0.15e-3, 0.15e-3, 0.04e-3, 0, 0, 0],
          "Jm": 33e-6, "G": 76.686, "B": 36.7e-6, "Tc": (3.96e-3, -10.5e-3), "qlim": (-266 * deg, 266 * deg)},
     ]  # fmt: skip
-    for index, row in enumerate(table):
-        row["name"] = f"q{index + 1}"
-        row["strict"] = False
     return _as_published(
         lambda: Robot.from_dh(
-            table,
+            _named(table, strict=False),
             name="puma560",
             gravity=[0.0, 0.0, -9.81],
             configurations={
@@ -191,12 +193,9 @@ def stanford() -> Robot:
         {"mass": 0.51, "com": [0, 0, 1.554],
          "inertia": [0.013, 0.013, 0.0003, 0, 0, 0], "Jm": 0.020, "G": 1, "qlim": (-170 * deg, 170 * deg)},
     ]  # fmt: skip
-    for index, row in enumerate(table):
-        row["name"] = f"q{index + 1}"
-        row["strict"] = False
     return _as_published(
         lambda: Robot.from_dh(
-            table,
+            _named(table, strict=False),
             name="stanford",
             gravity=[0.0, 0.0, -9.81],
             configurations={"qz": [0, 0, 0.5, 0, 0, 0]},
@@ -223,10 +222,8 @@ def scara() -> Robot:
         {"mass": 0.5, "com": [0, 0, 0.02], "inertia": [0.0005, 0.0005, 0.0003, 0, 0, 0],
          "B": 0.05, "Tc": (0.02, -0.02), "qlim": (-190 * deg, 190 * deg)},
     ]  # fmt: skip
-    for index, row in enumerate(table):
-        row["name"] = f"q{index + 1}"
     return Robot.from_dh(
-        table,
+        _named(table),
         name="scara",
         gravity=[0.0, 0.0, -9.81],
         configurations={"qz": [0, 0, 0, 0], "qr": [0, _PI / 4, 0.1, 0]},
