@@ -28,6 +28,7 @@ from armdyn import control as C
 from armdyn import trajectories as T
 from armdyn.dynamics import kernels as K
 from armdyn.dynamics.compiled import COULOMB_NEG, COULOMB_POS, HEADER, STRIDE
+from armdyn.dynamics.vectorized import sin_cos
 from armdyn.errors import ModelError
 from armdyn.model.robot import Robot
 
@@ -90,10 +91,10 @@ def _desired(kind: int, traj: np.ndarray, t: float, q0: np.ndarray, out: np.ndar
     for i in range(n):
         if kind == 1:
             amplitude, omega, phase, offset = traj[0, i], traj[1, i], traj[2, i], traj[3, i]
-            angle = omega * t + phase
-            out[0, i] = offset + amplitude * math.sin(angle)
-            out[1, i] = amplitude * omega * math.cos(angle)
-            out[2, i] = -amplitude * omega * omega * math.sin(angle)
+            sine, cosine = sin_cos(omega * t + phase)
+            out[0, i] = offset + amplitude * sine
+            out[1, i] = amplitude * omega * cosine
+            out[2, i] = -amplitude * omega * omega * sine
         elif kind == 2:
             a, b, t0, t1 = traj[0, i], traj[1, i], traj[2, i], traj[3, i]
             span = t1 - t0
@@ -127,8 +128,7 @@ def _accelerations(
     For the arms of this library (n up to about ten) this is faster than the O(n)
     articulated-body algorithm and equal to it to rounding; ``tau`` carries the disturbance.
     """
-    K.crba_core(plant, w, 0, q, M)
-    K.rnea_core(plant, w, 0, q, qd, qd, qd, K.NONLINEAR, N)
+    K.mass_matrix_and_bias(plant, w, 0, q, qd, M, N)
     _solve(M, N, tau, coulomb, eps, qd, qdd)
 
 
@@ -175,8 +175,7 @@ def _control(
     if kind == C.COMPUTED_TORQUE:
         for i in range(n):
             u[i] = desired[2, i] + kv[i] * (desired[1, i] - qd[i]) + kp[i] * (desired[0, i] - q[i]) + ki[i] * e_int[i]
-        K.crba_core(model, wc, 0, q, M_)
-        K.rnea_core(model, wc, 0, q, qd, qd, qd, K.NONLINEAR, Nv)
+        K.mass_matrix_and_bias(model, wc, 0, q, qd, M_, Nv)
         for i in range(n):
             total = Nv[i] + smooth_coulomb(model_coulomb, eps, i, qd[i])
             for j in range(n):

@@ -499,9 +499,26 @@ def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarra
     then F is carried to each ancestor j: M_ij = M_ji = S_j^T F.
     """
     n = int(m[0])
-    transforms, composite = w0, w0 + 12 * n
     for i in range(n):
-        _joint_transform(m, i, q[i], w, transforms + 12 * i)
+        _joint_transform(m, i, q[i], w, w0 + 12 * i)
+    crba_from_transforms(m, w, w0, 12, w0 + 12 * n, M)
+
+
+@njit(inline="always", **_OPTS)
+def mass_matrix_and_bias(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, qd: np.ndarray, M: np.ndarray,
+                         N: np.ndarray) -> None:  # fmt: skip
+    """M(q) and N(q, qd) together: RNEA's joint transforms serve CRBA too (forward dynamics in a loop)."""
+    n = int(m[0])
+    rnea_core(m, w, w0, q, qd, qd, qd, NONLINEAR, N)
+    crba_from_transforms(m, w, w0, 30, w0 + 30 * n + 32, M)
+
+
+@njit(inline="always", **_OPTS)
+def crba_from_transforms(m: np.ndarray, w: np.ndarray, transforms: int, stride: int, composite: int,
+                         M: np.ndarray) -> None:  # fmt: skip
+    """CRBA given each joint's (R, p) at w[transforms + stride i:], composite inertias at w[composite:]."""
+    n = int(m[0])
+    for i in range(n):
         b = HEADER + STRIDE * i
         c = composite + 10 * i
         w[c] = m[b + MASS]
@@ -514,7 +531,7 @@ def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarra
     for i in range(n - 1, -1, -1):
         parent = int(m[HEADER + STRIDE * i + PARENT])
         if parent >= 0:
-            _add_inertia_to_parent(w, transforms + 12 * i, composite + 10 * i, composite + 10 * parent)
+            _add_inertia_to_parent(w, transforms + stride * i, composite + 10 * i, composite + 10 * parent)
     for i in range(n):
         b = HEADER + STRIDE * i
         c = composite + 10 * i
@@ -528,7 +545,7 @@ def crba_core(m: np.ndarray, w: np.ndarray, w0: int, q: np.ndarray, M: np.ndarra
         j = i
         parent = int(m[b + PARENT])
         while parent >= 0:  # F <- X_j^T F, carried to the parent: [R n + p x (R f); R f]
-            t = transforms + 12 * j
+            t = transforms + stride * j
             r00, r01, r02, r10, r11, r12 = w[t], w[t + 1], w[t + 2], w[t + 3], w[t + 4], w[t + 5]
             r20, r21, r22, px, py, pz = w[t + 6], w[t + 7], w[t + 8], w[t + 9], w[t + 10], w[t + 11]
             Fx = r00 * fx + r01 * fy + r02 * fz
