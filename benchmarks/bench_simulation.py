@@ -14,8 +14,9 @@ Four parts, all in this one process except the Toolbox's run:
    are compared joint by joint;
 2. 10 s of PUMA 560 computed-torque tracking at 1 kHz, ComputedTorque(100, 20) on a sinusoid, and
 3. 5 s of the RR arm of Example 4.4-1 likewise: wall time, real-time factor and tracking error;
-4. where the time of a step goes: simulate() with lighter controllers, and armdyn's kernels called in a
-   compiled loop (each checked against a reference computation on the same states).
+4. where the time goes: the tracking run split into its compiled loop, its energies and the rest, simulate()
+   with less work per step, and armdyn's kernels called in a compiled loop (each checked against a reference
+   computation on the same states), summed into the per-step cost of possible step designs.
 
 Times are medians over repeats; the candidates' repeats are interleaved so that machine noise hits all of
 them alike. The Toolbox's run is timed once. Prints plain tables and writes the same as Markdown to
@@ -400,6 +401,23 @@ def tracking(arms: dict[str, tuple[ad.Robot, Sinusoid, float]]) -> tuple[list[li
     return rows, times
 
 
+def tracking_error(arm: ad.Robot, trajectory: Sinusoid) -> list[list[str]]:
+    """The PUMA 560's tracking run once per variant (untimed): what its tracking error comes from."""
+    variants = {
+        f"as in part 2 (dt = {DT * 1e3:g} ms, friction smoothed with eps = 1e-3)": (arm, DT, 1e-3),
+        "arm.without_friction()": (arm.without_friction(), DT, 1e-3),
+        f"dt = {DT_FINE * 1e3:g} ms": (arm, DT_FINE, 1e-3),
+        "coulomb_smoothing = 1e-2": (arm, DT, 1e-2),
+    }
+    rows = []
+    for label, (plant, dt, eps) in variants.items():
+        result = simulate(plant, ComputedTorque(*GAINS), trajectory, t_final=T_PUMA, dt=dt, coulomb_smoothing=eps)
+        error = np.abs(result.error)
+        last = result.t >= result.t[-1] - 1.0
+        rows.append([label, sci(error[-1].max()), sci(error[last].max())])
+    return rows
+
+
 # ----- 4. where the time goes -------------------------------------------------------------------
 _NJIT = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
 
@@ -447,6 +465,33 @@ def _loop_computed_torque(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.nd
             out[s, i] = total
 
 
+@njit(inline="always", **_NJIT)
+def _cholesky_solve(M: np.ndarray, N: np.ndarray, tau: np.ndarray, y: np.ndarray) -> None:
+    """y = M^-1 (tau - N) by a Cholesky factorization of M in place."""
+    n = N.shape[0]
+    for j in range(n):
+        total = M[j, j]
+        for k in range(j):
+            total -= M[j, k] * M[j, k]
+        pivot = math.sqrt(total)
+        M[j, j] = pivot
+        for i in range(j + 1, n):
+            total = M[i, j]
+            for k in range(j):
+                total -= M[i, k] * M[j, k]
+            M[i, j] = total / pivot
+    for i in range(n):
+        total = tau[i] - N[i]
+        for k in range(i):
+            total -= M[i, k] * y[k]
+        y[i] = total / M[i, i]
+    for i in range(n - 1, -1, -1):
+        total = y[i]
+        for k in range(i + 1, n):
+            total -= M[k, i] * y[k]
+        y[i] = total / M[i, i]
+
+
 @njit(**_NJIT)
 def _loop_cholesky(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
     """qdd = M^-1 (tau - N) by CRBA, RNEA and a Cholesky solve."""
@@ -455,28 +500,34 @@ def _loop_cholesky(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray
     for s in range(Q.shape[0]):
         K.crba_core(m, w, 0, Q[s], M)
         K.rnea_core(m, w, 0, Q[s], QD[s], QD[s], QD[s], K.NONLINEAR, N)
-        for j in range(n):
-            total = M[j, j]
-            for k in range(j):
-                total -= M[j, k] * M[j, k]
-            pivot = math.sqrt(total)
-            M[j, j] = pivot
-            for i in range(j + 1, n):
-                total = M[i, j]
-                for k in range(j):
-                    total -= M[i, k] * M[j, k]
-                M[i, j] = total / pivot
-        y = out[s]
+        _cholesky_solve(M, N, TAU[s], out[s])
+
+
+FUSED = hasattr(K, "mass_matrix_and_bias")  # M and N in one pass, in armdyn's newer kernels
+
+
+@njit(**_NJIT)
+def _loop_fused(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
+    """qdd = M^-1 (tau - N), M and N by kernels.mass_matrix_and_bias (compiled only when it exists)."""
+    n = Q.shape[1]
+    w, M, N = np.empty(200 * n + 128), np.empty((n, n)), np.empty(n)
+    for s in range(Q.shape[0]):
+        K.mass_matrix_and_bias(m, w, 0, Q[s], QD[s], M, N)
+        _cholesky_solve(M, N, TAU[s], out[s])
+
+
+@njit(**_NJIT)
+def _loop_fused_torque(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
+    """tau = M u + N, M and N by kernels.mass_matrix_and_bias (compiled only when it exists)."""
+    n = Q.shape[1]
+    w, M, N = np.empty(200 * n + 128), np.empty((n, n)), np.empty(n)
+    for s in range(Q.shape[0]):
+        K.mass_matrix_and_bias(m, w, 0, Q[s], QD[s], M, N)
         for i in range(n):
-            total = TAU[s, i] - N[i]
-            for k in range(i):
-                total -= M[i, k] * y[k]
-            y[i] = total / M[i, i]
-        for i in range(n - 1, -1, -1):
-            total = y[i]
-            for k in range(i + 1, n):
-                total -= M[k, i] * y[k]
-            y[i] = total / M[i, i]
+            total = N[i]
+            for j in range(n):
+                total += M[i, j] * U[s, j]
+            out[s, i] = total
 
 
 @njit(**_NJIT)
@@ -511,7 +562,7 @@ def kernels(arm: ad.Robot, rng: np.random.Generator) -> tuple[list[list[str]], d
     )
     outs = {
         name: np.empty((KERNEL_STATES, n))
-        for name in ("aba", "cholesky", "nonlinear", "inverse", "computed", "coulomb")
+        for name in ("aba", "cholesky", "fused", "nonlinear", "inverse", "computed", "fused_torque", "coulomb")
     }
     energy = np.empty((KERNEL_STATES, 2))
     loops = {
@@ -519,6 +570,11 @@ def kernels(arm: ad.Robot, rng: np.random.Generator) -> tuple[list[list[str]], d
         "cholesky": (
             "forward dynamics, CRBA + RNEA + Cholesky solve",
             partial(_loop_cholesky, m, Q, QD, U, outs["cholesky"]),
+            reference_fd,
+        ),
+        "fused": (
+            "forward dynamics, mass_matrix_and_bias + Cholesky solve",
+            partial(_loop_fused, m, Q, QD, U, outs["fused"]),
             reference_fd,
         ),
         "crba": ("M(q), CRBA (crba_core)", partial(_loop_crba, m, Q, matrix), reference_M),
@@ -530,6 +586,11 @@ def kernels(arm: ad.Robot, rng: np.random.Generator) -> tuple[list[list[str]], d
         "computed": (
             "computed torque M u + N: CRBA + RNEA + M u",
             partial(_loop_computed_torque, m, Q, QD, U, outs["computed"]),
+            reference_tau,
+        ),
+        "fused_torque": (
+            "computed torque M u + N: mass_matrix_and_bias + M u",
+            partial(_loop_fused_torque, m, Q, QD, U, outs["fused_torque"]),
             reference_tau,
         ),
         "inverse": (
@@ -548,13 +609,17 @@ def kernels(arm: ad.Robot, rng: np.random.Generator) -> tuple[list[list[str]], d
             None,
         ),
     }
+    if not FUSED:
+        del loops["fused"], loops["fused_torque"]
     times = measure(*(Candidate(call, KERNEL_REPEATS) for _, call, _ in loops.values()))
     per_call = {name: seconds / KERNEL_STATES * 1e6 for name, seconds in zip(loops, times, strict=True)}
-    results = {"aba": outs["aba"], "cholesky": outs["cholesky"], "crba": matrix, "nonlinear": outs["nonlinear"],
-               "computed": outs["computed"], "inverse": outs["inverse"], "energy": energy}  # fmt: skip
+    results = outs | {"crba": matrix, "energy": energy}
     rows = []
     for name, (label, _, reference) in loops.items():
-        agreement = sci(relative_error(results[name], reference)) if reference is not None else "-"
+        agreement = "-"
+        if reference is not None:
+            error = relative_error(results[name], reference)
+            agreement = sci(error) + ("" if error <= TOLERANCE else f" (DIFFERS: more than {TOLERANCE:g})")
         rows.append([label, us(per_call[name]), agreement])
     return rows, per_call
 
@@ -790,6 +855,21 @@ def main() -> None:
         )
     )
 
+    show(
+        Table(
+            "2b. PUMA 560 tracking error (rad) of the same run with less friction stiffness or a finer step",
+            ["variant", "final max |e|", "max |e|, last 1 s"],
+            tracking_error(puma, puma_trajectory),
+            [
+                "One untimed run each. The controller (on its own model, with the same smoothed friction) runs "
+                "once per step and holds its torque over the step, while the plant's smoothed Coulomb friction "
+                "changes by up to 2 Tc within a few eps of velocity: near each velocity reversal the held "
+                "torque cannot cancel it, and RK4 at 1 ms is outside its stability interval there (table 1a).",
+            ],
+            left=1,
+        )
+    )
+
     kernel_rows, per_call = kernels(puma, rng)
     step_rows, loop_per_step = breakdown(puma, puma_trajectory)
     steps = round(T_PUMA / DT) + 1
@@ -800,6 +880,9 @@ def main() -> None:
         ("Cholesky design: 4 (CRBA + RNEA + Cholesky) + CRBA + RNEA + M u", 4 * fd + controller),
         ("the same, the first stage from the controller's M and N: 3 FD + controller", 3 * fd + controller),
     ]
+    if FUSED:
+        fused = 3 * per_call["fused"] + per_call["fused_torque"]
+        sums.append(("the same with M and N by mass_matrix_and_bias: 3 FD + controller", fused))
     show(
         Table(
             f"4a. Where the time goes: simulate() of the PUMA 560, {T_PUMA:g} s at {DT * 1e3:g} ms, in parts and "

@@ -6,9 +6,11 @@ held in between), or with an adaptive solver of scipy.integrate.solve_ivp. When 
 controller and the trajectory are armdyn's own and the disturbance is constant, the whole
 RK4 run is one compiled Numba call.
 
-Coulomb friction is smoothed: Fd_i = tanh(qd_i / eps) Tc+ (qd_i >= 0) or -tanh(qd_i / eps) Tc-
-(qd_i < 0), continuous through zero velocity, so the integrator does not chatter; eps
-(``coulomb_smoothing``, 1e-3 rad/s by default) -> 0 recovers Fd = Tc sgn(qd). The integral
+Coulomb friction is smoothed: Fd_i = tanh(qd_i / eps_i) Tc+ (qd_i >= 0) or -tanh(qd_i / eps_i) Tc-
+(qd_i < 0), continuous through zero velocity, so the integrator does not chatter. With
+``coulomb_smoothing="auto"`` (the default) eps_i = max(1e-3 rad/s, Tc_i dt / M_ii(q0)), which
+keeps the stiffness of the smoothed law within fixed-step RK4's stability region; a number
+sets every eps_i, and eps -> 0 recovers Fd = Tc sgn(qd). The integral
 of the error for PID control is accumulated once per controller evaluation.
 """
 
@@ -19,6 +21,7 @@ import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -46,9 +49,14 @@ class Result:
     qdd: np.ndarray
     tau: np.ndarray
     q_d: np.ndarray | None
-    energy: np.ndarray
     arm: Robot
     info: dict = field(default_factory=dict)
+    energy_of: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+
+    @cached_property
+    def energy(self) -> np.ndarray:
+        """K + P at every sample (computed when first read: one batch call per arm)."""
+        return self.energy_of() if self.energy_of is not None else np.full(len(self.t), np.nan)
 
     @property
     def error(self) -> np.ndarray | None:
@@ -109,10 +117,10 @@ def _desired(kind: int, traj: np.ndarray, t: float, q0: np.ndarray, out: np.ndar
 
 
 @njit(inline="always", **_OPTS)
-def smooth_coulomb(coulomb: np.ndarray, eps: float, i: int, rate: float) -> float:
-    """Fd_i: tanh(qd / eps) Tc+ for qd >= 0, -tanh(qd / eps) Tc- for qd < 0 (exact sgn for eps = 0)."""
-    if eps > 0.0:
-        x = rate / eps
+def smooth_coulomb(coulomb: np.ndarray, eps: np.ndarray, i: int, rate: float) -> float:
+    """Fd_i: tanh(qd / eps_i) Tc+ for qd >= 0, -tanh(qd / eps_i) Tc- for qd < 0 (exact sgn for eps_i = 0)."""
+    if eps[i] > 0.0:
+        x = rate / eps[i]
         smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)  # tanh(20) = 1 - 8e-18
         return smooth * coulomb[i, 0] if rate >= 0.0 else -smooth * coulomb[i, 1]
     return coulomb[i, 0] if rate > 0.0 else coulomb[i, 1] if rate < 0.0 else 0.0
@@ -120,7 +128,7 @@ def smooth_coulomb(coulomb: np.ndarray, eps: float, i: int, rate: float) -> floa
 
 @njit(**_OPTS)
 def _accelerations(
-    plant: np.ndarray, coulomb: np.ndarray, eps: float, w: np.ndarray, q: np.ndarray, qd: np.ndarray,
+    plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, w: np.ndarray, q: np.ndarray, qd: np.ndarray,
     tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
 ) -> None:  # fmt: skip
     """qdd = M^-1 (tau - N - Fd_smooth) by CRBA, RNEA and a Cholesky solve.
@@ -132,9 +140,9 @@ def _accelerations(
     _solve(M, N, tau, coulomb, eps, qd, qdd)
 
 
-@njit(**_OPTS)
+@njit(inline="always", **_OPTS)
 def _solve(
-    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: float, qd: np.ndarray, qdd: np.ndarray
+    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, qd: np.ndarray, qdd: np.ndarray
 ) -> None:
     """qdd = M^-1 (tau - N - Fd_smooth) by Cholesky factorization (M is overwritten)."""
     n = qd.shape[0]
@@ -163,7 +171,7 @@ def _solve(
 
 @njit(**_OPTS)
 def _control(
-    kind: int, model: np.ndarray, model_coulomb: np.ndarray, eps: float, wc: np.ndarray, q: np.ndarray,
+    kind: int, model: np.ndarray, model_coulomb: np.ndarray, eps: np.ndarray, wc: np.ndarray, q: np.ndarray,
     qd: np.ndarray, desired: np.ndarray, e_int: np.ndarray, kp: np.ndarray, kv: np.ndarray, ki: np.ndarray,
     limit: np.ndarray, u: np.ndarray, M_: np.ndarray, Nv: np.ndarray, tau: np.ndarray,
 ) -> None:  # fmt: skip
@@ -197,7 +205,7 @@ def run_rk4(
     plants: np.ndarray, coulombs: np.ndarray, switches: np.ndarray, model: np.ndarray, model_coulomb: np.ndarray,
     shared: bool, kind: int,
     kp: np.ndarray, kv: np.ndarray, ki: np.ndarray, limit: np.ndarray, hold: int, traj_kind: int,
-    traj: np.ndarray, q0: np.ndarray, disturbance: np.ndarray, eps: float, t0: float, dt: float,
+    traj: np.ndarray, q0: np.ndarray, disturbance: np.ndarray, eps: np.ndarray, t0: float, dt: float,
     first: int, last: int, state: np.ndarray, tau_held: np.ndarray, e_int: np.ndarray,
     T_: np.ndarray, Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray, TAU: np.ndarray, QDES: np.ndarray,
 ) -> None:  # fmt: skip
@@ -301,7 +309,7 @@ def simulate(
     qd0: Sequence[float] | None = None,
     disturbance: object = None,
     events: Sequence[tuple[float, Robot]] = (),
-    coulomb_smoothing: float = 1e-3,
+    coulomb_smoothing: float | str = "auto",
     progress: Callable[[float], None] | None = None,
 ) -> Result:
     """Simulate ``arm`` from (q0, qd0) (zeros by default) for t_final seconds.
@@ -367,20 +375,21 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
     state, tau_held, e_int = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n)
+    smoothing = _smoothing(arm, eps, dt, q0)
     chunks = 20 if progress is not None else 1
     bounds = np.linspace(0, steps + 1, chunks + 1).astype(int)
     for a, b in itertools.pairwise(bounds):
         run_rk4(
             plants, coulombs, switches, model, model_coulomb, spec.model is None, spec.kind, kp, kv, ki, limit,
-            hold, traj_kind, traj, q0, tau_d, float(eps), 0.0, dt, int(a), int(b), state, tau_held, e_int, times,
+            hold, traj_kind, traj, q0, tau_d, smoothing, 0.0, dt, int(a), int(b), state, tau_held, e_int, times,
             arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"],
         )  # fmt: skip
         if progress is not None:
             progress(b / (steps + 1))
     q_d = arrays["q_d"] if trajectory is not None else None
-    energy = _energies(arms, events, times, arrays["q"], arrays["qd"])
-    return Result(times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], q_d, energy, arm,
-                  {"method": "rk4 (compiled)", "dt": dt, "integral": e_int})  # fmt: skip
+    return Result(times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], q_d, arm,
+                  {"method": "rk4 (compiled)", "dt": dt, "integral": e_int},
+                  lambda: _energies(arms, events, times, arrays["q"], arrays["qd"]))  # fmt: skip
 
 
 def _energies(arms: list[Robot], events: list, times: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
@@ -395,12 +404,25 @@ def _energies(arms: list[Robot], events: list, times: np.ndarray, q: np.ndarray,
     return energy
 
 
-def _smooth_coulomb(arm: Robot, qd: np.ndarray, eps: float) -> np.ndarray:
+def _smoothing(arm: Robot, eps: object, dt: float, q0: np.ndarray) -> np.ndarray:
+    """eps_i per joint. "auto": the friction's stiffness Tc_i / (eps_i M_ii) times dt stays at 1,
+    inside RK4's stability limit (2.79), and eps_i is never below 1e-3 rad/s."""
+    if isinstance(eps, str):
+        if eps != "auto":
+            raise ModelError(f"coulomb_smoothing must be 'auto' or a number, got '{eps}'")
+        largest = np.abs(arm.coulomb_friction).max(axis=1)
+        return np.maximum(1e-3, largest * dt / np.diag(arm.inertia_matrix(q0)))
+    value = float(eps)
+    if not (np.isfinite(value) and value >= 0):
+        raise ModelError(f"coulomb_smoothing must be a non-negative number, got {eps}")
+    return np.full(arm.n, value)
+
+
+def _smooth_coulomb(arm: Robot, qd: np.ndarray, eps: np.ndarray) -> np.ndarray:
     coulomb = arm.coulomb_friction
-    if eps <= 0:
-        return np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
-    smooth = np.tanh(qd / eps)
-    return np.where(qd >= 0, smooth * coulomb[:, 0], -smooth * coulomb[:, 1])
+    exact = np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
+    smooth = np.tanh(qd / np.where(eps > 0, eps, 1.0))
+    return np.where(eps > 0, np.where(qd >= 0, smooth * coulomb[:, 0], -smooth * coulomb[:, 1]), exact)
 
 
 def _plant_at(arms: list[Robot], events: list, t: float) -> Robot:
@@ -451,7 +473,7 @@ def _tau_d(disturbance: object, t: float, q: np.ndarray, qd: np.ndarray) -> np.n
 def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt, eps):
     """The same TRESP scheme in Python, for controllers and trajectories of the user's own."""
     n = arms[0].n
-    qdd_of = _dynamics(arms, events, eps)
+    qdd_of = _dynamics(arms, events, _smoothing(arms[0], eps, dt, q0))
     hold = max(1, round(period / dt)) if period else 1
     out = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
@@ -474,9 +496,9 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
         q = q + dt / 6 * (qd + 2 * k2q + 2 * k3q + k4q)
         qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
     q_d = out["q_d"] if trajectory is not None else None
-    energy = _energies(arms, events, times, out["q"], out["qd"])
-    return Result(times, out["q"], out["qd"], out["qdd"], out["tau"], q_d, energy, arms[0],
-                  {"method": "rk4 (Python)", "dt": dt, "integral": e_int})  # fmt: skip
+    return Result(times, out["q"], out["qd"], out["qdd"], out["tau"], q_d, arms[0],
+                  {"method": "rk4 (Python)", "dt": dt, "integral": e_int},
+                  lambda: _energies(arms, events, times, out["q"], out["qd"]))  # fmt: skip
 
 
 def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps):
@@ -484,7 +506,7 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
     from scipy.integrate import solve_ivp
 
     n = arms[0].n
-    qdd_of = _dynamics(arms, events, eps)
+    qdd_of = _dynamics(arms, events, _smoothing(arms[0], eps, dt, q0))
 
     def rate(t: float, x: np.ndarray) -> np.ndarray:
         q, qd, e_int = x[:n], x[n : 2 * n], x[2 * n :]
@@ -506,6 +528,6 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
         tau[k] = _torque(controller, plant, t, q[k], qd[k], desired, e_int[k])
         qdd[k] = qdd_of(t, q[k], qd[k], tau[k] - _tau_d(disturbance, t, q[k], qd[k]))
         q_d[k] = desired[0]
-    energy = _energies(arms, events, times, q, qd)
-    return Result(times, q, qd, qdd, tau, q_d if trajectory is not None else None, energy, arms[0],
-                  {"method": method, "dt": dt, "evaluations": solution.nfev})  # fmt: skip
+    return Result(times, q, qd, qdd, tau, q_d if trajectory is not None else None, arms[0],
+                  {"method": method, "dt": dt, "evaluations": solution.nfev},
+                  lambda: _energies(arms, events, times, q, qd))  # fmt: skip
