@@ -28,7 +28,12 @@ def _entries(raw: Derivation, name: str) -> list[tuple[tuple[int, ...], se.Basic
         return [((i, j), raw.M[i][j]) for i in range(n) for j in range(n)]
     if name == "Vm":
         return [((i, j), raw.Vm[i][j]) for i in range(n) for j in range(n)]
-    return [((i,), x) for i, x in enumerate(raw.G if name == "G" else raw.tau)]
+    if name == "G":
+        return [((i,), x) for i, x in enumerate(raw.G)]
+    # tau as M qdd + V + F + G, not expanded: the terms of M, V and G then share subexpressions
+    return [
+        ((i,), se.Add(*(raw.M[i][j] * raw.qdd[j] for j in range(n)), raw.V[i], raw.F[i], raw.G[i])) for i in range(n)
+    ]
 
 
 def count_operations(expr: se.Basic) -> int:
@@ -216,13 +221,17 @@ def _batch_loop(one: Callable, arity: int) -> Callable:
 
 def compile_closed_form(raw: Derivation, values: dict[str, float]) -> CompiledClosedForm:
     """Generate Python with the parameter values as constants, and compile it with Numba."""
+    mapping = {se.Symbol(k): v for k, v in values.items()}
+
+    def numeric(x: se.Basic) -> se.Basic:
+        return x.subs(mapping)
+
     substituted = Derivation(
         **{
             **raw.__dict__,
-            "M": [[x.subs({se.Symbol(k): v for k, v in values.items()}) for x in row] for row in raw.M],
-            "Vm": [[x.subs({se.Symbol(k): v for k, v in values.items()}) for x in row] for row in raw.Vm],
-            "G": [x.subs({se.Symbol(k): v for k, v in values.items()}) for x in raw.G],
-            "tau": [x.subs({se.Symbol(k): v for k, v in values.items()}) for x in raw.tau],
+            "M": [[numeric(x) for x in row] for row in raw.M],
+            "Vm": [[numeric(x) for x in row] for row in raw.Vm],
+            **{name: [numeric(x) for x in getattr(raw, name)] for name in ("G", "tau", "V", "F")},
         }
     )
     namespace: dict[str, object] = {"cos": math.cos, "sin": math.sin, "sign": np.sign}
