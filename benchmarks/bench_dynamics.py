@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import datetime
 import gc
-import hashlib
 import os
 import platform
 import statistics
@@ -38,6 +37,7 @@ from pathlib import Path
 import numba
 import numpy as np
 import pinocchio as pin
+from common import _loop_ns, cpu_model, ratio, source_state, us
 
 import armdyn as ad
 
@@ -80,13 +80,6 @@ class Candidate:
     calls: int = CALLS
     repeats: int = REPEATS
     states: int = 1
-
-
-def _loop_ns(fn: Callable[[], object], calls: int) -> int:
-    start = time.perf_counter_ns()
-    for _ in range(calls):
-        fn()
-    return time.perf_counter_ns() - start
 
 
 def measure(*candidates: Candidate) -> list[float]:
@@ -145,20 +138,6 @@ class Table:
         if self.notes:
             body += ["", *(f"- {note}" for note in self.notes)]
         return "\n".join(body) + "\n"
-
-
-def us(value: float) -> str:
-    """Microseconds with about three significant digits."""
-    if value >= 100:
-        return f"{value:,.0f}"
-    return f"{value:.1f}" if value >= 10 else f"{value:.3f}" if value < 1 else f"{value:.2f}"
-
-
-def ratio(value: float) -> str:
-    """A ratio with two decimals, or two significant digits when small."""
-    if value >= 100:
-        return f"{value:,.0f}"
-    return f"{value:.2f}" if value >= 0.1 else f"{value:.2g}"
 
 
 # ----- the arms ---------------------------------------------------------------------------------
@@ -391,29 +370,6 @@ def startup() -> list:
 
 
 # ----- the run ----------------------------------------------------------------------------------
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def source_state() -> tuple[str, str]:
-    """(a hash of armdyn's installed source, its git commit and whether src/ has uncommitted changes)."""
-    root = Path(ad.__file__).parent
-    digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
-    try:
-        git = partial(subprocess.run, capture_output=True, text=True, check=True, cwd=root)
-        commit = git(["git", "rev-parse", "--short", "HEAD"]).stdout.strip()
-        dirty = git(["git", "status", "--porcelain", "--", "."]).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return digest.hexdigest()[:12], "not a git checkout"
-    return digest.hexdigest()[:12], f"git {commit}" + (" plus uncommitted changes" if dirty else "")
 
 
 def warm_up(arms: Sequence[ad.Robot]) -> float:

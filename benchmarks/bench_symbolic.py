@@ -29,8 +29,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import gc
-import hashlib
-import importlib.metadata
 import json
 import os
 import platform
@@ -50,6 +48,7 @@ import numba
 import numpy as np
 import symengine as se
 import sympy
+from common import _loop_ns, cpu_model, ratio, source_state, us, version
 
 import armdyn as ad
 from armdyn.symbolic import ClosedForm, derive
@@ -96,13 +95,6 @@ class Candidate:
     calls: int = CALLS
     repeats: int = REPEATS
     states: int = 1
-
-
-def _loop_ns(fn: Callable[[], object], calls: int) -> int:
-    start = time.perf_counter_ns()
-    for _ in range(calls):
-        fn()
-    return time.perf_counter_ns() - start
 
 
 def measure(*candidates: Candidate) -> list[float]:
@@ -179,20 +171,6 @@ class Table:
         if self.notes:
             body += ["", *(f"- {note}" for note in self.notes)]
         return "\n".join(body) + "\n"
-
-
-def us(value: float) -> str:
-    """Microseconds with about three significant digits."""
-    if value >= 100:
-        return f"{value:,.0f}"
-    return f"{value:.1f}" if value >= 10 else f"{value:.3f}" if value < 1 else f"{value:.2f}"
-
-
-def ratio(value: float) -> str:
-    """A ratio with two decimals, or two significant digits when small."""
-    if value >= 100:
-        return f"{value:,.0f}"
-    return f"{value:.2f}" if value >= 0.1 else f"{value:.2g}"
 
 
 def seconds(value: float) -> str:
@@ -549,36 +527,6 @@ def toolbox(
 
 
 # ----- the run ----------------------------------------------------------------------------------
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def source_state() -> tuple[str, str]:
-    """(a hash of armdyn's installed source, its git commit and whether src/ has uncommitted changes)."""
-    root = Path(ad.__file__).parent
-    digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
-    try:
-        git = partial(subprocess.run, capture_output=True, text=True, check=True, cwd=root)
-        commit = git(["git", "rev-parse", "--short", "HEAD"]).stdout.strip()
-        dirty = git(["git", "status", "--porcelain", "--", "."]).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return digest.hexdigest()[:12], "not a git checkout"
-    return digest.hexdigest()[:12], f"git {commit}" + (" plus uncommitted changes" if dirty else "")
-
-
-def version(distribution: str) -> str:
-    try:
-        return importlib.metadata.version(distribution)
-    except importlib.metadata.PackageNotFoundError:
-        return "not installed"
 
 
 def header(source: tuple[str, str], args: argparse.Namespace) -> list[str]:
