@@ -192,3 +192,11 @@ def test_demo_is_the_main_job(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert (tmp_path / "demo.png").exists() and (tmp_path / "demo.csv").exists()
     assert "final tracking errors" in result.output and "Table 3.3.1" in result.output
+
+
+def test_the_top_level_names() -> None:
+    assert ad.simulate is simulate
+    assert ad.control.ComputedTorque is ComputedTorque and ad.trajectories.Sinusoid is Sinusoid
+    assert ad.statespace.linearize is not None and ad.symbolic.derive is not None
+    with pytest.raises(AttributeError):
+        _ = ad.no_such_name

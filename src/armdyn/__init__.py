@@ -11,12 +11,18 @@ from armdyn.model.urdf import load_urdf
 __version__ = "0.1.0"
 
 
-def __getattr__(name: str) -> object:
-    """armdyn.symbolic and armdyn.properties load on first use (SymPy and SciPy take a moment)."""
-    if name in ("symbolic", "properties"):
-        import importlib
+_LAZY_MODULES = ("symbolic", "properties", "statespace", "control", "trajectories", "simulation", "plotting")
 
+
+def __getattr__(name: str) -> object:
+    """The heavier parts load on first use: armdyn.symbolic (SymPy), armdyn.properties (SciPy),
+    armdyn.simulation and its companions; ``armdyn.simulate`` is armdyn.simulation.simulate."""
+    import importlib
+
+    if name in _LAZY_MODULES:
         return importlib.import_module(f"armdyn.{name}")
+    if name == "simulate":
+        return importlib.import_module("armdyn.simulation").simulate
     raise AttributeError(f"module 'armdyn' has no attribute '{name}'")
 
 
