@@ -90,12 +90,3 @@ def compile_robot(robot: Robot) -> np.ndarray:
         record[VISCOUS] = viscous[i]
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
     return buffer
-
-
-def scratch_size(n: int) -> int:
-    """Scratch doubles one state needs (the batch kernels give each thread its own)."""
-    return SCRATCH_PER_JOINT * n + SCRATCH_FIXED
-
-
-def scratch_start(n: int) -> int:
-    return HEADER + STRIDE * n

@@ -410,25 +410,6 @@ def friction_batch(m: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
         friction_core(m, qd[s], out[s])
 
 
-@njit("int64(float64[::1], float64[::1], float64[::1], float64[::1], float64[::1], float64[::1])", **_OPTS)
-def rnea_wrench_one(
-    m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, tau: np.ndarray
-) -> int:
-    """Inverse dynamics with a wrench exerted by the tool (tool frame, [force; moment])."""
-    n = int(m[0])
-    status = _check(q, n, 1)
-    if status == 0:
-        status = _check(qd, n, 2)
-    if status == 0:
-        status = _check(qdd, n, 3)
-    if status == 0:
-        status = _check(wrench, 6, 5)
-    if status != 0 or tau.shape[0] != n:
-        return status if status != 0 else 4
-    rnea_core(m, m, HEADER + STRIDE * n, q, qd, qdd, wrench, INVERSE_DYNAMICS | WITH_WRENCH, tau)
-    return 0
-
-
 @njit(parallel=True, **_OPTS)
 def rnea_batch(
     m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, flags: int, tau: np.ndarray
