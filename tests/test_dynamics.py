@@ -87,7 +87,7 @@ def test_batches_broadcast_and_accept_lists() -> None:
     tau = arm.inverse_dynamics(q, np.zeros(6), [0.0] * 6)  # one qd and qdd for all five states
     assert tau.shape == (5, 6)
     assert_allclose(tau, np.tile(arm.gravity_vector(arm.qn), (5, 1)), atol=1e-12)
-    assert_allclose(arm.gravity_vector(list(arm.qn)), arm.gravity_vector(arm.qn))
+    assert_allclose(arm.gravity_vector(list(arm.qn)), arm.gravity_vector(arm.qn), atol=1e-12)
     assert arm.inverse_dynamics(np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 6))).shape == (0, 6)
     assert isinstance(arm.kinetic_energy(arm.qn, np.ones(6)), float)
 
@@ -103,7 +103,7 @@ def test_out_arrays_are_filled_in_place() -> None:
     assert arm.forward_dynamics(np.zeros((3, 6)), np.zeros((3, 6)), np.zeros((3, 6)), out=batch) is batch
     with pytest.raises(ad.ModelError, match=r"out must be a writable C-contiguous float64 array of shape \(3, 6\)"):
         arm.inverse_dynamics(np.zeros((3, 6)), np.zeros((3, 6)), np.zeros((3, 6)), out=np.empty((6,)))
-    with pytest.raises(ad.ModelError, match=r"out must have shape \(6, 6\)"):
+    with pytest.raises(ad.ModelError, match=r"out must be a writable C-contiguous float64 array of shape \(6, 6\)"):
         arm.inertia_matrix(arm.qn, out=np.empty((5, 5)))
 
 
@@ -118,7 +118,7 @@ def test_out_arrays_are_filled_in_place() -> None:
         (lambda a: a.forward_dynamics(np.full(6, np.nan), np.zeros(6), np.zeros(6)), "q must be finite"),
         (lambda a: a.inertia_matrix(np.zeros(3)), r"q must have shape \(6,\)"),
         (lambda a: a.coriolis_matrix(np.zeros(6), [np.nan] * 6), "qd must be finite"),
-        (lambda a: a.gravity_vector(np.zeros((2, 5))), r"q must have shape \(\.\.\., 6\)"),
+        (lambda a: a.gravity_vector(np.zeros((2, 5))), r"q must have shape \(6,\) or \(\.\.\., 6\)"),
         (lambda a: a.kinetic_energy(np.zeros(6), np.zeros(3)), r"qd must have shape"),
         (lambda a: a.inverse_dynamics(np.zeros((2, 6)), np.zeros((3, 6)), np.zeros(6)), "do not broadcast"),
         (lambda a: a.inverse_dynamics(np.zeros(6), np.zeros(6), np.zeros(6), f_ext=[1, 2]), "f_ext must be"),
@@ -222,7 +222,7 @@ def test_kernels_equal_pinocchio(urdf_path: object) -> None:
 
 
 def test_vectorizable_sin_cos_is_accurate() -> None:
-    from armdyn.dynamics.vectorized import sin_cos
+    from armdyn.dynamics.spatial import sin_cos
 
     for x in np.concatenate([np.linspace(-100, 100, 20001), [0.0, np.pi / 4, np.pi / 2, np.pi, -np.pi / 2]]):
         s, c = sin_cos(x)

@@ -408,7 +408,7 @@ def _calls(arm: Robot, q: object) -> list[Callable[[], object]]:
 def test_q_with_the_wrong_length(q: object) -> None:
     arm = ad.models.puma560()
     for call in _calls(arm, q):
-        with pytest.raises(ModelError, match=r"q must have shape \(\.\.\., 6\) for 'puma560'"):
+        with pytest.raises(ModelError, match=r"q must have shape \(6,\) or \(\.\.\., 6\) for 'puma560'"):
             call()
 
 
@@ -424,7 +424,7 @@ def test_q_not_finite(bad: float) -> None:
 
 def test_qd_wrong_or_not_finite() -> None:
     arm = ad.models.puma560()
-    with pytest.raises(ModelError, match=r"qd must have shape \(\.\.\., 6\)"):
+    with pytest.raises(ModelError, match=r"qd must have shape \(6,\) or \(\.\.\., 6\)"):
         arm.jacobian_dot(np.zeros(6), np.zeros(5))
     with pytest.raises(ModelError, match=r"qd must be finite"):
         arm.jacobian_dot(np.zeros(6), [0, 0, np.nan, 0, 0, 0])

@@ -165,7 +165,7 @@ def test_friction_follows_the_toolbox_convention() -> None:
 
 def test_bad_states_are_refused() -> None:
     arm = ad.models.puma560()
-    with pytest.raises(ad.ModelError, match=r"q must have shape \(\.\.\., 6\)"):
+    with pytest.raises(ad.ModelError, match=r"q must have shape \(6,\) or \(\.\.\., 6\)"):
         L.inertia_matrix(arm, np.zeros(5))
     with pytest.raises(ad.ModelError, match="qd must be finite"):
         L.coriolis_matrix(arm, np.zeros(6), [0, 0, np.nan, 0, 0, 0])

@@ -1,12 +1,13 @@
 """armdyn: the dynamics of robot manipulators (Lewis, Dawson and Abdallah, Chapter 3)."""
 
 from armdyn import kinematics
+from armdyn import models as models
 from armdyn.dynamics import lagrange
 from armdyn.dynamics.regressor import base_parameters, identify
 from armdyn.errors import ModelError
-from armdyn.model import Inertial, Joint, Link, Robot
-from armdyn.model import catalog as models
-from armdyn.model.urdf import load_urdf
+from armdyn.model import ArmModel, Inertial, Joint, Link
+from armdyn.robot import Robot
+from armdyn.urdf import load_urdf
 
 __version__ = "0.1.0"
 
@@ -27,6 +28,7 @@ def __getattr__(name: str) -> object:
 
 
 __all__ = [
+    "ArmModel",
     "Inertial",
     "Joint",
     "Link",

@@ -7,9 +7,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from armdyn import models as catalog
 from armdyn.errors import ModelError
-from armdyn.model import catalog
-from armdyn.model.robot import Robot
+from armdyn.robot import Robot
 
 app = typer.Typer(help="armdyn: the dynamics of robot manipulators.", no_args_is_help=True, add_completion=False)
 console = Console(width=None if Console().is_terminal else 140)

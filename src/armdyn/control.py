@@ -1,32 +1,45 @@
 """Controllers of Chapter 4: computed torque (PD or PID), PD plus gravity, classical PID,
-digital (zero-order hold) and torque saturation.
+digital (zero-order hold) and torque saturation; each class beside its compiled law.
 
-A controller is a small object with one method:
+A controller is any callable
 
-    tau = controller(t, q, qd, q_d, qd_d, qdd_d, e_int)
+    tau = controller(t, q, qd, q_d, qd_d, qdd_d, e_int)            or
+    tau = controller(t, q, qd, q_d, qd_d, qdd_d, e_int, plant=arm)
 
-with e = q_d - q and e_int the time integral of e (kept by the simulator). Users can
-write their own; the built-in ones also describe themselves to the compiled simulation
-loop (``spec``), so that a whole run is one Numba call. Gains are scalars or per joint.
+with e = q_d - q and e_int the time integral of e (kept by the simulator); a controller that
+takes a ``plant`` keyword is given the arm in force at that time. A user's own controller
+runs in simulate's Python loop. The built-in ones also describe themselves to the compiled
+simulation loop (``spec``), which runs their compiled law (below each class), so that a
+whole run is one Numba call. Gains are scalars or per joint.
 """
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
+from armdyn.dynamics.crba import mass_matrix_and_bias
+from armdyn.dynamics.friction import smooth_coulomb
+from armdyn.dynamics.rnea import gravity_core
+from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.inputs import gains as _gains
+from armdyn.robot import Robot
 
-COMPUTED_TORQUE, PD_GRAVITY, PID_JOINT = 1, 2, 3
+NO_CONTROL, COMPUTED_TORQUE, PD_GRAVITY, PID_JOINT = 0, 1, 2, 3
+KP, KV, KI, LIMIT = 0, 1, 2, 3  # rows of the compiled laws' gain table
 
 
-def _gains(value: object, name: str, n: int) -> np.ndarray:
-    array = np.atleast_1d(np.asarray(value, dtype=float))
-    if array.ndim != 1 or array.shape[0] not in (1, n) or not np.all(np.isfinite(array)) or np.any(array < 0):
-        raise ModelError(f"gain {name} must be a non-negative scalar or {n} values, got {value!r}")
-    return np.broadcast_to(array, (n,)).copy()
+def accepts_plant(controller: object) -> bool:
+    """True when ``controller`` takes a ``plant`` keyword (or any keyword)."""
+    try:
+        parameters = inspect.signature(controller).parameters.values()
+    except (TypeError, ValueError):  # a builtin or extension callable: no keywords known
+        return False
+    return any(p.name == "plant" or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
 
 
 @dataclass
@@ -69,6 +82,28 @@ class ComputedTorque:
         return arm.inertia_matrix(q) @ u + arm.nonlinear_terms(q, qd)
 
 
+@njit(inline="always", **NUMBA_OPTIONS)
+def computed_torque_law(
+    model: np.ndarray, model_coulomb: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
+    desired: np.ndarray, e_int: np.ndarray, gain: np.ndarray, u: np.ndarray, M: np.ndarray, N: np.ndarray,
+    tau: np.ndarray,
+) -> None:  # fmt: skip
+    """tau = M (qdd_d + kv edot + kp e + ki int e) + N on the model; its Coulomb friction compensated
+    with the simulation's smooth law. Leaves M and N of this state in M and N."""
+    n = q.shape[0]
+    for i in range(n):
+        u[i] = (
+            desired[2, i] + gain[KV, i] * (desired[1, i] - qd[i]) + gain[KP, i] * (desired[0, i] - q[i])
+            + gain[KI, i] * e_int[i]
+        )  # fmt: skip
+    mass_matrix_and_bias(model, work, q, qd, M, N)
+    for i in range(n):
+        total = N[i] + smooth_coulomb(model_coulomb, eps, i, qd[i])
+        for j in range(n):
+            total += M[i, j] * u[j]
+        tau[i] = total
+
+
 @dataclass
 class PDGravity:
     """tau = kp e + kv edot + G(q) (Example 4.4-3)."""
@@ -89,6 +124,17 @@ class PDGravity:
         return _gains(self.kp, "kp", n) * (q_d - q) + _gains(self.kv, "kv", n) * (qd_d - qd) + arm.gravity_vector(q)
 
 
+@njit(inline="always", **NUMBA_OPTIONS)
+def pd_gravity_law(
+    model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray, desired: np.ndarray, gain: np.ndarray,
+    G: np.ndarray, tau: np.ndarray,
+) -> None:  # fmt: skip
+    """tau = kp e + kv edot + G(q) on the model."""
+    gravity_core(model, work, q, G)
+    for i in range(q.shape[0]):
+        tau[i] = gain[KP, i] * (desired[0, i] - q[i]) + gain[KV, i] * (desired[1, i] - qd[i]) + G[i]
+
+
 @dataclass
 class PID:
     """Classical independent-joint control, tau = kp e + kv edot + ki int e (Example 4.4-4)."""
@@ -105,6 +151,15 @@ class PID:
         n = q.shape[-1]
         e, edot = q_d - q, qd_d - qd
         return _gains(self.kp, "kp", n) * e + _gains(self.kv, "kv", n) * edot + _gains(self.ki, "ki", n) * e_int
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def pid_law(
+    q: np.ndarray, qd: np.ndarray, desired: np.ndarray, e_int: np.ndarray, gain: np.ndarray, tau: np.ndarray
+) -> None:
+    """tau = kp e + kv edot + ki int e."""
+    for i in range(q.shape[0]):
+        tau[i] = gain[KP, i] * (desired[0, i] - q[i]) + gain[KV, i] * (desired[1, i] - qd[i]) + gain[KI, i] * e_int[i]
 
 
 @dataclass
@@ -151,3 +206,23 @@ class Saturated:
         tau = self.controller(*args, **kwargs)
         limit = np.asarray(self.limit, dtype=float)
         return np.clip(tau, -limit, limit)
+
+
+@njit(**NUMBA_OPTIONS)
+def control_law(
+    kind: int, model: np.ndarray, model_coulomb: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray,
+    qd: np.ndarray, desired: np.ndarray, e_int: np.ndarray, gain: np.ndarray, u: np.ndarray, M: np.ndarray,
+    N: np.ndarray, tau: np.ndarray,
+) -> None:  # fmt: skip
+    """The compiled law of a built-in controller (``kind``), then saturation at gain[LIMIT].
+
+    gain rows: KP, KV, KI, LIMIT, per joint; desired rows: q_d, qd_d, qdd_d.
+    """
+    if kind == COMPUTED_TORQUE:
+        computed_torque_law(model, model_coulomb, eps, work, q, qd, desired, e_int, gain, u, M, N, tau)
+    elif kind == PD_GRAVITY:
+        pd_gravity_law(model, work, q, qd, desired, gain, N, tau)
+    else:
+        pid_law(q, qd, desired, e_int, gain, tau)
+    for i in range(q.shape[0]):
+        tau[i] = min(max(tau[i], -gain[LIMIT, i]), gain[LIMIT, i])

@@ -8,25 +8,51 @@ from __future__ import annotations
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.model import ArmModel
 
 
-def as_state(robot: Robot, value: object, name: str = "q") -> np.ndarray:
-    """A float array of shape (..., n), or a ModelError naming the argument.
+def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
+    """A finite array of shape (..., n), or a ModelError naming the argument.
 
     Complex arrays stay complex: the Lagrange reference then takes complex-step derivatives.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm, for n and its name in the message.
+    value : array_like
+        The state, (n,) or a batch (..., n).
+    name : str, optional
+        The argument's name for the message (default "q").
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` as a float (or complex) array of shape (..., n).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``value`` is not numbers, does not end in n, or holds NaN or infinity.
     """
-    array = np.asarray(value, dtype=complex if np.iscomplexobj(value) else float)
-    if array.ndim == 0 or array.shape[-1] != robot.n:
-        raise ModelError(f"{name} must have shape (..., {robot.n}) for '{robot.name}', got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise ModelError(f"{name} must be finite (it holds NaN or infinity)")
-    return array
+    return inputs.state(value, robot.n, name, f" for '{robot.name}'", complex_ok=True)
 
 
 def skew(v: np.ndarray) -> np.ndarray:
-    """The cross-product matrix [v]x of vectors v (..., 3) -> (..., 3, 3)."""
+    """The cross-product matrix [v]x of vectors v (..., 3) -> (..., 3, 3).
+
+    Parameters
+    ----------
+    v : numpy.ndarray
+        Vectors, (..., 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        [v]x, (..., 3, 3), with [v]x u = v x u.
+    """
     zero = np.zeros_like(v[..., 0])
     return np.stack(
         [
@@ -39,7 +65,22 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def joint_motion(revolute: bool, axis: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The 4x4 motion of a joint: rotation about (Rodrigues) or translation along its axis."""
+    """The 4x4 motion of a joint: rotation about (Rodrigues) or translation along its axis.
+
+    Parameters
+    ----------
+    revolute : bool
+        True for a rotation by q about ``axis``, False for a translation by q along it.
+    axis : numpy.ndarray
+        The unit axis, (3,).
+    q : numpy.ndarray
+        Joint values, any shape (...).
+
+    Returns
+    -------
+    numpy.ndarray
+        The homogeneous transforms, (..., 4, 4), of the dtype of ``q``.
+    """
     motion = np.zeros((*q.shape, 4, 4), dtype=q.dtype)
     motion[..., 3, 3] = 1.0
     if revolute:
@@ -52,11 +93,32 @@ def joint_motion(revolute: bool, axis: np.ndarray, q: np.ndarray) -> np.ndarray:
     return motion
 
 
-def joint_frames(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def joint_frames(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(link frames T_i, joint frames) in the world, both (..., n, 4, 4).
 
     The joint frame of joint i is T_parent @ placement @ motion(q_i): its origin lies on
     the joint axis and it carries the axis as a constant vector.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+
+    Returns
+    -------
+    links : numpy.ndarray
+        The link frames T_i, (..., n, 4, 4).
+    joints : numpy.ndarray
+        The joint frames, (..., n, 4, 4).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
     """
     q = as_state(robot, q)
     shape = q.shape[:-1] + (robot.n, 4, 4)
@@ -69,23 +131,78 @@ def joint_frames(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return links, joints
 
 
-def link_transforms(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """T_i(q), the pose of every link frame in the world, shape (..., n, 4, 4)."""
+def link_transforms(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+    """T_i(q), the pose of every link frame in the world, shape (..., n, 4, 4) (Appendix A).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+
+    Returns
+    -------
+    numpy.ndarray
+        T_i, (..., n, 4, 4): base @ the chain of placements, motions and frame offsets.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+    """
     return joint_frames(robot, q)[0]
 
 
-def tool_pose(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """The tool pose T_tool_link(q) @ tool, shape (..., 4, 4)."""
+def tool_pose(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+    """The tool pose T_tool_link(q) @ tool, shape (..., 4, 4).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+
+    Returns
+    -------
+    numpy.ndarray
+        The pose of the tool in the world, (..., 4, 4).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+    """
     return link_transforms(robot, q)[..., robot.tool_link, :, :] @ robot.tool
 
 
-def joint_axes(robot: Robot, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """World axis z_j and origin o_j of every joint, each (..., n, 3)."""
+def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World axis z_j and origin o_j of every joint, each (..., n, 3).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    joints : numpy.ndarray
+        The joint frames of ``joint_frames``, (..., n, 4, 4).
+
+    Returns
+    -------
+    z : numpy.ndarray
+        The unit joint axes in the world, (..., n, 3).
+    o : numpy.ndarray
+        The joint-frame origins in the world, (..., n, 3).
+    """
     axes = np.stack([link.joint.axis for link in robot.links])
     return np.einsum("...jab,jb->...ja", joints[..., :3, :3], axes), joints[..., :3, 3]
 
 
-def _target(robot: Robot, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+def _target(robot: ArmModel, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Which link, its pose (tool applied for the tool link), and the joint axes/origins."""
     links, joints = joint_frames(robot, q)
     index = robot.tool_link if link is None else int(link)
@@ -96,7 +213,7 @@ def _target(robot: Robot, q: np.ndarray, link: int | None) -> tuple[int, np.ndar
     return index, pose, z, o
 
 
-def _columns(robot: Robot, z: np.ndarray, o: np.ndarray, point: np.ndarray, moves: np.ndarray) -> np.ndarray:
+def _columns(robot: ArmModel, z: np.ndarray, o: np.ndarray, point: np.ndarray, moves: np.ndarray) -> np.ndarray:
     """Geometric Jacobian columns for a point: [z x (p - o); z] (revolute), [z; 0] (prismatic)."""
     revolute = np.array([kind == "revolute" for kind in robot.kinds])
     linear = np.where(revolute[:, None], np.cross(z, point[..., None, :] - o), z)
@@ -111,11 +228,35 @@ def _in_frame(jac: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     return np.concatenate([rt @ jac[..., :3, :], rt @ jac[..., 3:, :]], axis=-2)
 
 
-def jacobian(robot: Robot, q: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
+def jacobian(robot: ArmModel, q: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
     """The geometric Jacobian J(q), (..., 6, n): [v; w] = J qd, linear rows first.
 
-    Of the tool (default) or of link ``link``'s frame origin; expressed in the world
-    ("base") or in the moving frame itself ("tool").
+    Column j is [z_j x (p - o_j); z_j] for a revolute joint and [z_j; 0] for a prismatic
+    one (Appendix A), zero for joints that do not move the point.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+    frame : str, optional
+        "base" (default) expresses J in the world; "tool" in the moving frame itself.
+    link : int, optional
+        The index of the link whose frame origin is the point; default (None) the tool.
+
+    Returns
+    -------
+    numpy.ndarray
+        J, (..., 6, n).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity, when ``link``
+        is not a link index, or when ``frame`` is not "base" or "tool".
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
     """
     index, pose, z, o = _target(robot, q, link)
     jac = _columns(robot, z, o, pose[..., :3, 3], robot.ancestors[index])
@@ -131,13 +272,38 @@ def _expressed(jac: np.ndarray, pose: np.ndarray, frame: str) -> np.ndarray:
 
 
 def jacobian_dot(
-    robot: Robot, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | None = None
+    robot: ArmModel, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | None = None
 ) -> np.ndarray:
     """dJ/dt for the Jacobian of ``jacobian`` (same point and frame), (..., 6, n).
 
     For a revolute column d/dt [z x (p - o); z] = [zdot x (p - o) + z x (pdot - odot); zdot]
     and for a prismatic one d/dt [z; 0] = [zdot; 0], with zdot = w_j x z_j, w_j the angular
     velocity of the body carrying joint j's axis and odot the velocity of its origin.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n).
+    frame : str, optional
+        "base" (default) for the derivative of the world-frame Jacobian; "tool" for that of
+        the Jacobian expressed in the moving frame.
+    link : int, optional
+        The index of the link whose frame origin is the point; default (None) the tool.
+
+    Returns
+    -------
+    numpy.ndarray
+        dJ/dt, (..., 6, n).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, when
+        ``link`` is not a link index, or when ``frame`` is not "base" or "tool".
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
     """
     qd = as_state(robot, qd, "qd")
     index, pose, z, o = _target(robot, q, link)
@@ -171,10 +337,31 @@ def jacobian_dot(
     return _in_frame(corrected, pose[..., :3, :3])
 
 
-def twist_generators(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def twist_generators(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(S_j, T_i): S_j the 4x4 world-frame generator of joint j, so that dT_i/dq_j = S_j T_i.
 
     S_j = [[z^, -z^ o], [0, 0]] for a revolute joint, [[0, z], [0, 0]] for a prismatic one.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+
+    Returns
+    -------
+    generators : numpy.ndarray
+        S_j, (..., n, 4, 4).
+    links : numpy.ndarray
+        The link frames T_i, (..., n, 4, 4).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
     """
     links, joints = joint_frames(robot, q)
     z, o = joint_axes(robot, joints)
@@ -186,10 +373,30 @@ def twist_generators(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return generators, links
 
 
-def link_transform_derivatives(robot: Robot, q: np.ndarray) -> np.ndarray:
+def link_transform_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """dT_i/dq_j as the book uses it (3.2.18), shape (..., n, n, 4, 4) indexed [i, j].
 
-    dT_i/dq_j = S_j T_i when joint j moves link i, and 0 otherwise.
+    dT_i/dq_j = S_j T_i when joint j moves link i, and 0 otherwise (see
+    ``twist_generators``).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+
+    Returns
+    -------
+    numpy.ndarray
+        dT_i/dq_j, (..., n, n, 4, 4), indexed [..., i, j, :, :].
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
     """
     generators, links = twist_generators(robot, q)
     derivative = generators[..., None, :, :, :] @ links[..., :, None, :, :]

@@ -16,14 +16,30 @@ import numpy as np
 from scipy.optimize import minimize
 
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.robot import Robot
 
 TOLERANCE = 1e-9
 
 
 @dataclass
 class Row:
-    """One property: its statement, whether it holds, the worst value found and the bound."""
+    """One property: its statement, whether it holds, the worst value found and the bound.
+
+    Parameters
+    ----------
+    name : str
+        The property's short name, e.g. "skew symmetry".
+    statement : str
+        What it states, e.g. "Mdot - 2 Vm is skew: x^T (Mdot - 2 Vm) x = 0".
+    holds : bool
+        Whether it held on every sample.
+    worst : float
+        The worst value found (the largest error, or the extreme of the bounded quantity).
+    bound : float or None
+        The computed bound, None for an identity.
+    how : str
+        How the value was found (samples, refinement).
+    """
 
     name: str
     statement: str
@@ -35,7 +51,22 @@ class Row:
 
 @dataclass
 class Report:
-    """The properties of Table 3.3.1 for one arm over a joint range."""
+    """The properties of Table 3.3.1 for one arm over a joint range (BOOK.md section 3).
+
+    Parameters
+    ----------
+    arm : str
+        The arm's name.
+    rows : list of Row
+        One row per property checked.
+    bounds : dict of str to float
+        The computed bounds by name: mu1, mu2 (3.3.6), m1, m2, vb, v, k, gb, for the groups
+        checked.
+    ranges : list of (float, float)
+        The (lower, upper) range sampled for each joint.
+    notes : list of str, optional
+        Remarks on the report (for example that prismatic joints make bounds depend on q).
+    """
 
     arm: str
     rows: list[Row]
@@ -48,13 +79,36 @@ class Report:
         return all(row.holds for row in self.rows)
 
     def row(self, name: str) -> Row:
+        """The row of one property, by name.
+
+        Parameters
+        ----------
+        name : str
+            The property's short name, e.g. "positive definite".
+
+        Returns
+        -------
+        Row
+            Its row.
+
+        Raises
+        ------
+        KeyError
+            When the report has no row of that name.
+        """
         for row in self.rows:
             if row.name == name:
                 return row
         raise KeyError(name)
 
     def table(self) -> object:
-        """A rich Table of the report."""
+        """A rich Table of the report.
+
+        Returns
+        -------
+        rich.table.Table
+            One line per property: statement, whether it holds, worst value, bound, how.
+        """
         from rich.table import Table
 
         table = Table(title=f"Table 3.3.1 for {self.arm}")
@@ -72,7 +126,31 @@ class Report:
 def joint_ranges(
     robot: Robot, limits: Sequence[tuple[float, float]] | None = None, prismatic_span: float = 1.0
 ) -> list[tuple[float, float]]:
-    """The range sampled for each joint (see the module docstring)."""
+    """The range sampled for each joint (see the module docstring).
+
+    The arm's limits where both are finite; otherwise the whole circle for a revolute
+    joint, and for a prismatic joint a span of ``prismatic_span`` from its finite limit
+    (or centred on 0 when it has none).
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm.
+    limits : sequence of (float, float), optional
+        (lower, upper) per joint, to use instead of the arm's own.
+    prismatic_span : float, optional
+        Length of the range of a prismatic joint without two finite limits (default 1.0).
+
+    Returns
+    -------
+    list of (float, float)
+        (lower, upper) for each joint.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``limits`` is not n finite (lower, upper) pairs with lower <= upper.
+    """
     if limits is not None:
         ranges = [(float(lo), float(hi)) for lo, hi in limits]
         if len(ranges) != robot.n or any(not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi) for lo, hi in ranges):
@@ -115,7 +193,33 @@ def _unit(x: np.ndarray) -> np.ndarray:
 
 
 def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequence | None = None) -> tuple:
-    """(mu1, mu2) with mu1 I <= M(q) <= mu2 I over the joint range (3.3.6)."""
+    """(mu1, mu2) with mu1 I <= M(q) <= mu2 I over the joint range (3.3.6).
+
+    The smallest and largest eigenvalues of M(q) over random samples of the joint range,
+    refined by L-BFGS-B (see the module docstring); ``check`` restricted to "inertia".
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm.
+    samples : int, optional
+        Number of random joint configurations (default 400, at least 4).
+    seed : int, optional
+        Seed of the random generator (default 0).
+    limits : sequence of (float, float), optional
+        (lower, upper) per joint, to use instead of the arm's own (see ``joint_ranges``).
+
+    Returns
+    -------
+    tuple of float
+        (mu1, mu2).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``samples`` is below 4 or ``limits`` is invalid (see ``joint_ranges``), or when
+        the arm has symbolic parameters.
+    """
     report = check(robot, samples=samples, seed=seed, limits=limits, only=("inertia",))
     return report.bounds["mu1"], report.bounds["mu2"]
 
@@ -129,9 +233,33 @@ def check(
 ) -> Report:
     """Evaluate the properties of Table 3.3.1 on ``robot`` (see the module docstring).
 
-    limits: (lower, upper) per joint to use instead of the arm's own; only: restrict to
-    some groups ("inertia", "coriolis", "skew", "friction", "gravity", "linearity",
-    "passivity") for speed.
+    Every bound is computed on random samples of the joint range, its extremes refined by
+    L-BFGS-B; passivity is checked along a simulated trajectory (RK4, 1 ms steps, 1 s).
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm.
+    samples : int, optional
+        Number of random joint configurations (default 300, at least 4).
+    seed : int, optional
+        Seed of the random generator (default 0).
+    limits : sequence of (float, float), optional
+        (lower, upper) per joint to use instead of the arm's own (see ``joint_ranges``).
+    only : sequence of str, optional
+        Restrict to some groups, for speed: "inertia", "coriolis", "skew", "friction",
+        "gravity", "linearity", "passivity" (default all).
+
+    Returns
+    -------
+    Report
+        One Row per property, with the computed bounds and the ranges sampled.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``samples`` is below 4, when ``limits`` is not n finite (lower, upper) pairs
+        with lower <= upper, or when the arm has symbolic parameters.
     """
     if samples < 4:
         raise ModelError(f"samples must be at least 4, got {samples}")

@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import itertools
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -27,16 +28,22 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from armdyn import control as C
-from armdyn import trajectories as T
-from armdyn.dynamics import kernels as K
-from armdyn.dynamics.compiled import COULOMB_NEG, COULOMB_POS, HEADER, STRIDE
-from armdyn.dynamics.vectorized import sin_cos
+from armdyn import control, inputs, trajectories
+from armdyn.control import COMPUTED_TORQUE, control_law
+from armdyn.dynamics import api
+from armdyn.dynamics.crba import mass_matrix_and_bias
+from armdyn.dynamics.friction import smooth_coulomb
+from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, STRIDE, workspace_size
+from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.robot import Robot
+from armdyn.trajectories import desired
 
-_OPTS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
 ADAPTIVE = ("rk45", "rk23", "dop853", "radau", "bdf", "lsoda")
+
+
+class PythonLoopWarning(UserWarning):
+    """simulate runs a user's controller or trajectory in its Python loop (slower than compiled)."""
 
 
 @dataclass
@@ -92,41 +99,7 @@ class Result:
 
 
 # ----- the compiled loop ------------------------------------------------------------------------------
-@njit(inline="always", **_OPTS)
-def _desired(kind: int, traj: np.ndarray, t: float, q0: np.ndarray, out: np.ndarray) -> None:
-    """out rows: q_d, qd_d, qdd_d (kinds: 0 hold q0, 1 sinusoid, 2 quintic)."""
-    n = q0.shape[0]
-    for i in range(n):
-        if kind == 1:
-            amplitude, omega, phase, offset = traj[0, i], traj[1, i], traj[2, i], traj[3, i]
-            sine, cosine = sin_cos(omega * t + phase)
-            out[0, i] = offset + amplitude * sine
-            out[1, i] = amplitude * omega * cosine
-            out[2, i] = -amplitude * omega * omega * sine
-        elif kind == 2:
-            a, b, t0, t1 = traj[0, i], traj[1, i], traj[2, i], traj[3, i]
-            span = t1 - t0
-            s = min(max((t - t0) / span, 0.0), 1.0)
-            out[0, i] = a + (b - a) * (10 * s**3 - 15 * s**4 + 6 * s**5)
-            out[1, i] = (b - a) * (30 * s**2 - 60 * s**3 + 30 * s**4) / span
-            out[2, i] = (b - a) * (60 * s - 180 * s**2 + 120 * s**3) / span**2
-        else:
-            out[0, i] = q0[i]
-            out[1, i] = 0.0
-            out[2, i] = 0.0
-
-
-@njit(inline="always", **_OPTS)
-def smooth_coulomb(coulomb: np.ndarray, eps: np.ndarray, i: int, rate: float) -> float:
-    """Fd_i: tanh(qd / eps_i) Tc+ for qd >= 0, -tanh(qd / eps_i) Tc- for qd < 0 (exact sgn for eps_i = 0)."""
-    if eps[i] > 0.0:
-        x = rate / eps[i]
-        smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)  # tanh(20) = 1 - 8e-18
-        return smooth * coulomb[i, 0] if rate >= 0.0 else -smooth * coulomb[i, 1]
-    return coulomb[i, 0] if rate > 0.0 else coulomb[i, 1] if rate < 0.0 else 0.0
-
-
-@njit(**_OPTS)
+@njit(**NUMBA_OPTIONS)
 def _accelerations(
     plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, w: np.ndarray, q: np.ndarray, qd: np.ndarray,
     tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
@@ -136,11 +109,11 @@ def _accelerations(
     For the arms of this library (n up to about ten) this is faster than the O(n)
     articulated-body algorithm and equal to it to rounding; ``tau`` carries the disturbance.
     """
-    K.mass_matrix_and_bias(plant, w, 0, q, qd, M, N)
+    mass_matrix_and_bias(plant, w, q, qd, M, N)
     _solve(M, N, tau, coulomb, eps, qd, qdd)
 
 
-@njit(inline="always", **_OPTS)
+@njit(inline="always", **NUMBA_OPTIONS)
 def _solve(
     M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, qd: np.ndarray, qdd: np.ndarray
 ) -> None:
@@ -169,55 +142,30 @@ def _solve(
         qdd[i] = total / M[i, i]
 
 
-@njit(**_OPTS)
-def _control(
-    kind: int, model: np.ndarray, model_coulomb: np.ndarray, eps: np.ndarray, wc: np.ndarray, q: np.ndarray,
-    qd: np.ndarray, desired: np.ndarray, e_int: np.ndarray, kp: np.ndarray, kv: np.ndarray, ki: np.ndarray,
-    limit: np.ndarray, u: np.ndarray, M_: np.ndarray, Nv: np.ndarray, tau: np.ndarray,
-) -> None:  # fmt: skip
-    """The built-in controllers (armdyn.control) on the controller's own model, then saturation.
-
-    The model's Coulomb friction is compensated with the same smooth law as the plant's.
-    """
-    n = q.shape[0]
-    if kind == C.COMPUTED_TORQUE:
-        for i in range(n):
-            u[i] = desired[2, i] + kv[i] * (desired[1, i] - qd[i]) + kp[i] * (desired[0, i] - q[i]) + ki[i] * e_int[i]
-        K.mass_matrix_and_bias(model, wc, 0, q, qd, M_, Nv)
-        for i in range(n):
-            total = Nv[i] + smooth_coulomb(model_coulomb, eps, i, qd[i])
-            for j in range(n):
-                total += M_[i, j] * u[j]
-            tau[i] = total
-    elif kind == C.PD_GRAVITY:
-        K.gravity_core(model, wc, 0, q, Nv)
-        for i in range(n):
-            tau[i] = kp[i] * (desired[0, i] - q[i]) + kv[i] * (desired[1, i] - qd[i]) + Nv[i]
-    else:
-        for i in range(n):
-            tau[i] = kp[i] * (desired[0, i] - q[i]) + kv[i] * (desired[1, i] - qd[i]) + ki[i] * e_int[i]
-    for i in range(n):
-        tau[i] = min(max(tau[i], -limit[i]), limit[i])
-
-
-@njit(**_OPTS)
-def run_rk4(
-    plants: np.ndarray, coulombs: np.ndarray, switches: np.ndarray, model: np.ndarray, model_coulomb: np.ndarray,
-    shared: bool, kind: int,
-    kp: np.ndarray, kv: np.ndarray, ki: np.ndarray, limit: np.ndarray, hold: int, traj_kind: int,
-    traj: np.ndarray, q0: np.ndarray, disturbance: np.ndarray, eps: np.ndarray, t0: float, dt: float,
-    first: int, last: int, state: np.ndarray, tau_held: np.ndarray, e_int: np.ndarray,
-    T_: np.ndarray, Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray, TAU: np.ndarray, QDES: np.ndarray,
-) -> None:  # fmt: skip
+@njit(**NUMBA_OPTIONS)
+def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, state: tuple, record: tuple) -> None:
     """Steps first..last-1 of fixed-step RK4 (the book's TRESP), recording each step's start.
 
-    state = [q; qd] is advanced in place; tau_held and e_int carry the controller's state.
+    plant = (models (P, L), Coulomb tables (P, n, 2), switch times (P - 1,), disturbance (n,),
+    Coulomb smoothing eps (n,)): the plant in force is models[p] from switch time p - 1 on.
+    controller = (kind, model, model Coulomb (n, 2), gain table (4, n), hold, shares plant):
+    control.control_law every ``hold`` steps on ``model``; "shares plant" when the model is
+    the plant's own, so that the plant reuses the controller's M and N.
+    trajectory = (kind, params (4, n), q0 (n,)): trajectories.desired.
+    steps = (t0, dt, first, last). state = ([q; qd], held torque, integral of e), advanced in
+    place. record = (t, q, qd, qdd, tau, q_d), each indexed by step.
     """
+    models, coulombs, switches, disturbance, eps = plant
+    kind, model, model_coulomb, gain, hold, shares_plant = controller
+    trajectory_kind, params, q0 = trajectory
+    t0, dt, first, last = steps
+    x, tau_held, e_int = state
+    T_, Q, QD, QDD, TAU, QDES = record
     n = q0.shape[0]
-    w = np.empty(200 * n + 128)
-    wc = np.empty(200 * n + 128)
-    desired = np.empty((3, n))
-    q, qd = state[:n].copy(), state[n:].copy()
+    w = np.empty(workspace_size(n))
+    wc = np.empty(workspace_size(n))
+    goal = np.empty((3, n))
+    q, qd = x[:n].copy(), x[n:].copy()
     stages = np.empty((8, n))  # the RK4 slopes of q and qd
     k1q, k1v, k2q, k2v, k3q, k3v, k4q, k4v = stages[0], stages[1], stages[2], stages[3], stages[4], stages[5], \
         stages[6], stages[7]  # fmt: skip
@@ -229,42 +177,41 @@ def run_rk4(
         p = 0
         while p < switches.shape[0] and t >= switches[p]:
             p += 1
-        plant, coulomb = plants[p], coulombs[p]
-        _desired(traj_kind, traj, t, q0, desired)
-        fresh = kind == C.COMPUTED_TORQUE and shared and p == 0 and k % hold == 0
+        plant_model, coulomb = models[p], coulombs[p]
+        desired(trajectory_kind, params, t, q0, goal)
+        fresh = kind == COMPUTED_TORQUE and shares_plant and p == 0 and k % hold == 0
         if kind > 0 and k % hold == 0:
             for i in range(n):
-                e_int[i] += (desired[0, i] - q[i]) * dt * hold
-            _control(kind, model, model_coulomb, eps, wc, q, qd, desired, e_int, kp, kv, ki, limit, u, M_, Nv,
-                     tau_held)  # fmt: skip
+                e_int[i] += (goal[0, i] - q[i]) * dt * hold
+            control_law(kind, model, model_coulomb, eps, wc, q, qd, goal, e_int, gain, u, M_, Nv, tau_held)
         for i in range(n):
             applied[i] = tau_held[i] - disturbance[i]
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
             _solve(Mp, Nv, applied, coulomb, eps, qd, k1v)
         else:
-            _accelerations(plant, coulomb, eps, w, q, qd, applied, Mp, net, k1v)
+            _accelerations(plant_model, coulomb, eps, w, q, qd, applied, Mp, net, k1v)
         T_[k] = t
         for i in range(n):
-            Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], desired[0, i]
+            Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], goal[0, i]
         for i in range(n):
             k1q[i] = qd[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k1q[i], qd[i] + 0.5 * dt * k1v[i]
-        _accelerations(plant, coulomb, eps, w, qs, vs, applied, Mp, net, k2v)
+        _accelerations(plant_model, coulomb, eps, w, qs, vs, applied, Mp, net, k2v)
         for i in range(n):
             k2q[i] = vs[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k2q[i], qd[i] + 0.5 * dt * k2v[i]
-        _accelerations(plant, coulomb, eps, w, qs, vs, applied, Mp, net, k3v)
+        _accelerations(plant_model, coulomb, eps, w, qs, vs, applied, Mp, net, k3v)
         for i in range(n):
             k3q[i] = vs[i]
             qs[i], vs[i] = q[i] + dt * k3q[i], qd[i] + dt * k3v[i]
-        _accelerations(plant, coulomb, eps, w, qs, vs, applied, Mp, net, k4v)
+        _accelerations(plant_model, coulomb, eps, w, qs, vs, applied, Mp, net, k4v)
         for i in range(n):
             k4q[i] = vs[i]
             q[i] += dt / 6.0 * (k1q[i] + 2.0 * k2q[i] + 2.0 * k3q[i] + k4q[i])
             qd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
-    state[:n] = q
-    state[n:] = qd
+    x[:n] = q
+    x[n:] = qd
 
 
 # ----- the Python side ---------------------------------------------------------------------------------
@@ -272,7 +219,7 @@ def _plant_buffers(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     """Compiled plants with their Coulomb friction taken out (the loop adds the smoothed one)."""
     plants, coulombs = [], []
     for arm in arms:
-        buffer = arm._engine().model.copy()  # compiled once per Robot
+        buffer = arm.packed.copy()  # packed once per Robot
         for i in range(arm.n):
             base = HEADER + STRIDE * i
             buffer[base + COULOMB_POS] = buffer[base + COULOMB_NEG] = 0.0
@@ -283,19 +230,25 @@ def _plant_buffers(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     return np.stack(plants), np.stack(coulombs)
 
 
-def _unwrap(controller: object) -> tuple[C.Spec | None, float, object]:
+def _unwrap(controller: object) -> tuple[control.Spec | None, float, object]:
     """(spec for the compiled loop or None, sample period (0 continuous), the controller)."""
     if controller is None:
-        return C.Spec(0, 0.0, 0.0, 0.0), 0.0, None
+        return control.Spec(control.NO_CONTROL, 0.0, 0.0, 0.0), 0.0, None
+    if not callable(controller):
+        raise ModelError(f"controller must be callable (see armdyn.control), got {type(controller).__name__}")
     spec_of = getattr(controller, "spec", None)
     spec = spec_of() if spec_of is not None else None
     period = 0.0
     inner = controller
-    while isinstance(inner, (C.Digital, C.Saturated)):
-        if isinstance(inner, C.Digital):
+    while isinstance(inner, (control.Digital, control.Saturated)):
+        if isinstance(inner, control.Digital):
             period = inner.period
         inner = inner.controller
     return spec, period, controller
+
+
+def _users_own(item: object) -> bool:
+    return item is not None and type(item).__module__ not in ("armdyn.control", "armdyn.trajectories")
 
 
 def simulate(
@@ -312,15 +265,59 @@ def simulate(
     coulomb_smoothing: float | str = "auto",
     progress: Callable[[float], None] | None = None,
 ) -> Result:
-    """Simulate ``arm`` from (q0, qd0) (zeros by default) for t_final seconds.
+    """Simulate the arm under control from (q0, qd0) for t_final seconds (Chapter 4, BOOK.md section 8).
 
-    controller: None (zero torque), one of armdyn.control's, or any callable
-    controller(t, q, qd, q_d, qd_d, qdd_d, e_int) -> tau. trajectory: None (hold q0),
-    Sinusoid, Quintic, CartesianCircle or any callable t -> (q_d, qd_d, qdd_d).
-    disturbance: tau_d, a constant vector or a callable (t, q, qd) -> tau_d.
-    events: (time, arm) pairs: from that time the plant is that arm (a payload change).
-    method: "rk4" (fixed step dt) or an adaptive solve_ivp method ("rk45", "rk23",
-    "dop853", "radau", "bdf", "lsoda"), sampled every dt.
+    Integrates M qdd + N(q, qd) + tau_d = tau. With ``method="rk4"`` (the book's TRESP) the
+    controller runs once per step, or once per sample period of a Digital controller with
+    its torque held in between. When the controller is one of armdyn.control's, the
+    trajectory None, Sinusoid or Quintic and the disturbance constant, the whole run is
+    one compiled call; a controller or trajectory of the user's own runs in a Python loop
+    of the same scheme, about 45 times slower, and simulate says so with a
+    PythonLoopWarning (silence it with the warnings module once the cost is known).
+    Coulomb friction is smoothed through zero velocity (see the module docstring).
+
+    Parameters
+    ----------
+    arm : Robot
+        The plant.
+    controller : callable, optional
+        None (zero torque), one of armdyn.control's, or any callable
+        ``controller(t, q, qd, q_d, qd_d, qdd_d, e_int) -> tau``; one that takes a ``plant``
+        keyword is given the arm in force at time t.
+    trajectory : callable, optional
+        None (hold q0), a Sinusoid, Quintic or CartesianCircle of armdyn.trajectories, or any
+        callable ``t -> (q_d, qd_d, qdd_d)``.
+    t_final : float
+        Seconds to simulate.
+    dt : float
+        The RK4 step, and the sampling of the result for adaptive methods.
+    method : str
+        "rk4" (fixed step dt) or an adaptive solve_ivp method: "rk45", "rk23", "dop853",
+        "radau", "bdf", "lsoda".
+    q0, qd0 : array_like, optional
+        Initial joint positions and velocities (zeros by default).
+    disturbance : array_like or callable, optional
+        tau_d: a constant (n,) vector or a callable ``(t, q, qd) -> tau_d``.
+    events : sequence of (float, Robot)
+        (time, arm) pairs: from that time on the plant is that arm (a payload change).
+    coulomb_smoothing : float or "auto"
+        eps of the smoothed Coulomb law, one number for every joint, or "auto" (sized to
+        the step, see the module docstring); 0 is the exact sign law.
+    progress : callable, optional
+        Called with the fraction done (0 to 1) as the compiled run proceeds.
+
+    Returns
+    -------
+    Result
+        Times, joint positions, velocities, accelerations and torques (time first), the
+        desired positions with a trajectory, energies, and ``info`` (the route taken).
+
+    Raises
+    ------
+    ModelError
+        When t_final or dt is not positive, q0 or qd0 has the wrong shape, the controller is
+        not callable or its model does not match the arm, a Digital period is not a whole
+        number of steps (or meets an adaptive method), or the method is unknown.
     """
     n = arm.n
     if not (t_final > 0 and dt > 0 and np.isfinite(t_final) and np.isfinite(dt)):
@@ -336,13 +333,21 @@ def simulate(
     if method == "rk4":
         compiled = (
             spec is not None
-            and (trajectory is None or isinstance(trajectory, (T.Sinusoid, T.Quintic)))
+            and trajectories.packed(trajectory, n) is not None
             and (disturbance is None or not callable(disturbance))
             and (spec.model is None or not spec.model.is_symbolic)
         )
         if compiled:
             return _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturbance, steps, dt,
                                  coulomb_smoothing, progress)  # fmt: skip
+        if _users_own(controller) or _users_own(trajectory) or callable(disturbance):
+            warnings.warn(
+                "simulate runs this controller, trajectory or disturbance of your own in its Python loop, about 45x "
+                "slower than the compiled loop of armdyn.control's controllers with a Sinusoid or Quintic "
+                "trajectory and a constant disturbance",
+                PythonLoopWarning,
+                stacklevel=2,
+            )
         return _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
                            coulomb_smoothing)  # fmt: skip
     if method.lower() in ADAPTIVE:
@@ -361,16 +366,14 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
         raise ModelError("the controller's model must have the plant's joints")
     models, model_coulombs = _plant_buffers([spec.model if spec.model is not None else arm])
     model, model_coulomb = models[0], model_coulombs[0]
-    kp, kv, ki = (C._gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki")))
-    limit = np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,)).copy()
+    gain = np.stack([
+        *(inputs.gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki"))),
+        np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,)),
+    ])  # fmt: skip
     hold = max(1, round(period / dt)) if period else 1
     if period and abs(hold * dt - period) > 1e-9 * period:
         raise ModelError(f"the sample period {period} must be a whole number of steps dt = {dt}")
-    traj_kind, traj = 0, np.zeros((4, n))
-    if isinstance(trajectory, T.Sinusoid):
-        traj_kind, traj = T.SINUSOID, trajectory.arrays(n)
-    elif isinstance(trajectory, T.Quintic):
-        traj_kind, traj = T.QUINTIC, trajectory.arrays(n)
+    trajectory_kind, params = trajectories.packed(trajectory, n)
     tau_d = np.zeros(n) if disturbance is None else np.broadcast_to(np.asarray(disturbance, float), (n,)).copy()
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
@@ -380,10 +383,13 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
     bounds = np.linspace(0, steps + 1, chunks + 1).astype(int)
     for a, b in itertools.pairwise(bounds):
         run_rk4(
-            plants, coulombs, switches, model, model_coulomb, spec.model is None, spec.kind, kp, kv, ki, limit,
-            hold, traj_kind, traj, q0, tau_d, smoothing, 0.0, dt, int(a), int(b), state, tau_held, e_int, times,
-            arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"],
-        )  # fmt: skip
+            (plants, coulombs, switches, tau_d, smoothing),
+            (spec.kind, model, model_coulomb, gain, hold, spec.model is None),
+            (trajectory_kind, params, q0),
+            (0.0, dt, int(a), int(b)),
+            (state, tau_held, e_int),
+            (times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"]),
+        )
         if progress is not None:
             progress(b / (steps + 1))
     q_d = arrays["q_d"] if trajectory is not None else None
@@ -399,7 +405,7 @@ def _energies(arms: list[Robot], events: list, times: np.ndarray, q: np.ndarray,
     for index, arm in enumerate(arms):
         mask = phase == index
         if np.any(mask):
-            kinetic_and_potential = arm._engine()._energies(q[mask], qd[mask])
+            kinetic_and_potential = api.energies(arm, q[mask], qd[mask])
             energy[mask] = kinetic_and_potential[:, 0] + kinetic_and_potential[:, 1]
     return energy
 
@@ -456,10 +462,9 @@ def _desired_of(trajectory: object, t: float, q0: np.ndarray) -> tuple[np.ndarra
 def _torque(controller, plant, t, q, qd, desired, e_int):
     if controller is None:
         return np.zeros_like(q)
-    try:
+    if control.accepts_plant(controller):
         return np.asarray(controller(t, q, qd, *desired, e_int, plant=plant), dtype=float)
-    except TypeError:
-        return np.asarray(controller(t, q, qd, *desired, e_int), dtype=float)
+    return np.asarray(controller(t, q, qd, *desired, e_int), dtype=float)
 
 
 def _tau_d(disturbance: object, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:

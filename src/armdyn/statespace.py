@@ -23,7 +23,7 @@ import numpy as np
 
 from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.robot import Robot
 
 
 def _split(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:

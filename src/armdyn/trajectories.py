@@ -1,8 +1,9 @@
 """Desired trajectories q_d(t) with their velocities and accelerations (Chapter 4).
 
 Each trajectory is called as ``trajectory(t)`` and returns (q_d, qd_d, qdd_d); t may be a
-scalar or an array of times (leading axis). The sinusoid and the quintic also pack into
-numbers for the compiled simulation loop.
+scalar or an array of times (leading axis); any such callable is a trajectory. The sinusoid
+and the quintic also pack into numbers (``arrays``) for their compiled form (``desired``),
+which the compiled simulation loop runs.
 """
 
 from __future__ import annotations
@@ -10,17 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
+from armdyn.dynamics.spatial import NUMBA_OPTIONS, sin_cos
 from armdyn.errors import ModelError
+from armdyn.inputs import vector as _vector
 
-SINUSOID, QUINTIC = 1, 2
-
-
-def _vector(value: object, name: str) -> np.ndarray:
-    array = np.atleast_1d(np.asarray(value, dtype=float))
-    if array.ndim != 1 or not np.all(np.isfinite(array)):
-        raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}")
-    return array
+HOLD, SINUSOID, QUINTIC = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -62,6 +59,16 @@ class Sinusoid:
         )
 
 
+@njit(inline="always", **NUMBA_OPTIONS)
+def sinusoid_at(params: np.ndarray, i: int, t: float, out: np.ndarray) -> None:
+    """Joint i of a Sinusoid packed by ``arrays``: out[:, i] = q_d, qd_d, qdd_d."""
+    amplitude, omega, phase, offset = params[0, i], params[1, i], params[2, i], params[3, i]
+    sine, cosine = sin_cos(omega * t + phase)
+    out[0, i] = offset + amplitude * sine
+    out[1, i] = amplitude * omega * cosine
+    out[2, i] = -amplitude * omega * omega * sine
+
+
 @dataclass(frozen=True)
 class Quintic:
     """A point-to-point move from q0 at t0 to q1 at t1, at rest at both ends (a quintic in time)."""
@@ -91,6 +98,17 @@ class Quintic:
         rate = (30 * s**2 - 60 * s**3 + 30 * s**4) / span
         accel = (60 * s - 180 * s**2 + 120 * s**3) / span**2
         return q0 + (q1 - q0) * shape, (q1 - q0) * rate, (q1 - q0) * accel
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def quintic_at(params: np.ndarray, i: int, t: float, out: np.ndarray) -> None:
+    """Joint i of a Quintic packed by ``arrays``: out[:, i] = q_d, qd_d, qdd_d."""
+    a, b, t0, t1 = params[0, i], params[1, i], params[2, i], params[3, i]
+    span = t1 - t0
+    s = min(max((t - t0) / span, 0.0), 1.0)
+    out[0, i] = a + (b - a) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+    out[1, i] = (b - a) * (30 * s**2 - 60 * s**3 + 30 * s**4) / span
+    out[2, i] = (b - a) * (60 * s - 180 * s**2 + 120 * s**3) / span**2
 
 
 @dataclass(frozen=True)
@@ -138,6 +156,31 @@ class CartesianCircle:
         )
         qdd = np.linalg.solve(J, (np.stack([xdd, ydd], -1) - jdot_qd)[..., None])[..., 0]
         return np.stack([q1, q2], -1), qd, qdd
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def desired(kind: int, params: np.ndarray, t: float, q0: np.ndarray, out: np.ndarray) -> None:
+    """The compiled trajectories: out rows q_d, qd_d, qdd_d at time t (HOLD keeps q0)."""
+    for i in range(q0.shape[0]):
+        if kind == SINUSOID:
+            sinusoid_at(params, i, t, out)
+        elif kind == QUINTIC:
+            quintic_at(params, i, t, out)
+        else:
+            out[0, i] = q0[i]
+            out[1, i] = 0.0
+            out[2, i] = 0.0
+
+
+def packed(trajectory: object, n: int) -> tuple[int, np.ndarray] | None:
+    """(kind, params) of a trajectory the compiled loop runs, or None for any other callable."""
+    if trajectory is None:
+        return HOLD, np.zeros((4, n))
+    if isinstance(trajectory, Sinusoid):
+        return SINUSOID, trajectory.arrays(n)
+    if isinstance(trajectory, Quintic):
+        return QUINTIC, trajectory.arrays(n)
+    return None
 
 
 def _width(values: tuple) -> int:

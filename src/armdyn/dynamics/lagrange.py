@@ -12,27 +12,27 @@ from __future__ import annotations
 import numpy as np
 
 from armdyn.kinematics import as_state, link_transform_derivatives, twist_generators
-from armdyn.model.robot import Robot
+from armdyn.model import ArmModel
 
 
-def pseudo_inertias(robot: Robot) -> np.ndarray:
+def pseudo_inertias(robot: ArmModel) -> np.ndarray:
     """The pseudo-inertia matrices J_i of all links, in their link frames, (n, 4, 4) (3.2.27)."""
     return np.stack([link.inertial.pseudo_inertia() for link in robot.links]).astype(float)
 
 
-def _homogeneous_gravity(robot: Robot) -> np.ndarray:
+def _homogeneous_gravity(robot: ArmModel) -> np.ndarray:
     """g = [gx gy gz 0] (3.2.33): a direction, so the translation of T_i does not act on it."""
     return np.append(robot.gravity.astype(float), 0.0)
 
 
-def inertia_matrix(robot: Robot, q: np.ndarray) -> np.ndarray:
+def inertia_matrix(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """M(q): m_jk = sum_i trace(dT_i/dq_j J_i (dT_i/dq_k)^T) (3.2.30), plus diag(G^2 Jm)."""
     dT = link_transform_derivatives(robot, q)
     M = np.einsum("...ijab,ibc,...ikac->...jk", dT, pseudo_inertias(robot), dT)
     return M + np.diag(robot.reflected_inertia)
 
 
-def second_derivatives(robot: Robot, q: np.ndarray) -> np.ndarray:
+def second_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """d2T_i/(dq_j dq_l) = S_a S_b T_i, a the joint nearer the root of (j, l), b the other.
 
     Shape (..., n, n, n, 4, 4) indexed [i, j, l]; zero unless both j and l move link i.
@@ -48,7 +48,7 @@ def second_derivatives(robot: Robot, q: np.ndarray) -> np.ndarray:
     return pairs[..., None, :, :, :, :] @ T[..., :, None, None, :, :] * both[..., None, None]
 
 
-def inertia_matrix_partials(robot: Robot, q: np.ndarray) -> np.ndarray:
+def inertia_matrix_partials(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """dM/dq_l, shape (..., n, n, n) indexed [l, j, k] (differentiating 3.2.30)."""
     dT = link_transform_derivatives(robot, q)
     d2T = second_derivatives(robot, q)
@@ -57,51 +57,51 @@ def inertia_matrix_partials(robot: Robot, q: np.ndarray) -> np.ndarray:
     return half + np.swapaxes(half, -1, -2)
 
 
-def inertia_matrix_dot(robot: Robot, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def inertia_matrix_dot(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """Mdot = sum_l dM/dq_l qd_l."""
     qd = as_state(robot, qd, "qd")
     return np.einsum("...ljk,...l->...jk", inertia_matrix_partials(robot, q), qd)
 
 
-def christoffel_symbols(robot: Robot, q: np.ndarray) -> np.ndarray:
+def christoffel_symbols(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """v_ijk = 1/2 (dm_kj/dq_i + dm_ki/dq_j - dm_ij/dq_k) (3.3.47), shape (..., n, n, n)."""
     dM = inertia_matrix_partials(robot, q)  # [l, j, k] = dm_jk/dq_l
     return 0.5 * (np.einsum("...ikj->...ijk", dM) + np.einsum("...jki->...ijk", dM) - np.einsum("...kij->...ijk", dM))
 
 
-def coriolis_matrix(robot: Robot, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def coriolis_matrix(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """The Christoffel form Vm(q, qd): (Vm)_kj = sum_i v_ijk qd_i (3.3.48)."""
     qd = as_state(robot, qd, "qd")
     return np.einsum("...ijk,...i->...kj", christoffel_symbols(robot, q), qd)
 
 
-def coriolis_vector(robot: Robot, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def coriolis_vector(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """V(q, qd) = Vm(q, qd) qd = Mdot qd - 1/2 d/dq (qd^T M qd) (3.2.42)."""
     qd = as_state(robot, qd, "qd")
     return np.einsum("...kj,...j->...k", coriolis_matrix(robot, q, qd), qd)
 
 
-def potential_energy(robot: Robot, q: np.ndarray) -> np.ndarray:
+def potential_energy(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """P(q) = -sum_i g^T T_i J_i e4 = -sum_i m_i g^T T_i r_i (3.2.35, 3.2.36)."""
     T = twist_generators(robot, q)[1]
     first_moments = pseudo_inertias(robot)[:, :, 3]  # J_i e4 = [m r; m]
     return -np.einsum("a,...iab,ib->...", _homogeneous_gravity(robot), T, first_moments)
 
 
-def gravity_vector(robot: Robot, q: np.ndarray) -> np.ndarray:
+def gravity_vector(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     """G_j(q) = dP/dq_j = -sum_i g^T (dT_i/dq_j) J_i e4 (3.2.43)."""
     dT = link_transform_derivatives(robot, q)
     first_moments = pseudo_inertias(robot)[:, :, 3]
     return -np.einsum("a,...ijab,ib->...j", _homogeneous_gravity(robot), dT, first_moments)
 
 
-def kinetic_energy(robot: Robot, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def kinetic_energy(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """K = 1/2 qd^T M(q) qd (3.2.29)."""
     qd = as_state(robot, qd, "qd")
     return 0.5 * np.einsum("...j,...jk,...k->...", qd, inertia_matrix(robot, q), qd)
 
 
-def friction(robot: Robot, qd: np.ndarray) -> np.ndarray:
+def friction(robot: ArmModel, qd: np.ndarray) -> np.ndarray:
     """F(qd) = Fv qd + Fd(qd) (3.3.2): viscous G^2 B qd plus Coulomb |G| Tc+ or |G| Tc-.
 
     At qd_i = 0 the Coulomb term is zero (sgn 0 = 0).
@@ -111,7 +111,7 @@ def friction(robot: Robot, qd: np.ndarray) -> np.ndarray:
     return robot.viscous_friction * qd + np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
 
 
-def inverse_dynamics(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+def inverse_dynamics(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (3.3.1 without disturbance)."""
     qdd = as_state(robot, qdd, "qdd")
     return (

@@ -21,20 +21,51 @@ import numpy as np
 
 from armdyn.errors import ModelError
 from armdyn.kinematics import as_state, joint_axes, joint_frames
-from armdyn.model.robot import Robot
+from armdyn.model import ArmModel
 
 BODY_PARAMETERS = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 JOINT_PARAMETERS = ("Fv", "Fc+", "Fc-", "Ia")
 
 
-def parameter_names(robot: Robot) -> list[str]:
-    """Names of phi: m1, mx1, ..., Izz1, ..., then Fv1, Fc+1, Fc-1, Ia1, ..."""
+def parameter_names(robot: ArmModel) -> list[str]:
+    """Names of phi: m1, mx1, ..., Izz1, ..., then Fv1, Fc+1, Fc-1, Ia1, ...
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+
+    Returns
+    -------
+    list of str
+        14 n names, in the order of ``parameters``.
+    """
     bodies = [f"{name}{i + 1}" for i in range(robot.n) for name in BODY_PARAMETERS]
     return bodies + [f"{name}{i + 1}" for i in range(robot.n) for name in JOINT_PARAMETERS]
 
 
-def parameters(robot: Robot) -> np.ndarray:
-    """phi, the parameter vector with W(q, qd, qdd) phi = inverse_dynamics(q, qd, qdd)."""
+def parameters(robot: ArmModel) -> np.ndarray:
+    """phi, the parameter vector with W(q, qd, qdd) phi = inverse_dynamics(q, qd, qdd).
+
+    The linear parameterization of Table 3.3.1, property 9. Per link [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz], the inertia about the
+    link-frame origin in link-frame axes; then per joint [Fv, Fc+, Fc-, Ia], the joint-side
+    viscous and Coulomb friction and the reflected motor inertia G^2 Jm.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+
+    Returns
+    -------
+    numpy.ndarray
+        phi, shape (14 n,).
+
+    Raises
+    ------
+    TypeError
+        When the arm has symbolic (SymPy) parameters; ClosedForm.phi gives them symbolically.
+    """
     values = []
     for link in robot.links:
         body = link.inertial
@@ -55,7 +86,19 @@ def body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarra
     """Y with f = I a + v x* I v = Y phi_body, shape (..., 6, 10), in the body's own frame.
 
     v = [w; v] the body velocity, [alpha; a] its spatial acceleration, both at the origin of
-    the frame; f = [moment about the origin; force].
+    the frame; f = [moment about the origin; force] (Featherstone 2008, 9.4).
+
+    Parameters
+    ----------
+    w, v : numpy.ndarray
+        Angular and linear velocity of the body at the frame origin, (..., 3).
+    alpha, a : numpy.ndarray
+        Angular and linear parts of its spatial acceleration at the frame origin, (..., 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        Y, shape (..., 6, 10), columns in the order of one link's block of ``parameters``.
     """
     Y = np.zeros((*w.shape[:-1], 6, 10))
     lin = a + _cross(w, v)  # the acceleration of the frame origin
@@ -87,8 +130,33 @@ def body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarra
     return Y
 
 
-def regressor(robot: Robot, q: object, qd: object, qdd: object) -> np.ndarray:
-    """W(q, qd, qdd), shape (..., n, 14 n), with W phi = tau (friction and motors included)."""
+def regressor(robot: ArmModel, q: object, qd: object, qdd: object) -> np.ndarray:
+    """W(q, qd, qdd), shape (..., n, 14 n), with W phi = tau (Table 3.3.1, property 9).
+
+    Friction and motors included: W ``parameters(robot)`` equals the inverse dynamics.
+    Computed recursively, O(n d) for depth d (Atkeson, An and Hollerbach 1986), batched
+    over any leading shape.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q, qd, qdd : array_like
+        Joint positions, velocities and accelerations, (n,) or a batch (..., n); the batch
+        shapes broadcast together.
+
+    Returns
+    -------
+    numpy.ndarray
+        W, shape (..., n, 14 n).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a state is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; ClosedForm.W gives W symbolically.
+    """
     q, qd, qdd = (as_state(robot, x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1])
     q, qd, qdd = (np.broadcast_to(x, (*batch, robot.n)) for x in (q, qd, qdd))
@@ -132,18 +200,46 @@ def regressor(robot: Robot, q: object, qd: object, qdd: object) -> np.ndarray:
 class BaseParameters:
     """The identifiable combinations of phi: tau = W_base(q, qd, qdd) phi_base.
 
-    regrouping: (r, p) matrix with phi_base = regrouping @ phi; columns: the indices of the
-    columns of W kept; names: readable combinations, e.g. "Izz2 + 0.1865*m3".
+    Made by ``base_parameters``.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    columns : numpy.ndarray
+        The indices of the r columns of W kept, in increasing order.
+    regrouping : numpy.ndarray
+        (r, p) matrix with phi_base = regrouping @ phi (p = 14 n, or 10 n without drives).
+    names : list of str
+        Readable combinations, e.g. "Izz2 + 0.1865*m3".
+    phi : numpy.ndarray
+        phi_base of the arm's own parameters, (r,).
     """
 
-    robot: Robot
+    robot: ArmModel
     columns: np.ndarray
     regrouping: np.ndarray
     names: list[str]
     phi: np.ndarray
 
     def regressor(self, q: object, qd: object, qdd: object) -> np.ndarray:
-        """W_base = W[..., columns], shape (..., n, r)."""
+        """W_base = W[..., columns], shape (..., n, r).
+
+        Parameters
+        ----------
+        q, qd, qdd : array_like
+            Joint positions, velocities and accelerations, (n,) or a batch (..., n).
+
+        Returns
+        -------
+        numpy.ndarray
+            W_base, shape (..., n, r), with W_base phi_base = tau.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a state is not numbers of shape (..., n) or holds NaN or infinity.
+        """
         return regressor(self.robot, q, qd, qdd)[..., self.columns]
 
     def __len__(self) -> int:
@@ -159,15 +255,41 @@ def _term(coefficient: float, name: str) -> str:
 
 
 def base_parameters(
-    robot: Robot, samples: int = 200, seed: int = 0, tolerance: float = 1e-9, drives: bool = True
+    robot: ArmModel, samples: int = 200, seed: int = 0, tolerance: float = 1e-9, drives: bool = True
 ) -> BaseParameters:
     """The base parameters by QR with column pivoting of regressors stacked at random states.
-
-    drives=False leaves out the friction and motor columns (the rigid-body parameters only).
 
     Columns whose pivot falls below ``tolerance`` times the largest are dependent: they are
     regrouped into the independent ones they are combinations of (Gautier, "Numerical
     calculation of the base inertial parameters of robots", J. Robot. Syst. 8(4), 1991).
+    The random states are uniform within the joint limits (within [-pi, pi] where a limit
+    is infinite), with velocities and accelerations uniform in [-2, 2].
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    samples : int, optional
+        Number of random states stacked (default 200, at least 1).
+    seed : int, optional
+        Seed of the random generator (default 0).
+    tolerance : float, optional
+        Relative pivot size below which a column counts as dependent (default 1e-9).
+    drives : bool, optional
+        True (default) includes the friction and motor columns; False leaves them out
+        (the rigid-body parameters only).
+
+    Returns
+    -------
+    BaseParameters
+        The kept columns, the regrouping matrix, readable names and the arm's phi_base.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``samples`` is below 1.
+    TypeError
+        When the arm has symbolic (SymPy) parameters.
     """
     from scipy.linalg import qr
 
@@ -202,7 +324,25 @@ def base_parameters(
 
 @dataclass
 class Identification:
-    """Least-squares estimate of the base parameters from measured torques."""
+    """Least-squares estimate of the base parameters from measured torques.
+
+    Made by ``identify``.
+
+    Parameters
+    ----------
+    base : BaseParameters
+        The base parameters estimated.
+    phi : numpy.ndarray
+        The estimate of phi_base, (r,).
+    standard_errors : numpy.ndarray
+        The standard error of each estimate, (r,).
+    condition_number : float
+        The condition number of the stacked base regressor.
+    residual_rms : float
+        The root-mean-square torque residual.
+    samples : int
+        The number of samples N used.
+    """
 
     base: BaseParameters
     phi: np.ndarray
@@ -216,7 +356,13 @@ class Identification:
         return self.base.names
 
     def table(self) -> object:
-        """A rich Table: each base parameter, its estimate, standard error and model value."""
+        """A rich Table: each base parameter, its estimate, standard error and model value.
+
+        Returns
+        -------
+        rich.table.Table
+            One line per base parameter.
+        """
         from rich.table import Table
 
         table = Table(
@@ -229,12 +375,38 @@ class Identification:
         return table
 
 
-def identify(robot: Robot, q: object, qd: object, qdd: object, tau: object, drives: bool = True) -> Identification:
+def identify(robot: ArmModel, q: object, qd: object, qdd: object, tau: object, drives: bool = True) -> Identification:
     """Estimate the base parameters from samples (q, qd, qdd, tau), each (N, n), by least squares.
 
-    Standard errors: sigma sqrt(diag((W^T W)^-1)) with sigma^2 the residual variance
-    (N n - r degrees of freedom); the condition number of the stacked base regressor says
-    how well the trajectory excites the parameters.
+    tau = W_base(q, qd, qdd) phi_base (Table 3.3.1, property 9) stacked over the samples
+    and solved for phi_base. Standard errors: sigma sqrt(diag((W^T W)^-1)) with sigma^2
+    the residual variance (N n - r degrees of freedom); the condition number of the stacked
+    base regressor says how well the trajectory excites the parameters.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm whose base parameters are estimated (its structure; its own values are
+        reported alongside for comparison).
+    q, qd, qdd : array_like
+        Measured joint positions, velocities and accelerations, (N, n).
+    tau : array_like
+        Measured joint torques, (N, n).
+    drives : bool, optional
+        True (default) also estimates the friction and motor parameters; False only the
+        rigid-body ones.
+
+    Returns
+    -------
+    Identification
+        The estimate, its standard errors, the condition number and the residual.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a sample array is not numbers of shape (..., n) or holds NaN or infinity, when
+        q, qd, qdd and tau hold different numbers of samples, or when there are too few
+        samples (N n must exceed the number r of base parameters).
     """
     tau = as_state(robot, tau, "tau").reshape(-1, robot.n)
     base = base_parameters(robot, drives=drives)

@@ -1,7 +1,7 @@
-"""What a robot is: inertials, joints, links, the Robot, URDF import, the built-in arms."""
+"""What an arm is: mass properties, joints, links and the ArmModel tree. Data and validation only."""
 
+from armdyn.model.arm import ArmModel, Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint, dh_joint
-from armdyn.model.robot import Link, Robot
 
-__all__ = ["Inertial", "Joint", "Link", "Robot", "dh_joint"]
+__all__ = ["ArmModel", "Inertial", "Joint", "Link", "dh_joint"]

@@ -10,7 +10,7 @@ import symengine as se
 import sympy
 
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.robot import Robot
 from armdyn.symbolic import codegen
 from armdyn.symbolic.derive import Derivation, derive_raw
 
@@ -18,7 +18,18 @@ _COLLAPSE_LIMIT = 4  # joints up to which trigonometric products are collapsed (
 
 
 def robot_symbols(robot: Robot) -> dict[str, sympy.Symbol]:
-    """The SymPy symbols among the arm's parameters, by name (they keep their assumptions)."""
+    """The SymPy symbols among the arm's parameters, by name (they keep their assumptions).
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm: its gravity, mass properties, joint placements and frame offsets are searched.
+
+    Returns
+    -------
+    dict of str to sympy.Symbol
+        Each symbol found, by name.
+    """
     found: dict[str, sympy.Symbol] = {}
     values = [robot.gravity]
     for link in robot.links:
@@ -37,6 +48,26 @@ class ClosedForm:
     ``q``, ``qd``, ``qdd`` are the joint symbols q1..qn, qd1..qdn, qdd1..qddn. Revolute
     angles enter through cos(q_i) and sin(q_i); for arms of up to four joints products are
     collapsed as the book writes them (cos(q1) cos(q2) - sin(q1) sin(q2) = cos(q1 + q2)).
+    Made by ``derive``, which is the way to build one.
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm.
+    raw : Derivation
+        The derivation (symengine expressions) that ``derive`` computed.
+    friction : str or bool
+        The friction mode the derivation used: True, False or "symbolic" (see ``derive``).
+    method : str
+        The method used, "lagrange" or "recursive".
+
+    Attributes
+    ----------
+    M, Vm, V, G, F, tau : sympy.Matrix
+        M(q), Vm(q, qd), V(q, qd) = Vm qd, G(q), F(qd) and
+        tau = M qdd + V + F + G (BOOK.md section 1).
+    q, qd, qdd : sympy.Matrix
+        The joint symbols, (n, 1).
     """
 
     def __init__(self, robot: Robot, raw: Derivation, friction: str | bool, method: str) -> None:
@@ -136,7 +167,15 @@ class ClosedForm:
         return out
 
     def latex(self) -> str:
-        """The equations as LaTeX, in the book's layout: M(q) qdd + Vm qd + F + G = tau, then each term."""
+        """The equations as LaTeX, in the book's layout: M(q) qdd + Vm qd + F + G = tau, then each term.
+
+        cos(q1 + q2) is written c_{12}, sin(q2) s_{2}, as the book does.
+
+        Returns
+        -------
+        str
+            A display equation followed by an ``aligned`` block, one line per term.
+        """
         lines = [r"M(q)\,\ddot{q} + V_m(q,\dot{q})\,\dot{q} + F(\dot{q}) + G(q) = \tau"]
         for label, m in self._display():
             lines.append(f"{label} &= {sympy.latex(m, mat_delim='[')}")
@@ -144,7 +183,13 @@ class ClosedForm:
         return f"\\[ {lines[0]} \\]\n\\begin{{aligned}}\n{body}\n\\end{{aligned}}\n"
 
     def pretty(self) -> str:
-        """The equations for the terminal (SymPy's pretty printer, c_12 = cos(q1 + q2))."""
+        """The equations for the terminal (SymPy's pretty printer, c_12 = cos(q1 + q2)).
+
+        Returns
+        -------
+        str
+            M(q), Vm(q, qd), V(q, qd), G(q) and, when not zero, F(qd), one block each.
+        """
         blocks = []
         for label, m in self._display():
             clean = label.replace("\\dot{q}", "qd").replace(r"\,", "").replace("_m", "m")
@@ -157,15 +202,42 @@ class ClosedForm:
 
     # ----- code -------------------------------------------------------------------------------------
     def operation_counts(self, cse: bool = True) -> dict[str, int]:
-        """Arithmetic operations of M, Vm, G and tau, before (cse=False) or after common-subexpression elimination."""
+        """Arithmetic operations of M, Vm, G and tau, before (cse=False) or after common-subexpression elimination.
+
+        Parameters
+        ----------
+        cse : bool, optional
+            True (default) counts after common-subexpression elimination, False before.
+
+        Returns
+        -------
+        dict of str to int
+            The count for each of "M", "Vm", "G" and "tau".
+        """
         return codegen.operation_counts(self.raw, cse)
 
     def to_python(self) -> str:
-        """Python source (NumPy/Numba-ready) of M(q), Vm(q, qd), G(q), tau(q, qd, qdd), with CSE."""
+        """Python source (NumPy/Numba-ready) of M(q), Vm(q, qd), G(q), tau(q, qd, qdd), with CSE.
+
+        Returns
+        -------
+        str
+            A module defining M(q, out), Vm(q, qd, out), G(q, out) and tau(q, qd, qdd, out),
+            each filling and returning ``out``; the arm's symbolic parameters follow ``out``
+            as further arguments, in alphabetical order.
+        """
         return codegen.python_source(self.raw, self._parameter_names())
 
     def to_c(self) -> str:
-        """C99 source of the same four functions, with CSE."""
+        """C99 source of the same four functions, with CSE.
+
+        Returns
+        -------
+        str
+            void functions M, Vm, G and tau taking ``const double *`` states and a ``double
+            *out`` (matrices row major); the arm's symbolic parameters follow ``out`` as
+            further ``double`` arguments, in alphabetical order.
+        """
         return codegen.c_source(self.raw, self._parameter_names())
 
     def _parameter_names(self) -> list[str]:
@@ -179,7 +251,22 @@ class ClosedForm:
     def compile(self, values: dict[Any, float] | None = None) -> codegen.CompiledClosedForm:
         """Numba-compiled M(q), Vm(q, qd), G(q), tau(q, qd, qdd), batched like the rest of armdyn.
 
-        An arm with symbolic parameters needs ``values`` for them (by symbol or name).
+        Parameters
+        ----------
+        values : dict, optional
+            Numeric values of the arm's symbolic parameters, keyed by symbol or by name;
+            an arm with symbolic parameters needs one for each.
+
+        Returns
+        -------
+        CompiledClosedForm
+            An object with methods M, Vm, G and tau, each taking one state (n,) or a batch
+            (..., n) and an optional ``out`` array.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a symbolic parameter of the arm has no value in ``values``.
         """
         names = self._parameter_names()
         given = {str(k): float(v) for k, v in (values or {}).items()}
@@ -196,10 +283,30 @@ def _plain(name: str) -> str:
 def derive(robot: Robot, method: str = "auto", friction: str | bool = True) -> ClosedForm:
     """The closed-form robot equation of ``robot`` (numeric, symbolic or mixed parameters).
 
-    method: "lagrange" (the book's trace formula with pseudo-inertia matrices),
-    "recursive" (composite rigid bodies, for larger arms) or "auto" (Lagrange up to three
-    joints). friction: True for the arm's own friction, False for none, "symbolic" for new
-    symbols v_i (viscous) and k_i (Coulomb), F_i = v_i qd_i + k_i sgn(qd_i).
+    M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md sections 1 and 4), with the
+    reflected motor inertias G^2 Jm on the diagonal of M.
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm; its parameters may be numbers, SymPy expressions, or both.
+    method : str, optional
+        "lagrange" (the book's trace formula with pseudo-inertia matrices), "recursive"
+        (composite rigid bodies, for larger arms) or "auto" (default: Lagrange up to three
+        joints).
+    friction : str or bool, optional
+        True (default) for the arm's own friction, False for none, "symbolic" for new
+        symbols v_i (viscous) and k_i (Coulomb), F_i = v_i qd_i + k_i sgn(qd_i).
+
+    Returns
+    -------
+    ClosedForm
+        M, Vm, V, G, F and tau as SymPy matrices, with printing and code generation.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``method`` is not "auto", "lagrange" or "recursive".
     """
     raw = derive_raw(robot, method, friction)
     chosen = method if method != "auto" else ("lagrange" if robot.n <= 3 else "recursive")

@@ -23,7 +23,7 @@ import numpy as np
 import symengine as se
 
 from armdyn.errors import ModelError
-from armdyn.model.robot import Robot
+from armdyn.robot import Robot
 from armdyn.symbolic.algebra import TrigAlgebra, cross, matrix, number, skew
 
 

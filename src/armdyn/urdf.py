@@ -14,9 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from armdyn.errors import ModelError
+from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
-from armdyn.model.robot import Link, Robot
+from armdyn.robot import Robot
 
 _MOVING = {"revolute", "continuous", "prismatic"}
 
@@ -60,11 +61,35 @@ def _body(urdf_link: object, strict: bool) -> Inertial:
 def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object = (0.0, 0.0, -9.81)) -> Robot:
     """Read a URDF file into a Robot.
 
-    ``<dynamics damping friction>`` become viscous and (symmetric) Coulomb friction.
-    Mimic joints load as independent joints, with a warning naming them. Floating and
-    planar joints, kinematic loops, a missing file and malformed XML raise ModelError.
-    ``strict=False`` accepts inertias that break the triangle inequality (with a
-    warning), as CAD exports sometimes carry.
+    Revolute, continuous, prismatic and fixed joints, in branching trees; fixed joints are
+    merged into their parent body and the moving joints numbered depth first from the root,
+    children in file order. ``<dynamics damping friction>`` become viscous and (symmetric)
+    Coulomb friction. Mimic joints load as independent joints, with a warning naming them.
+    Meshes are never loaded.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The URDF file.
+    strict : bool, optional
+        True (default) refuses inertias whose principal moments break the triangle
+        inequality; False accepts them with a warning, as CAD exports sometimes carry.
+    gravity : array_like, optional
+        Acceleration of gravity in the world frame, 3 values (default [0, 0, -9.81]).
+
+    Returns
+    -------
+    Robot
+        The arm, named after the URDF's robot, one link per moving joint.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the file is missing, is malformed XML or not a valid URDF; when it has floating
+        or planar joints, a joint of unknown type, a kinematic loop, a link defined twice, a
+        joint naming an undefined link, more or fewer than one root link, or no moving joint;
+        when a joint axis has no direction; and when a link's mass properties, friction or
+        limits are invalid (see Inertial and Link).
     """
     path = Path(path)
     if not path.is_file():

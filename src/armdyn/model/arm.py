@@ -1,7 +1,7 @@
-"""Robot: links in a kinematic tree with gravity, base and tool, friction, motors, limits.
+"""What an arm is: links in a kinematic tree with gravity, base and tool, friction, motors, limits.
 
-Pure data and validation. The thin methods at the end call the algorithm modules,
-imported when first used, so that nothing here depends on an algorithm at import time.
+Data and validation only: no algorithm lives here (armdyn.dynamics and armdyn.kinematics
+are free functions of an ArmModel; armdyn.robot.Robot joins the two for users).
 """
 
 from __future__ import annotations
@@ -29,6 +29,33 @@ class Link:
     act on the motor side of a gear of ratio ``gear_ratio`` (G) whose rotor has inertia
     ``motor_inertia`` (Jm). At the joint they appear as G^2 Jm, G^2 B and |G| Tc. With
     the default G = 1 and Jm = 0 the friction values are joint-side values.
+
+    Parameters
+    ----------
+    name : str
+        The joint's name, unique within an arm.
+    joint : Joint
+        The joint.
+    inertial : Inertial
+        Mass properties of the body the joint moves, in its link frame.
+    parent : int, optional
+        Index of the parent link in the arm, -1 (default) for the base.
+    viscous : float, optional
+        Viscous friction coefficient B, motor side, >= 0 (default 0).
+    coulomb : (float, float), optional
+        Coulomb friction (Tc+, Tc-), motor side, with Tc+ >= 0 >= Tc- (default (0, 0)).
+    motor_inertia : float, optional
+        Rotor inertia Jm, >= 0 (default 0).
+    gear_ratio : float, optional
+        Gear ratio G, finite and non-zero (default 1); negative reverses the motor.
+    limits : (float, float), optional
+        Joint limits (lower, upper), rad or m (default unlimited, (-inf, inf)).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the friction, motor inertia or gear ratio is not finite or breaks its sign rule
+        (B >= 0, Tc+ >= 0 >= Tc-, Jm >= 0, G != 0), or when lower > upper or a limit is NaN.
     """
 
     name: str
@@ -71,12 +98,43 @@ class Link:
         return self.joint.kind
 
 
-class Robot:
+class ArmModel:
     """An arm: a kinematic tree of links (parents before children), immutable.
 
-    gravity: acceleration of gravity in the world frame (default [0, 0, -9.81]);
-    base: pose of the root in the world; tool: pose of the tool in the frame of link
-    ``tool_link`` (default the last link); configurations: named joint vectors.
+    armdyn.Robot is this data with the dynamics and kinematics as methods; the algorithms
+    themselves take any ArmModel. A named configuration is also an attribute
+    (``arm.qn`` is ``arm.configuration("qn")``).
+
+    Parameters
+    ----------
+    links : sequence of Link
+        The links, each after its parent; joint names unique.
+    name : str, optional
+        The arm's name, used in messages (default "robot").
+    gravity : array_like, optional
+        Acceleration of gravity in the world frame, 3 values (default [0, 0, -9.81]); SymPy
+        expressions are accepted for closed-form work.
+    base : array_like, optional
+        Pose of the root in the world, a 4x4 homogeneous transform (default identity).
+    tool : array_like, optional
+        Pose of the tool in the frame of link ``tool_link``, 4x4 (default identity).
+    tool_link : int, optional
+        Index of the link carrying the tool (default the last link).
+    configurations : mapping of str to array_like, optional
+        Named joint vectors of n values each, e.g. {"qz": [0, 0]}.
+    dh : mapping, optional
+        The Denavit-Hartenberg table the arm was built from (``from_dh`` fills it:
+        {"convention": ..., "rows": [...]}).
+    description : str, optional
+        A line describing the arm (default "").
+
+    Raises
+    ------
+    armdyn.ModelError
+        When there is no link, an item is not a Link, a parent index does not name an
+        earlier link (or -1), two joints share a name, gravity is not a finite 3-vector,
+        base or tool is not a finite 4x4 transform, ``tool_link`` is not a link index, or a
+        configuration does not have n values.
     """
 
     def __init__(
@@ -127,7 +185,8 @@ class Robot:
                 raise ModelError(f"robot '{name}': configuration '{key}' must have {self.n} values, got {vector.shape}")
             self._configurations[key] = _frozen(vector)
         self._dh = dict(dh) if dh else None
-        self._cache: dict[str, Any] = {}
+        self._parents = _frozen(np.array([link.parent for link in self._links], dtype=int))
+        self._ancestors = _frozen(_ancestor_table(self._parents))
 
     # ----- construction -------------------------------------------------------------
     @classmethod
@@ -136,16 +195,38 @@ class Robot:
         table: Sequence[Mapping[str, Any]],
         convention: str = "standard",
         **robot_options: Any,
-    ) -> Robot:
-        """An arm from a Denavit-Hartenberg table, one mapping per joint.
+    ) -> ArmModel:
+        """An arm from a Denavit-Hartenberg table, one mapping per joint (Appendix A).
 
-        Row keys (all optional): ``kind`` ('R' or 'P', default 'R'), ``a``, ``alpha``,
-        ``d``, ``theta`` (for a revolute joint theta is the offset added to q; for a
-        prismatic one d is), ``mass``, ``com`` (in the DH link frame), ``inertia``
-        (about the c.o.m.: 3 moments, 6 values [Ixx Iyy Izz Ixy Iyz Ixz] or 3x3),
-        ``Jm``, ``G``, ``B``, ``Tc`` ((Tc+, Tc-)), ``qlim`` ((lower, upper)), ``name``,
-        ``strict`` (triangle-inequality check, default True). ``convention`` is
-        'standard' or 'modified'; further keywords go to Robot().
+        Each joint's parent is the joint before it (a serial chain).
+
+        Parameters
+        ----------
+        table : sequence of mapping
+            One row per joint. Row keys (all optional): ``kind`` ('R' or 'P', default
+            'R'), ``a``, ``alpha``, ``d``, ``theta`` (for a revolute joint theta is the
+            offset added to q; for a prismatic one d is), ``mass``, ``com`` (in the DH link
+            frame), ``inertia`` (about the c.o.m.: 3 moments, 6 values
+            [Ixx Iyy Izz Ixy Iyz Ixz] or 3x3), ``Jm``, ``G``, ``B``, ``Tc`` ((Tc+, Tc-)),
+            ``qlim`` ((lower, upper)), ``name`` (default joint1, joint2, ...), ``strict``
+            (triangle-inequality check, default True).
+        convention : str, optional
+            'standard' (default) or 'modified' (Craig) DH.
+        **robot_options
+            Further keywords for the constructor: name, gravity, base, tool, tool_link,
+            configurations, description.
+
+        Returns
+        -------
+        ArmModel
+            The arm, of the class this is called on (``Robot.from_dh`` makes a Robot).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a row has an unknown key, an unknown joint kind, or invalid mass
+            properties, friction, motor or limits (see Inertial and Link); when
+            ``convention`` is neither 'standard' nor 'modified'; and as the constructor.
         """
         links = []
         rows = []
@@ -181,8 +262,27 @@ class Robot:
             rows.append({"kind": joint.kind, "a": a, "alpha": alpha, "d": d, "theta": theta})
         return cls(links, dh={"convention": convention, "rows": rows}, **robot_options)
 
-    def replace(self, links: Sequence[Link] | None = None, **changes: Any) -> Robot:
-        """A copy with some links or options changed (the Robot itself never changes)."""
+    def replace(self, links: Sequence[Link] | None = None, **changes: Any) -> ArmModel:
+        """A copy with some links or options changed (the arm itself never changes).
+
+        Parameters
+        ----------
+        links : sequence of Link, optional
+            The new links (default the arm's own).
+        **changes
+            Constructor options to change: name, gravity, base, tool, tool_link,
+            configurations, dh, description.
+
+        Returns
+        -------
+        ArmModel
+            The new arm, of the same class.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When the changed arm is invalid (see the class docstring).
+        """
         options = {
             "name": self.name,
             "gravity": self._gravity,
@@ -194,12 +294,32 @@ class Robot:
             "description": self.description,
         }
         options.update(changes)
-        return Robot(self._links if links is None else links, **options)
+        return type(self)(self._links if links is None else links, **options)
 
-    def with_payload(self, mass: float, com: Iterable[float] = (0.0, 0.0, 0.0), inertia: object = None) -> Robot:
+    def with_payload(self, mass: float, com: Iterable[float] = (0.0, 0.0, 0.0), inertia: object = None) -> ArmModel:
         """The arm carrying a payload rigidly attached to the tool link (added, never overwriting).
 
-        com is in the tool link's frame; inertia is about the payload's own centre of mass.
+        The payload's mass properties are added to the tool link's (parallel-axis theorem).
+
+        Parameters
+        ----------
+        mass : float
+            The payload's mass (kg).
+        com : array_like, optional
+            Its centre of mass in the tool link's frame (default the frame origin).
+        inertia : array_like, optional
+            Its inertia about its own centre of mass, in the tool link's axes: 3 moments,
+            6 values [Ixx Iyy Izz Ixy Iyz Ixz] or 3x3 (default none: a point mass).
+
+        Returns
+        -------
+        ArmModel
+            The arm with the payload, of the same class.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When the payload's mass properties are invalid (see Inertial).
         """
         tool = self._links[self._tool_link]
         payload = Inertial(mass, com, np.zeros((3, 3)) if inertia is None else inertia, f"{tool.name} payload")
@@ -207,12 +327,25 @@ class Robot:
         links[self._tool_link] = dataclasses.replace(tool, inertial=tool.inertial + payload)
         return self.replace(links)
 
-    def without_friction(self) -> Robot:
-        """The same arm with no viscous or Coulomb friction."""
+    def without_friction(self) -> ArmModel:
+        """The same arm with no viscous or Coulomb friction.
+
+        Returns
+        -------
+        ArmModel
+            The arm without friction, of the same class; motors are kept.
+        """
         return self.replace([dataclasses.replace(link, viscous=0.0, coulomb=(0.0, 0.0)) for link in self._links])
 
-    def without_motors(self) -> Robot:
-        """The same arm with no motor rotor inertia (friction, if any, is kept at the joint side)."""
+    def without_motors(self) -> ArmModel:
+        """The same arm with no motor rotor inertia (friction, if any, is kept at the joint side).
+
+        Returns
+        -------
+        ArmModel
+            The arm with Jm = 0 and G = 1, its friction moved to the joint side (G^2 B and
+            |G| Tc), of the same class.
+        """
         links = [
             dataclasses.replace(
                 link,
@@ -225,7 +358,24 @@ class Robot:
         ]
         return self.replace(links)
 
-    def with_gravity(self, gravity: Iterable[object]) -> Robot:
+    def with_gravity(self, gravity: Iterable[object]) -> ArmModel:
+        """The same arm under another gravity.
+
+        Parameters
+        ----------
+        gravity : array_like
+            Acceleration of gravity in the world frame, 3 values (SymPy expressions accepted).
+
+        Returns
+        -------
+        ArmModel
+            The arm with the new gravity, of the same class.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``gravity`` is not a finite 3-vector.
+        """
         return self.replace(gravity=gravity)
 
     # ----- structure ----------------------------------------------------------------
@@ -248,7 +398,8 @@ class Robot:
 
     @property
     def parents(self) -> np.ndarray:
-        return self._cached("parents", lambda: _frozen(np.array([link.parent for link in self._links])))
+        """Index of each link's parent (-1 for the base)."""
+        return self._parents
 
     @property
     def is_chain(self) -> bool:
@@ -257,15 +408,7 @@ class Robot:
     @property
     def ancestors(self) -> np.ndarray:
         """Boolean (n, n): [i, j] is True when joint j moves link i (j is i or an ancestor)."""
-
-        def build() -> np.ndarray:
-            table = np.eye(self.n, dtype=bool)
-            for i, parent in enumerate(self.parents):
-                if parent >= 0:
-                    table[i] |= table[parent]
-            return _frozen(table)
-
-        return self._cached("ancestors", build)
+        return self._ancestors
 
     @property
     def gravity(self) -> np.ndarray:
@@ -329,7 +472,23 @@ class Robot:
         return {key: value.copy() for key, value in self._configurations.items()}
 
     def configuration(self, name: str) -> np.ndarray:
-        """A named joint configuration (for the PUMA 560: qz, qr, qs, qn), as a new array."""
+        """A named joint configuration (for the PUMA 560: qz, qr, qs, qn), as a new array.
+
+        Parameters
+        ----------
+        name : str
+            The configuration's name.
+
+        Returns
+        -------
+        numpy.ndarray
+            The joint vector, (n,), a copy.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When the arm has no configuration of that name.
+        """
         try:
             return self._configurations[name].copy()
         except KeyError:
@@ -341,125 +500,11 @@ class Robot:
         configurations = self.__dict__.get("_configurations", {})
         if name in configurations:
             return configurations[name].copy()
-        raise AttributeError(f"'Robot' object has no attribute '{name}'")
+        raise AttributeError(f"'{type(self).__name__}' object has no attribute '{name}'")
 
     def __repr__(self) -> str:
         kinds = "".join("R" if kind == "revolute" else "P" for kind in self.kinds)
-        return f"Robot('{self.name}', n={self.n}, joints={kinds})"
-
-    def _cached(self, key: str, build: Any) -> Any:
-        if key not in self._cache:
-            self._cache[key] = build()
-        return self._cache[key]
-
-    # ----- dynamics (armdyn.dynamics.engine: compiled kernels) --------------------------------
-    def _engine(self) -> Any:
-        """Compile the arm once; its bound engine methods then shadow these wrappers on the instance."""
-        engine = self.__dict__.get("_compiled_engine")
-        if engine is None:
-            from armdyn.dynamics.engine import Engine
-
-            engine = Engine(self)
-            self.__dict__["_compiled_engine"] = engine
-            for name in Engine.PUBLIC:
-                self.__dict__[name] = getattr(engine, name)
-        return engine
-
-    def __getstate__(self) -> dict[str, Any]:
-        from armdyn.dynamics.engine import Engine
-
-        skip = {"_compiled_engine", *Engine.PUBLIC}
-        return {key: value for key, value in self.__dict__.items() if key not in skip}
-
-    def inverse_dynamics(self, q: Any, qd: Any, qdd: Any, f_ext: Any = None, out: Any = None) -> np.ndarray:
-        """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (RNEA, O(n)), friction and reflected motor
-        inertia included; plus J^T f_ext for a wrench f_ext = [force; moment] the tool exerts
-        (tool frame, about the tool point)."""
-        return self._engine().inverse_dynamics(q, qd, qdd, f_ext, out)
-
-    def forward_dynamics(self, q: Any, qd: Any, tau: Any, out: Any = None) -> np.ndarray:
-        """qdd = M(q)^-1 (tau - N(q, qd)) (ABA, O(n))."""
-        return self._engine().forward_dynamics(q, qd, tau, out)
-
-    def inertia_matrix(self, q: Any, out: Any = None) -> np.ndarray:
-        """M(q), shape (..., n, n) (CRBA), with G^2 Jm on the diagonal."""
-        return self._engine().inertia_matrix(q, out)
-
-    def inertia_matrix_dot(self, q: Any, qd: Any) -> np.ndarray:
-        """dM/dt = Vm + Vm^T, shape (..., n, n)."""
-        return self._engine().inertia_matrix_dot(q, qd)
-
-    def coriolis_matrix(self, q: Any, qd: Any, out: Any = None) -> np.ndarray:
-        """The Christoffel form Vm(q, qd) (3.3.48), (..., n, n): Mdot - 2 Vm is skew symmetric."""
-        return self._engine().coriolis_matrix(q, qd, out)
-
-    def coriolis_vector(self, q: Any, qd: Any, out: Any = None) -> np.ndarray:
-        """V(q, qd) = Vm(q, qd) qd."""
-        return self._engine().coriolis_vector(q, qd, out)
-
-    def gravity_vector(self, q: Any, out: Any = None) -> np.ndarray:
-        """G(q)."""
-        return self._engine().gravity_vector(q, out)
-
-    def friction(self, qd: Any, out: Any = None) -> np.ndarray:
-        """F(qd) = Fv qd + Fd(qd), joint side (G^2 B qd and |G| Tc+ or |G| Tc-)."""
-        return self._engine().friction(qd, out)
-
-    def nonlinear_terms(self, q: Any, qd: Any, out: Any = None) -> np.ndarray:
-        """N(q, qd) = Vm qd + F + G."""
-        return self._engine().nonlinear_terms(q, qd, out)
-
-    def kinetic_energy(self, q: Any, qd: Any) -> Any:
-        """K = 1/2 qd^T M(q) qd: a float for one state, an array (...) for a batch."""
-        return self._engine().kinetic_energy(q, qd)
-
-    def potential_energy(self, q: Any) -> Any:
-        """P(q) = -sum m_i g^T p_ci: a float for one state, an array (...) for a batch."""
-        return self._engine().potential_energy(q)
-
-    def regressor(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
-        """W(q, qd, qdd), shape (..., n, 14 n), with W @ parameters() = inverse_dynamics (recursive, O(n d))."""
-        from armdyn.dynamics import regressor
-
-        return regressor.regressor(self, q, qd, qdd)
-
-    def parameters(self) -> np.ndarray:
-        """phi: per link [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz] (about the link origin),
-        then per joint [Fv, Fc+, Fc-, Ia] (joint-side friction, reflected motor inertia)."""
-        from armdyn.dynamics import regressor
-
-        return regressor.parameters(self)
-
-    # ----- kinematics (armdyn.kinematics) ----------------------------------------------
-    def link_transforms(self, q: np.ndarray) -> np.ndarray:
-        """T_i(q) of every link in the world frame, shape (..., n, 4, 4)."""
-        from armdyn import kinematics
-
-        return kinematics.link_transforms(self, q)
-
-    def tool_pose(self, q: np.ndarray) -> np.ndarray:
-        """Pose of the tool in the world frame, shape (..., 4, 4)."""
-        from armdyn import kinematics
-
-        return kinematics.tool_pose(self, q)
-
-    def jacobian(self, q: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
-        """Geometric Jacobian of the tool (or of a link's frame), (..., 6, n), linear rows first."""
-        from armdyn import kinematics
-
-        return kinematics.jacobian(self, q, frame, link)
-
-    def jacobian_dot(self, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
-        """Time derivative of the geometric Jacobian, (..., 6, n)."""
-        from armdyn import kinematics
-
-        return kinematics.jacobian_dot(self, q, qd, frame, link)
-
-    def link_transform_derivatives(self, q: np.ndarray) -> np.ndarray:
-        """dT_i/dq_j, shape (..., n, n, 4, 4) indexed [i, j] (zero when j does not move i)."""
-        from armdyn import kinematics
-
-        return kinematics.link_transform_derivatives(self, q)
+        return f"{type(self).__name__}('{self.name}', n={self.n}, joints={kinds})"
 
 
 def _transform(value: np.ndarray | None, where: str) -> np.ndarray:
@@ -474,3 +519,11 @@ def _transform(value: np.ndarray | None, where: str) -> np.ndarray:
 def _frozen(array: np.ndarray) -> np.ndarray:
     array.setflags(write=False)
     return array
+
+
+def _ancestor_table(parents: np.ndarray) -> np.ndarray:
+    table = np.eye(len(parents), dtype=bool)
+    for i, parent in enumerate(parents):
+        if parent >= 0:
+            table[i] |= table[parent]
+    return table

@@ -12,9 +12,10 @@ from collections.abc import Callable
 import numpy as np
 
 from armdyn.errors import ModelError
+from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
-from armdyn.model.robot import Link, Robot
+from armdyn.robot import Robot
 
 _PI = np.pi
 

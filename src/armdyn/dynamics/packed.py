@@ -1,9 +1,14 @@
-"""A Robot compiled once into one flat float array that the Numba kernels take.
+"""An ArmModel packed once into one flat, read-only float array that the Numba kernels take,
+and the named sizes of the workspace (scratch) each kernel needs.
 
-Every array argument costs Numba dispatch time, so the whole model, and the scratch
-space of the one-state kernels, lives in a single contiguous buffer:
+Every array argument costs Numba dispatch time, so the whole model lives in one array:
 
-    [ header | joint 0 | joint 1 | ... | joint n-1 | scratch ]
+    [ header | joint 0 | joint 1 | ... | joint n-1 ]
+
+No kernel writes it (it is flagged read only, and Numba compiles the kernels against a
+read-only array type, so a write would not compile). Scratch space is a separate
+workspace: each one-state call allocates its own inside the compiled code, each parallel
+chunk of a batch call its own, so calls from several threads never share one.
 
 Each joint is rewritten so that it moves about or along its own z axis: the placement
 absorbs the rotation that carries z onto the joint axis and the parent's frame offset,
@@ -15,9 +20,10 @@ kernels then never need a general axis (Featherstone, Rigid Body Dynamics Algori
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-from armdyn.model.inertial import Inertial
-from armdyn.model.robot import Robot
+from armdyn.errors import ModelError
+from armdyn.model import ArmModel, Inertial
 
 # header
 N_JOINTS, GRAVITY, TOOL_LINK, TOOL_ROTATION, TOOL_POSITION, HEADER = 0, 1, 4, 5, 14, 20
@@ -26,9 +32,26 @@ PARENT, KIND, ROTATION, POSITION = 0, 1, 2, 11
 MASS, FIRST_MOMENT, INERTIA = 14, 15, 18  # INERTIA: Ixx Ixy Ixz Iyy Iyz Izz about the body origin
 ARMATURE, VISCOUS, COULOMB_POS, COULOMB_NEG = 24, 25, 26, 27
 STRIDE = 28
-SCRATCH_PER_JOINT = 160  # the largest kernel (the Coriolis matrix) needs 6+6+6+36+36+12 per joint, plus slack
-SCRATCH_FIXED = 64
 REVOLUTE_KIND, PRISMATIC_KIND = 0.0, 1.0
+
+# Workspace layouts, per joint and fixed (each kernel's docstring says what its record holds).
+TRANSFORM = 12  # a joint's (R, p): 9 + 3
+RNEA_JOINT, RNEA_VELOCITY, RNEA_FORCE = 30, 12, 24  # R, p | v, a | f
+RNEA_FIXED = 18  # the tool wrench: its transform (12) and the wrench (6)
+GRAVITY_JOINT = 21  # R, p | a | f
+COMPOSITE = 10  # a composite inertia (m, h, I_O)
+CORIOLIS_JOINT, CORIOLIS_FIXED = 64, 10  # local and world transforms, S, Sdot, v, I^c, B^c | one inertia
+ABA_JOINT, ABA_FIXED = 98, 26  # transforms, S, v, c, I^A, p^A, U, a, (D, u) | one inertia, momentum
+ENERGY_JOINT, ENERGY_FIXED = 30, 6  # local and world transforms, v | I v
+WORK_PER_JOINT = max(RNEA_JOINT + COMPOSITE, TRANSFORM + COMPOSITE, GRAVITY_JOINT, CORIOLIS_JOINT, ABA_JOINT,
+                     ENERGY_JOINT)  # fmt: skip
+WORK_FIXED = max(RNEA_FIXED, CORIOLIS_FIXED, ABA_FIXED, ENERGY_FIXED)
+
+
+@njit(cache=True)
+def workspace_size(n: int) -> int:
+    """Scratch values any kernel needs for an arm of n joints (one Workspace serves them all)."""
+    return WORK_PER_JOINT * n + WORK_FIXED
 
 
 def _rotation_onto(axis: np.ndarray) -> np.ndarray:
@@ -48,7 +71,7 @@ def _homogeneous(rotation: np.ndarray) -> np.ndarray:
     return transform
 
 
-def body_frames(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def body_frames(robot: ArmModel) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """(placement of each joint frame in its parent's body frame, pose of each link frame in its body frame)."""
     align = [_homogeneous(_rotation_onto(link.joint.axis)) for link in robot.links]
     placements, link_in_body = [], []
@@ -59,14 +82,12 @@ def body_frames(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:
     return placements, link_in_body
 
 
-def compile_robot(robot: Robot) -> np.ndarray:
-    """The flat buffer of a numeric Robot (the layout constants above describe it)."""
+def pack(robot: ArmModel) -> np.ndarray:
+    """The model array of a numeric arm (the layout constants above describe it), read only."""
     if robot.is_symbolic:
-        from armdyn.errors import ModelError
-
         raise ModelError(f"robot '{robot.name}' has symbolic parameters; numeric kernels need numbers")
     n = robot.n
-    buffer = np.zeros(HEADER + STRIDE * n + SCRATCH_PER_JOINT * n + SCRATCH_FIXED)
+    buffer = np.zeros(HEADER + STRIDE * n)
     placements, link_in_body = body_frames(robot)
     tool = link_in_body[robot.tool_link] @ robot.tool
     buffer[N_JOINTS] = n
@@ -89,4 +110,5 @@ def compile_robot(robot: Robot) -> np.ndarray:
         record[ARMATURE] = armature[i]
         record[VISCOUS] = viscous[i]
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
+    buffer.setflags(write=False)
     return buffer

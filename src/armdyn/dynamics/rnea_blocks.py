@@ -1,11 +1,11 @@
-"""Batch kernels vectorized across states: structure of arrays, blocks of states.
+"""Batch inverse dynamics vectorized across states: structure of arrays, blocks of states.
 
 A batch of inverse dynamics is the same arithmetic on many states. Laid out with the
 state index innermost (one row per quantity, one column per state of a block), the
 loop over a block's states is straight-line arithmetic that LLVM turns into SIMD
 instructions, and blocks run in parallel threads. Joint kinds become 0/1 factors so
 that the vectorized loop has no branches, and sin/cos are computed by a polynomial
-that vectorizes (libm's do not).
+that vectorizes (libm's do not). The equations are rnea.rnea_core's.
 """
 
 from __future__ import annotations
@@ -13,56 +13,31 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from armdyn.dynamics.compiled import (
+from armdyn.dynamics.friction import coulomb
+from armdyn.dynamics.packed import (
     ARMATURE,
-    COULOMB_NEG,
-    COULOMB_POS,
     FIRST_MOMENT,
     GRAVITY,
     HEADER,
     INERTIA,
     KIND,
     MASS,
+    N_JOINTS,
     PARENT,
     POSITION,
     ROTATION,
     STRIDE,
     VISCOUS,
 )
+from armdyn.dynamics.rnea import WITH_FRICTION, WITH_GRAVITY, WITH_QDD, WITH_VELOCITY
+from armdyn.dynamics.spatial import NUMBA_OPTIONS, force_to_parent, sin_cos
 
 BLOCK = 32
-_OPTS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
-
-# pi/2 split in three parts for an exact range reduction (Cody and Waite), and the
-# minimax coefficients of sin and cos on [-pi/4, pi/4] (Moshier, Cephes sin.c).
-_PIO2_1, _PIO2_2, _PIO2_3 = 1.57079625129699707031e0, 7.54978941586159635335e-8, 5.39030285815811905290e-15
-_S1, _S2, _S3 = -1.66666666666666307295e-1, 8.33333333332211858878e-3, -1.98412698295895385996e-4
-_S4, _S5, _S6 = 2.75573136213857245213e-6, -2.50507477628578072866e-8, 1.58962301576546568060e-10
-_C1, _C2, _C3 = 4.16666666666665929218e-2, -1.38888888888730564116e-3, 2.48015872888517045348e-5
-_C4, _C5, _C6 = -2.75573141792967388112e-7, 2.08757008419747316778e-9, -1.13585365213876817300e-11
-_ROUND = 6755399441055744.0  # 1.5 * 2**52: adding and subtracting it rounds to an integer
 
 
-@njit(inline="always", **_OPTS)
-def sin_cos(x: float) -> tuple[float, float]:
-    """(sin x, cos x) to about one unit in the last place for |x| < 1e5, with selects, not branches."""
-    k = (x * 0.6366197723675814 + _ROUND) - _ROUND  # nearest integer, in arithmetic
-    r = ((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3
-    z = r * r
-    s = r + r * z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
-    c = 1.0 - 0.5 * z + z * z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    quadrant = np.int64(k) & 3
-    swap = (quadrant & 1) == 1
-    sine = c if swap else s
-    cosine = s if swap else c
-    sine = -sine if quadrant >= 2 else sine
-    cosine = -cosine if (quadrant == 1) | (quadrant == 2) else cosine
-    return sine, cosine
-
-
-@njit(inline="always", **_OPTS)
-def _forward_block(m: np.ndarray, i: int, x: np.ndarray, vscale: float, ascale: float) -> None:
-    """One joint's forward step of RNEA for a block of states (see kernels.rnea_core).
+@njit(inline="always", **NUMBA_OPTIONS)
+def _forward_block(model: np.ndarray, i: int, x: np.ndarray, vscale: float, ascale: float) -> None:
+    """One joint's forward step of RNEA for a block of states (see rnea.rnea_core).
 
     x holds rows of BLOCK values. In: 0-11 the parent's v and a (or zeros and -g for the
     root), 12-14 q, qd, qdd. Out: 15-23 R, 24-26 p, 27-32 v, 33-38 a, 39-44 f. One flat
@@ -71,15 +46,15 @@ def _forward_block(m: np.ndarray, i: int, x: np.ndarray, vscale: float, ascale: 
     """
     b = HEADER + STRIDE * i
     r = b + ROTATION
-    prism = m[b + KIND]
+    prism = model[b + KIND]
     rev = 1.0 - prism
-    p00, p01, p02, p10, p11, p12 = m[r], m[r + 1], m[r + 2], m[r + 3], m[r + 4], m[r + 5]
-    p20, p21, p22 = m[r + 6], m[r + 7], m[r + 8]
-    Px, Py, Pz = m[b + POSITION], m[b + POSITION + 1], m[b + POSITION + 2]
-    mass = m[b + MASS]
-    hx, hy, hz = m[b + FIRST_MOMENT], m[b + FIRST_MOMENT + 1], m[b + FIRST_MOMENT + 2]
+    p00, p01, p02, p10, p11, p12 = model[r], model[r + 1], model[r + 2], model[r + 3], model[r + 4], model[r + 5]
+    p20, p21, p22 = model[r + 6], model[r + 7], model[r + 8]
+    Px, Py, Pz = model[b + POSITION], model[b + POSITION + 1], model[b + POSITION + 2]
+    mass = model[b + MASS]
+    hx, hy, hz = model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2]
     k = b + INERTIA
-    i0, i1, i2, i3, i4, i5 = m[k], m[k + 1], m[k + 2], m[k + 3], m[k + 4], m[k + 5]
+    i0, i1, i2, i3, i4, i5 = model[k], model[k + 1], model[k + 2], model[k + 3], model[k + 4], model[k + 5]
     for s in range(BLOCK):
         qi = x[12 * BLOCK + s]
         sn, cs = sin_cos(qi)
@@ -185,7 +160,7 @@ def _forward_block(m: np.ndarray, i: int, x: np.ndarray, vscale: float, ascale: 
         x[44 * BLOCK + s] = mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx
 
 
-@njit(inline="always", **_OPTS)
+@njit(inline="always", **NUMBA_OPTIONS)
 def _force_to_parent_block(x: np.ndarray) -> None:
     """X^T f for a block: rows R (0-8), p (9-11), f (12-17) -> rows 18-23."""
     for s in range(BLOCK):
@@ -195,28 +170,27 @@ def _force_to_parent_block(x: np.ndarray) -> None:
         px, py, pz = x[9 * BLOCK + s], x[10 * BLOCK + s], x[11 * BLOCK + s]
         nx, ny, nz = x[12 * BLOCK + s], x[13 * BLOCK + s], x[14 * BLOCK + s]
         fx, fy, fz = x[15 * BLOCK + s], x[16 * BLOCK + s], x[17 * BLOCK + s]
-        Fx = r00 * fx + r01 * fy + r02 * fz
-        Fy = r10 * fx + r11 * fy + r12 * fz
-        Fz = r20 * fx + r21 * fy + r22 * fz
-        x[18 * BLOCK + s] = r00 * nx + r01 * ny + r02 * nz + py * Fz - pz * Fy
-        x[19 * BLOCK + s] = r10 * nx + r11 * ny + r12 * nz + pz * Fx - px * Fz
-        x[20 * BLOCK + s] = r20 * nx + r21 * ny + r22 * nz + px * Fy - py * Fx
-        x[21 * BLOCK + s] = Fx
-        x[22 * BLOCK + s] = Fy
-        x[23 * BLOCK + s] = Fz
+        (
+            x[18 * BLOCK + s],
+            x[19 * BLOCK + s],
+            x[20 * BLOCK + s],
+            x[21 * BLOCK + s],
+            x[22 * BLOCK + s],
+            x[23 * BLOCK + s],
+        ) = force_to_parent((r00, r01, r02, r10, r11, r12, r20, r21, r22), (px, py, pz), (nx, ny, nz), (fx, fy, fz))
 
 
-@njit(parallel=True, **_OPTS)
-def rnea_blocks(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> None:
-    """RNEA (kernels.rnea_core) over a (B, n) batch, BLOCK states at a time, blocks in parallel.
+@njit(parallel=True, **NUMBA_OPTIONS)
+def rnea_blocks(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> None:
+    """RNEA (rnea.rnea_core) over a (B, n) batch, BLOCK states at a time, blocks in parallel.
 
-    flags as in kernels: 1 qdd, 2 gravity, 4 velocity, 8 friction.
+    flags as in rnea: WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION.
     """
-    count, n = q.shape[0], int(m[0])
-    ascale = 1.0 if (flags & 1) != 0 else 0.0
-    gscale = 1.0 if (flags & 2) != 0 else 0.0
-    vscale = 1.0 if (flags & 4) != 0 else 0.0
-    friction = (flags & 8) != 0
+    count, n = q.shape[0], int(model[N_JOINTS])
+    ascale = 1.0 if (flags & WITH_QDD) != 0 else 0.0
+    gscale = 1.0 if (flags & WITH_GRAVITY) != 0 else 0.0
+    vscale = 1.0 if (flags & WITH_VELOCITY) != 0 else 0.0
+    friction = (flags & WITH_FRICTION) != 0
     blocks = (count + BLOCK - 1) // BLOCK
     for block in prange(blocks):
         first = block * BLOCK
@@ -224,7 +198,7 @@ def rnea_blocks(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f
         store = np.empty((n, 30, BLOCK))  # per joint: R, p, v, a, f
         x = np.zeros(45 * BLOCK)
         for i in range(n):
-            parent = int(m[HEADER + STRIDE * i + PARENT])
+            parent = int(model[HEADER + STRIDE * i + PARENT])
             for s in range(size):
                 x[12 * BLOCK + s] = q[first + s, i]
                 x[13 * BLOCK + s] = qd[first + s, i]
@@ -234,28 +208,24 @@ def rnea_blocks(m: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, f
                     for s in range(BLOCK):
                         x[row * BLOCK + s] = store[parent, 12 + row, s]
                 else:
-                    value = -gscale * m[GRAVITY + row - 9] if row >= 9 else 0.0
+                    value = -gscale * model[GRAVITY + row - 9] if row >= 9 else 0.0
                     for s in range(BLOCK):
                         x[row * BLOCK + s] = value
-            _forward_block(m, i, x, vscale, ascale)
+            _forward_block(model, i, x, vscale, ascale)
             for row in range(30):
                 for s in range(BLOCK):
                     store[i, row, s] = x[(15 + row) * BLOCK + s]
         for i in range(n - 1, -1, -1):
             b = HEADER + STRIDE * i
-            prism = m[b + KIND]
-            armature = ascale * m[b + ARMATURE]
+            prism = model[b + KIND]
+            armature = ascale * model[b + ARMATURE]
             for s in range(size):
                 value = prism * store[i, 29, s] + (1.0 - prism) * store[i, 26, s] + armature * qdd[first + s, i]
                 if friction:
-                    rate = qd[first + s, i]
-                    value += m[b + VISCOUS] * rate
-                    if rate > 0.0:
-                        value += m[b + COULOMB_POS]
-                    elif rate < 0.0:
-                        value += m[b + COULOMB_NEG]
+                    value += model[b + VISCOUS] * qd[first + s, i]
+                    value += coulomb(model, i, qd[first + s, i])
                 tau[first + s, i] = value
-            parent = int(m[b + PARENT])
+            parent = int(model[b + PARENT])
             if parent >= 0:
                 for row in range(12):
                     for s in range(BLOCK):

@@ -1,0 +1,467 @@
+"""The dynamics of an arm as free functions: one state or a batch, with ``out=``.
+
+Every function takes the arm first (a Robot: an ArmModel with its packed model), then
+states of shape (n,) for one state or (..., n) for a batch, and returns the matching
+shape. robot.Robot takes these functions as its methods, so ``arm.inertia_matrix(q)``
+and ``api.inertia_matrix(arm, q)`` are the same call.
+
+A one-state call with 1-D C-contiguous float64 arrays goes straight to a compiled kernel
+that checks lengths and finiteness itself (an explicit signature, so any other input fails
+the type match with a TypeError). Anything else, and any input the kernel refuses, takes
+the general path: armdyn.inputs converts, checks (raising a ModelError that names the
+argument), broadcasts, and one batch kernel runs over all states.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from armdyn import inputs
+from armdyn.dynamics.aba import aba_batch, aba_one
+from armdyn.dynamics.coriolis import coriolis_batch, coriolis_one
+from armdyn.dynamics.crba import crba_batch, crba_one
+from armdyn.dynamics.energy import energy_batch, energy_one
+from armdyn.dynamics.friction import friction_batch, friction_one
+from armdyn.dynamics.rnea import (
+    CORIOLIS,
+    GRAVITY_ONLY,
+    INVERSE_DYNAMICS,
+    NONLINEAR,
+    WITH_WRENCH,
+    gravity_one,
+    rnea_batch,
+    rnea_one,
+)
+from armdyn.dynamics.rnea_blocks import rnea_blocks
+from armdyn.errors import ModelError
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from armdyn.robot import Robot
+
+_empty = np.empty
+_NO_WRENCH = np.zeros((1, 6))
+
+
+def _where(arm: Robot) -> str:
+    return f" for '{arm.name}' (n = {arm.n})"
+
+
+def _model(arm: Robot) -> np.ndarray:
+    if arm.packed is None:
+        raise ModelError(f"robot '{arm.name}' has symbolic parameters; numeric dynamics need numbers")
+    return arm.packed
+
+
+def _rnea(
+    arm: Robot, flags: int, names: tuple[str, ...], states: tuple, out: object, f_ext: object = None
+) -> np.ndarray:
+    """The general path of the RNEA family: checked, broadcast, vectorized across states."""
+    model = _model(arm)
+    batch, flat = inputs.batch_states(names, states, arm.n, _where(arm))
+    flat += [flat[-1]] * (3 - len(flat))
+    result = inputs.result(out, (*batch, arm.n))
+    target = result.reshape(-1, arm.n)
+    if not target.shape[0]:
+        return result
+    if f_ext is None:
+        rnea_blocks(model, flat[0], flat[1], flat[2], flags, target)
+    else:
+        rnea_batch(model, flat[0], flat[1], flat[2], inputs.wrenches(f_ext, batch), flags | WITH_WRENCH, target)
+    return result
+
+
+def _batch(
+    arm: Robot, kernel: Callable, names: tuple[str, ...], states: tuple, out: object, trailing: tuple
+) -> np.ndarray:
+    """The general path of the other kernels: checked, broadcast, one parallel batch call."""
+    model = _model(arm)
+    batch, flat = inputs.batch_states(names, states, arm.n, _where(arm))
+    result = inputs.result(out, (*batch, *trailing))
+    target = result.reshape(-1, *trailing)
+    if target.shape[0]:
+        kernel(model, *flat, target)
+    return result
+
+
+def inverse_dynamics(
+    arm: Robot,
+    q: ArrayLike,
+    qd: ArrayLike,
+    qdd: ArrayLike,
+    f_ext: ArrayLike | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """Joint torques tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (BOOK.md section 1, 3.3.1).
+
+    The recursive Newton-Euler algorithm, O(n) (Featherstone 2008, 5.3); friction and the
+    reflected motor inertia G^2 Jm included. With a wrench the tool exerts on its
+    surroundings, tau gains J^T f_ext.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd, qdd : array_like
+        Joint positions, velocities and accelerations, (n,) or a batch (..., n); the batch
+        shapes broadcast together.
+    f_ext : array_like, optional
+        Wrench [force; moment] the tool exerts, in the tool frame about the tool point, (6,)
+        or one per state (..., 6).
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        tau, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        When a state has the wrong shape or holds NaN or infinity, when ``out`` does not fit,
+        or when the arm has symbolic parameters.
+    """
+    if f_ext is None:
+        tau = _empty(arm.n) if out is None else out
+        try:
+            if rnea_one(arm.packed, q, qd, qdd, INVERSE_DYNAMICS, tau) == 0:
+                return tau
+        except TypeError:  # not one state of 1-D float64 arrays: the general path
+            pass
+    return _rnea(arm, INVERSE_DYNAMICS, ("q", "qd", "qdd"), (q, qd, qdd), out, f_ext)
+
+
+def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """N(q, qd) = Vm(q, qd) qd + F(qd) + G(q), so that M qdd + N = tau (BOOK.md section 1).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        N, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid (see inverse_dynamics).
+    """
+    result = _empty(arm.n) if out is None else out
+    try:
+        if rnea_one(arm.packed, q, qd, qd, NONLINEAR, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _rnea(arm, NONLINEAR, ("q", "qd"), (q, qd), out)
+
+
+def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """V(q, qd) = Vm(q, qd) qd, the Coriolis and centripetal torques (BOOK.md section 1).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        V, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid (see inverse_dynamics).
+    """
+    result = _empty(arm.n) if out is None else out
+    try:
+        if rnea_one(arm.packed, q, qd, qd, CORIOLIS, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _rnea(arm, CORIOLIS, ("q", "qd"), (q, qd), out)
+
+
+def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """G(q), the gravity torques, dP/dq (BOOK.md section 2, 3.2.43).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q : array_like
+        Joint positions, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        G, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        When q or ``out`` is invalid (see inverse_dynamics).
+    """
+    result = _empty(arm.n) if out is None else out
+    try:
+        if gravity_one(arm.packed, q, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _rnea(arm, GRAVITY_ONLY, ("q",), (q,), out)
+
+
+def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """F(qd) = Fv qd + Fd(qd), joint side: G^2 B qd plus |G| Tc+ (qd > 0) or |G| Tc- (qd < 0)
+    (BOOK.md section 1, Table 3.3.1 property 6).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    qd : array_like
+        Joint velocities, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        F, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        When qd or ``out`` is invalid (see inverse_dynamics).
+    """
+    result = _empty(arm.n) if out is None else out
+    try:
+        if friction_one(arm.packed, qd, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _batch(arm, friction_batch, ("qd",), (qd,), out, (arm.n,))
+
+
+def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """M(q), symmetric positive definite, with G^2 Jm on the diagonal (BOOK.md section 2, 3.2.31).
+
+    The composite-rigid-body algorithm (Featherstone 2008, 6.2).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q : array_like
+        Joint positions, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        M, shape (..., n, n).
+
+    Raises
+    ------
+    ModelError
+        When q or ``out`` is invalid (see inverse_dynamics).
+    """
+    n = arm.n
+    result = _empty((n, n)) if out is None else out
+    try:
+        if crba_one(arm.packed, q, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _batch(arm, crba_batch, ("q",), (q,), out, (n, n))
+
+
+def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """The Christoffel form Vm(q, qd) (BOOK.md section 3, 3.3.48): Mdot - 2 Vm is skew symmetric.
+
+    Echeandia and Wensing (2021), Algorithm 2, O(n d) for depth d.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        Vm, shape (..., n, n).
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid (see inverse_dynamics).
+    """
+    n = arm.n
+    result = _empty((n, n)) if out is None else out
+    try:
+        if coriolis_one(arm.packed, q, qd, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _batch(arm, coriolis_batch, ("q", "qd"), (q, qd), out, (n, n))
+
+
+def forward_dynamics(
+    arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: np.ndarray | None = None
+) -> np.ndarray:
+    """Joint accelerations qdd = M(q)^-1 (tau - N(q, qd)) (BOOK.md section 5).
+
+    The articulated-body algorithm, O(n) (Featherstone 2008, 7.3).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd, tau : array_like
+        Joint positions, velocities and torques, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        qdd, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid (see inverse_dynamics).
+    """
+    qdd = _empty(arm.n) if out is None else out
+    try:
+        if aba_one(arm.packed, q, qd, tau, qdd) == 0:
+            return qdd
+    except TypeError:
+        pass
+    return _batch(arm, aba_batch, ("q", "qd", "tau"), (q, qd, tau), out, (arm.n,))
+
+
+def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """Kinetic and potential energy together, [K, P] (BOOK.md section 2, 3.2.29 and 3.2.35).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (..., 2): K, then P.
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid (see inverse_dynamics).
+    """
+    result = _empty(2) if out is None else out
+    try:
+        if energy_one(arm.packed, q, qd, result) == 0:
+            return result
+    except TypeError:
+        pass
+    return _batch(arm, energy_batch, ("q", "qd"), (q, qd), out, (2,))
+
+
+def kinetic_energy(arm: Robot, q: ArrayLike, qd: ArrayLike) -> float | np.ndarray:
+    """K = 1/2 qd^T M(q) qd (BOOK.md section 2, 3.2.29), with the motor rotors' 1/2 G^2 Jm qd^2.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or (..., n).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        K: a float for one state, shape (...) for a batch.
+
+    Raises
+    ------
+    ModelError
+        When a state is invalid (see inverse_dynamics).
+    """
+    values = energies(arm, q, qd)
+    return float(values[0]) if values.ndim == 1 else values[..., 0]
+
+
+def potential_energy(arm: Robot, q: ArrayLike) -> float | np.ndarray:
+    """P(q) = -sum_i m_i g^T p_ci (BOOK.md section 2, 3.2.35).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q : array_like
+        Joint positions, (n,) or (..., n).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        P: a float for one state, shape (...) for a batch.
+
+    Raises
+    ------
+    ModelError
+        When q is invalid (see inverse_dynamics).
+    """
+    values = energies(arm, q, q)
+    return float(values[1]) if values.ndim == 1 else values[..., 1]
+
+
+def inertia_matrix_dot(arm: Robot, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
+    """dM/dt = Vm + Vm^T, exact for the Christoffel Vm (Table 3.3.1, property 4).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or (..., n).
+
+    Returns
+    -------
+    numpy.ndarray
+        Mdot, shape (..., n, n).
+
+    Raises
+    ------
+    ModelError
+        When a state is invalid (see inverse_dynamics).
+    """
+    Vm = coriolis_matrix(arm, q, qd)
+    return Vm + np.swapaxes(Vm, -1, -2)

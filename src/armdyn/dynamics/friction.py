@@ -1,0 +1,67 @@
+"""F(qd) = Fv qd + Fd(qd) (BOOK.md section 1, 3.3.2): the one compiled home of the friction law.
+
+Per joint, joint side: viscous Fv_j qd_j and Coulomb Fd_j = Tc+_j for qd_j > 0, Tc-_j for
+qd_j < 0, 0 at rest (Tc- <= 0 <= Tc+). Simulation smooths the Coulomb step through zero
+velocity (``smooth_coulomb``) so that a fixed-step integrator does not chatter.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange, types
+
+from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, N_JOINTS, STRIDE, VISCOUS
+from armdyn.dynamics.spatial import MODEL, NUMBA_OPTIONS, VECTOR, states_status
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def coulomb(model: np.ndarray, j: int, rate: float) -> float:
+    """Fd_j(qd_j): Tc+ for qd > 0, Tc- for qd < 0, 0 at rest."""
+    b = HEADER + STRIDE * j
+    if rate > 0.0:
+        return model[b + COULOMB_POS]
+    if rate < 0.0:
+        return model[b + COULOMB_NEG]
+    return 0.0
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def joint_friction(model: np.ndarray, j: int, rate: float) -> float:
+    """F_j(qd_j) = Fv_j qd_j + Fd_j(qd_j)."""
+    return model[HEADER + STRIDE * j + VISCOUS] * rate + coulomb(model, j, rate)
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def smooth_coulomb(coulomb_table: np.ndarray, eps: np.ndarray, i: int, rate: float) -> float:
+    """Fd_i smoothed: tanh(qd / eps_i) Tc+ for qd >= 0, -tanh(qd / eps_i) Tc- for qd < 0; the exact
+    step for eps_i = 0. ``coulomb_table`` is (n, 2): Tc+, Tc- per joint."""
+    if eps[i] > 0.0:
+        x = rate / eps[i]
+        smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)  # tanh(20) = 1 - 8e-18
+        return smooth * coulomb_table[i, 0] if rate >= 0.0 else -smooth * coulomb_table[i, 1]
+    return coulomb_table[i, 0] if rate > 0.0 else coulomb_table[i, 1] if rate < 0.0 else 0.0
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def friction_core(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
+    for i in range(int(model[N_JOINTS])):
+        out[i] = joint_friction(model, i, qd[i])
+
+
+@njit(types.int64(MODEL, VECTOR, VECTOR), **NUMBA_OPTIONS)
+def friction_one(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    """F(qd) for one state; the status of states_status, or 4 when out has the wrong length."""
+    status = states_status(model, qd, qd, qd, 1)
+    if status == 0 and out.shape[0] != int(model[N_JOINTS]):
+        status = 4
+    if status == 0:
+        friction_core(model, qd, out)
+    return status
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
+def friction_batch(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
+    for s in prange(qd.shape[0]):
+        friction_core(model, qd[s], out[s])

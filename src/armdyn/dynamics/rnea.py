@@ -1,0 +1,283 @@
+"""Inverse dynamics by the recursive Newton-Euler algorithm, and its parts (Featherstone,
+Rigid Body Dynamics Algorithms, 2008, 5.3): tau = M qdd + Vm qd + F + G (+ J^T f_ext), and with
+flags the Coriolis vector V = Vm qd, N = V + F + G, or G alone.
+
+A one-state entry (``*_one``) checks its inputs and returns a status (spatial.states_status;
+4 for an output of the wrong shape); a batch entry runs states in parallel chunks, each with
+its own workspace (packed.workspace_size).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange, types
+
+from armdyn.dynamics.friction import coulomb
+from armdyn.dynamics.packed import (
+    ARMATURE,
+    FIRST_MOMENT,
+    GRAVITY,
+    GRAVITY_JOINT,
+    HEADER,
+    INERTIA,
+    KIND,
+    MASS,
+    N_JOINTS,
+    PARENT,
+    POSITION,
+    RNEA_FORCE,
+    RNEA_JOINT,
+    RNEA_VELOCITY,
+    ROTATION,
+    STRIDE,
+    TOOL_LINK,
+    TOOL_POSITION,
+    TOOL_ROTATION,
+    VISCOUS,
+    workspace_size,
+)
+from armdyn.dynamics.spatial import (
+    MODEL,
+    NUMBA_OPTIONS,
+    VECTOR,
+    add_force_to_parent,
+    force_to_parent,
+    joint_transform,
+    sin_cos,
+    states_status,
+)
+
+WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION, WITH_WRENCH = 1, 2, 4, 8, 16
+INVERSE_DYNAMICS = WITH_QDD | WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
+NONLINEAR = WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
+CORIOLIS = WITH_VELOCITY
+GRAVITY_ONLY = WITH_GRAVITY
+BATCH_CHUNKS = 64  # parallel chunks of a batch call, each with its own workspace
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def rnea_core(
+    model: np.ndarray,
+    work: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    qdd: np.ndarray,
+    wrench: np.ndarray,
+    flags: int,
+    tau: np.ndarray,
+) -> None:
+    """tau = M qdd + Vm qd + F + G (+ J^T wrench), the parts selected by ``flags`` (Featherstone 5.3).
+
+    Forward: v_i = X_i v_p + S qd_i, a_i = X_i a_p + S qdd_i + (X_i v_p) x S qd_i, a_0 = -g;
+    f_i = I_i a_i + v_i x* I_i v_i. Backward: tau_i = S^T f_i (+ armature qdd_i, friction),
+    f_p += X_i^T f_i. Written out in scalars: this is the hot loop of every simulation.
+    Workspace per joint at work[RNEA_JOINT i:]: R (9), p (3), v (6), a (6), f (6); the tool
+    wrench's transform after the last joint (RNEA_FIXED).
+    """
+    n = int(model[N_JOINTS])
+    gscale = 1.0 if (flags & WITH_GRAVITY) != 0 else 0.0
+    vscale = 1.0 if (flags & WITH_VELOCITY) != 0 else 0.0
+    ascale = 1.0 if (flags & WITH_QDD) != 0 else 0.0
+    gx, gy, gz = -gscale * model[GRAVITY], -gscale * model[GRAVITY + 1], -gscale * model[GRAVITY + 2]
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        r = b + ROTATION
+        parent = int(model[b])
+        p00, p01, p02 = model[r], model[r + 1], model[r + 2]
+        p10, p11, p12 = model[r + 3], model[r + 4], model[r + 5]
+        p20, p21, p22 = model[r + 6], model[r + 7], model[r + 8]
+        px, py, pz = model[b + POSITION], model[b + POSITION + 1], model[b + POSITION + 2]
+        qi = q[i]
+        if model[b + KIND] == 0.0:
+            s, c = sin_cos(qi)
+            r00 = p00 * c + p01 * s
+            r01 = p01 * c - p00 * s
+            r10 = p10 * c + p11 * s
+            r11 = p11 * c - p10 * s
+            r20 = p20 * c + p21 * s
+            r21 = p21 * c - p20 * s
+            prism = 0.0
+        else:
+            r00, r01, r10, r11, r20, r21 = p00, p01, p10, p11, p20, p21
+            px += qi * p02
+            py += qi * p12
+            pz += qi * p22
+            prism = 1.0
+        r02, r12, r22 = p02, p12, p22
+        o = RNEA_JOINT * i
+        work[o], work[o + 1], work[o + 2], work[o + 3], work[o + 4], work[o + 5] = r00, r01, r02, r10, r11, r12
+        work[o + 6], work[o + 7], work[o + 8], work[o + 9], work[o + 10], work[o + 11] = r20, r21, r22, px, py, pz
+        if parent >= 0:
+            op = RNEA_JOINT * parent + RNEA_VELOCITY
+            wx, wy, wz, vx, vy, vz = work[op], work[op + 1], work[op + 2], work[op + 3], work[op + 4], work[op + 5]
+            ax, ay, az, lx, ly, lz = (
+                work[op + 6],
+                work[op + 7],
+                work[op + 8],
+                work[op + 9],
+                work[op + 10],
+                work[op + 11],
+            )
+        else:
+            wx = wy = wz = vx = vy = vz = ax = ay = az = 0.0
+            lx, ly, lz = gx, gy, gz
+        # l + a x p, v + w x p
+        tx = vx + wy * pz - wz * py
+        ty = vy + wz * px - wx * pz
+        tz = vz + wx * py - wy * px
+        ux = lx + ay * pz - az * py
+        uy = ly + az * px - ax * pz
+        uz = lz + ax * py - ay * px
+        Wx = r00 * wx + r10 * wy + r20 * wz
+        Wy = r01 * wx + r11 * wy + r21 * wz
+        Wz = r02 * wx + r12 * wy + r22 * wz
+        Vx = r00 * tx + r10 * ty + r20 * tz
+        Vy = r01 * tx + r11 * ty + r21 * tz
+        Vz = r02 * tx + r12 * ty + r22 * tz
+        Ax = r00 * ax + r10 * ay + r20 * az
+        Ay = r01 * ax + r11 * ay + r21 * az
+        Az = r02 * ax + r12 * ay + r22 * az
+        Lx = r00 * ux + r10 * uy + r20 * uz
+        Ly = r01 * ux + r11 * uy + r21 * uz
+        Lz = r02 * ux + r12 * uy + r22 * uz
+        rate = vscale * qd[i]
+        acc = ascale * qdd[i]
+        rev = 1.0 - prism
+        # (X v_p) x S qd: revolute [W x e3; V x e3] qd, prismatic [0; W x e3] qd
+        Ax += rev * Wy * rate
+        Ay -= rev * Wx * rate
+        Az += rev * acc
+        Lx += (rev * Vy + prism * Wy) * rate
+        Ly -= (rev * Vx + prism * Wx) * rate
+        Lz += prism * acc
+        Wz += rev * rate
+        Vz += prism * rate
+        work[o + 12], work[o + 13], work[o + 14], work[o + 15], work[o + 16], work[o + 17] = Wx, Wy, Wz, Vx, Vy, Vz
+        work[o + 18], work[o + 19], work[o + 20], work[o + 21], work[o + 22], work[o + 23] = Ax, Ay, Az, Lx, Ly, Lz
+        mass = model[b + MASS]
+        hx, hy, hz = model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2]
+        k = b + INERTIA
+        i0, i1, i2, i3, i4, i5 = model[k], model[k + 1], model[k + 2], model[k + 3], model[k + 4], model[k + 5]
+        # momentum of v: kk = Io W + h x V ; ll = m V - h x W
+        kx = i0 * Wx + i1 * Wy + i2 * Wz + hy * Vz - hz * Vy
+        ky = i1 * Wx + i3 * Wy + i4 * Wz + hz * Vx - hx * Vz
+        kz = i2 * Wx + i4 * Wy + i5 * Wz + hx * Vy - hy * Vx
+        llx = mass * Vx - (hy * Wz - hz * Wy)
+        lly = mass * Vy - (hz * Wx - hx * Wz)
+        llz = mass * Vz - (hx * Wy - hy * Wx)
+        # f = I a + v x* momentum
+        work[o + 24] = i0 * Ax + i1 * Ay + i2 * Az + hy * Lz - hz * Ly + Wy * kz - Wz * ky + Vy * llz - Vz * lly
+        work[o + 25] = i1 * Ax + i3 * Ay + i4 * Az + hz * Lx - hx * Lz + Wz * kx - Wx * kz + Vz * llx - Vx * llz
+        work[o + 26] = i2 * Ax + i4 * Ay + i5 * Az + hx * Ly - hy * Lx + Wx * ky - Wy * kx + Vx * lly - Vy * llx
+        work[o + 27] = mass * Lx - (hy * Az - hz * Ay) + Wy * llz - Wz * lly
+        work[o + 28] = mass * Ly - (hz * Ax - hx * Az) + Wz * llx - Wx * llz
+        work[o + 29] = mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx
+    if (flags & WITH_WRENCH) != 0:
+        add_tool_wrench(model, work, RNEA_JOINT * int(model[TOOL_LINK]) + RNEA_FORCE, wrench, RNEA_JOINT * n)
+    for i in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * i
+        o = RNEA_JOINT * i
+        nx, ny, nz, fx, fy, fz = work[o + 24], work[o + 25], work[o + 26], work[o + 27], work[o + 28], work[o + 29]
+        prism = model[b + KIND]
+        value = prism * fz + (1.0 - prism) * nz + ascale * model[b + ARMATURE] * qdd[i]
+        if (flags & WITH_FRICTION) != 0:
+            value += model[b + VISCOUS] * qd[i]
+            value += coulomb(model, i, qd[i])
+        tau[i] = value
+        parent = int(model[b])
+        if parent >= 0:
+            r00, r01, r02, r10, r11, r12 = work[o], work[o + 1], work[o + 2], work[o + 3], work[o + 4], work[o + 5]
+            r20, r21, r22, px, py, pz = work[o + 6], work[o + 7], work[o + 8], work[o + 9], work[o + 10], work[o + 11]
+            moved = force_to_parent(
+                (r00, r01, r02, r10, r11, r12, r20, r21, r22), (px, py, pz), (nx, ny, nz), (fx, fy, fz)
+            )
+            op = RNEA_JOINT * parent + RNEA_FORCE
+            for k in range(6):
+                work[op + k] += moved[k]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def add_tool_wrench(model: np.ndarray, work: np.ndarray, f: int, wrench: np.ndarray, tmp: int) -> None:
+    """The body of the tool link must also supply the wrench [force; moment] that the tool
+    exerts on its surroundings, given in the tool frame about the tool point."""
+    for k in range(9):
+        work[tmp + k] = model[TOOL_ROTATION + k]
+    for k in range(3):
+        work[tmp + 9 + k] = model[TOOL_POSITION + k]
+        work[tmp + 12 + k] = wrench[3 + k]  # moment
+        work[tmp + 15 + k] = wrench[k]  # force
+    add_force_to_parent(work, tmp, work, tmp + 12, work, f)
+
+
+@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR, types.int64, VECTOR), **NUMBA_OPTIONS)
+def rnea_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> int:
+    """One state: the parts of tau selected by ``flags``; unused state arguments may repeat q."""
+    count = 3 if (flags & WITH_QDD) != 0 else 2 if (flags & (WITH_VELOCITY | WITH_FRICTION)) != 0 else 1
+    status = states_status(model, q, qd, qdd, count)
+    if status == 0 and tau.shape[0] != int(model[N_JOINTS]):
+        status = 4
+    if status == 0:
+        rnea_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, qd, qdd, qd, flags, tau)
+    return status
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
+def rnea_batch(
+    model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, wrench: np.ndarray, flags: int, tau: np.ndarray
+) -> None:
+    """Many states (B, n) at once, in parallel chunks; wrench (B, 6) or (1, 6) for all."""
+    count = q.shape[0]
+    chunks = min(count, BATCH_CHUNKS)
+    for chunk in prange(chunks):
+        work = np.empty(workspace_size(int(model[N_JOINTS])))
+        for s in range(chunk * count // chunks, (chunk + 1) * count // chunks):
+            e = s if wrench.shape[0] == count else 0
+            rnea_core(model, work, q[s], qd[s], qdd[s], wrench[e], flags, tau[s])
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def gravity_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, G: np.ndarray) -> None:
+    """G(q): RNEA with no motion (Featherstone 5.3). Each body's acceleration is then -g in its own
+    axes, a_i = [0; R_i^T l_p], its force f_i = [h x l_i; m l_i]; tau_i = S^T f_i and
+    f_p += X_i^T f_i. Workspace: GRAVITY_JOINT per joint: R, p | a | f."""
+    n = int(model[N_JOINTS])
+    for i in range(n):
+        b = HEADER + STRIDE * i
+        parent = int(model[b + PARENT])
+        o = GRAVITY_JOINT * i
+        joint_transform(model, i, q[i], work, o)
+        if parent >= 0:
+            op = GRAVITY_JOINT * parent + 12
+            lx, ly, lz = work[op], work[op + 1], work[op + 2]
+        else:
+            lx, ly, lz = -model[GRAVITY], -model[GRAVITY + 1], -model[GRAVITY + 2]
+        Lx = work[o] * lx + work[o + 3] * ly + work[o + 6] * lz
+        Ly = work[o + 1] * lx + work[o + 4] * ly + work[o + 7] * lz
+        Lz = work[o + 2] * lx + work[o + 5] * ly + work[o + 8] * lz
+        mass, hx, hy, hz = (
+            model[b + MASS],
+            model[b + FIRST_MOMENT],
+            model[b + FIRST_MOMENT + 1],
+            model[b + FIRST_MOMENT + 2],
+        )
+        work[o + 12], work[o + 13], work[o + 14] = Lx, Ly, Lz
+        work[o + 15], work[o + 16], work[o + 17] = hy * Lz - hz * Ly, hz * Lx - hx * Lz, hx * Ly - hy * Lx
+        work[o + 18], work[o + 19], work[o + 20] = mass * Lx, mass * Ly, mass * Lz
+    for i in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * i
+        o = GRAVITY_JOINT * i
+        G[i] = work[o + 20] if model[b + KIND] != 0.0 else work[o + 17]
+        parent = int(model[b + PARENT])
+        if parent >= 0:
+            add_force_to_parent(work, o, work, o + 15, work, GRAVITY_JOINT * parent + 15)
+
+
+@njit(types.int64(MODEL, VECTOR, VECTOR), **NUMBA_OPTIONS)
+def gravity_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
+    """G(q) for one state, by its own lean recursion."""
+    status = states_status(model, q, q, q, 1)
+    if status == 0 and out.shape[0] != int(model[N_JOINTS]):
+        status = 4
+    if status == 0:
+        gravity_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, out)
+    return status

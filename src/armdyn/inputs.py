@@ -1,0 +1,100 @@
+"""The one place where an argument becomes a checked array, or a ModelError that names it.
+
+One shape rule holds everywhere: a state argument is one state (n,) or a batch (..., n);
+the batch shapes of several arguments broadcast together; ``out`` is a writable
+C-contiguous float64 array of exactly the result's shape.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from armdyn.errors import ModelError
+
+
+def state(value: object, n: int, name: str = "q", where: str = "", complex_ok: bool = False) -> np.ndarray:
+    """A finite float array of shape (..., n) (complex kept when ``complex_ok``, for complex-step
+    derivatives of the Lagrange reference), or a ModelError naming the argument."""
+    try:
+        array = np.asarray(value, dtype=complex if complex_ok and np.iscomplexobj(value) else float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{name} must be an array of numbers of shape (..., {n}){where}") from None
+    if array.ndim == 0 or array.shape[-1] != n:
+        raise ModelError(f"{name} must have shape ({n},) or (..., {n}){where}, got {array.shape}")
+    if array.size and not _finite(array):
+        raise ModelError(f"{name} must be finite (it holds NaN or infinity){where}")
+    return array
+
+
+def _finite(array: np.ndarray) -> bool:
+    if np.iscomplexobj(array):
+        return bool(np.isfinite(array).all())
+    return bool(np.isfinite(array.min()) and np.isfinite(array.max()))  # NaN propagates through min and max
+
+
+def batch_states(
+    names: Sequence[str], values: Sequence[object], n: int, where: str = ""
+) -> tuple[tuple[int, ...], list[np.ndarray]]:
+    """Check and broadcast state arguments; return the batch shape and each as a (B, n) C array."""
+    arrays = [state(value, n, name, where) for name, value in zip(names, values, strict=True)]
+    try:
+        batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
+    except ValueError:
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
+        raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
+    shape = (*batch, n)
+    flat = [
+        np.require(a if a.shape == shape else np.broadcast_to(a, shape), np.float64, ["C", "W"]).reshape(-1, n)
+        for a in arrays
+    ]
+    return batch, flat
+
+
+def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
+    """``out`` checked against the result's shape, or a new array when out is None."""
+    if out is None:
+        return np.empty(shape)
+    if not (
+        isinstance(out, np.ndarray)
+        and out.shape == shape
+        and out.dtype == np.float64
+        and out.flags.c_contiguous
+        and out.flags.writeable
+    ):
+        got = getattr(out, "shape", type(out).__name__)
+        raise ModelError(f"out must be a writable C-contiguous float64 array of shape {shape}, got {got}")
+    return out
+
+
+def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
+    """A tool wrench [force; moment] (6,) or one per state (..., 6), as a (B, 6) C array."""
+    try:
+        wrench = np.asarray(f_ext, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError("f_ext must be a wrench [force; moment] of 6 numbers") from None
+    if wrench.ndim == 0 or wrench.shape[-1] != 6 or not np.all(np.isfinite(wrench)):
+        raise ModelError(f"f_ext must be a finite wrench [force; moment] of shape (..., 6), got {wrench.shape}")
+    if wrench.ndim > 1 and wrench.shape[:-1] != batch:
+        raise ModelError(f"f_ext batch shape {wrench.shape[:-1]} does not match the states' {batch}")
+    return np.require(np.broadcast_to(wrench, (*batch, 6)), np.float64, ["C", "W"]).reshape(-1, 6)
+
+
+def gains(value: object, name: str, n: int) -> np.ndarray:
+    """A non-negative scalar or n values, as (n,)."""
+    array = vector(value, name)
+    if array.shape[0] not in (1, n) or np.any(array < 0):
+        raise ModelError(f"gain {name} must be a non-negative scalar or {n} values, got {value!r}")
+    return np.broadcast_to(array, (n,)).copy()
+
+
+def vector(value: object, name: str) -> np.ndarray:
+    """A finite number or 1-D array of numbers, as a 1-D float array."""
+    try:
+        array = np.atleast_1d(np.asarray(value, dtype=float))
+    except (TypeError, ValueError):
+        raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}") from None
+    if array.ndim != 1 or not np.all(np.isfinite(array)):
+        raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}")
+    return array

@@ -1,0 +1,69 @@
+"""Robot: an ArmModel with its dynamics and kinematics as methods, the object users hold.
+
+The only place where methods meet data. Each method is a free function of armdyn.dynamics
+or armdyn.kinematics taking the arm first; the arm is packed for the compiled kernels once,
+when it is made, and never changes afterwards.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from armdyn import kinematics
+from armdyn.dynamics import api
+from armdyn.dynamics import regressor as parameterization
+from armdyn.dynamics.packed import pack
+from armdyn.model.arm import ArmModel
+
+
+class Robot(ArmModel):
+    """An arm: links in a kinematic tree with gravity, base and tool, friction, motors and limits,
+    with the robot equation M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md section 1).
+
+    Build one with ``Robot.from_dh``, ``armdyn.load_urdf`` or ``armdyn.models``; the
+    constructor takes a list of Links (see ArmModel). Every array method takes one state
+    (n,) or a batch (..., n) and returns the matching shape.
+
+    Attributes
+    ----------
+    packed : numpy.ndarray or None
+        The read-only model array the compiled kernels take (None for symbolic parameters).
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.packed: np.ndarray | None = None if self.is_symbolic else pack(self)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {key: value for key, value in self.__dict__.items() if key != "packed"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.packed = None if self.is_symbolic else pack(self)  # unpickled arrays come back writable
+
+    # dynamics (armdyn.dynamics.api)
+    inverse_dynamics = api.inverse_dynamics
+    forward_dynamics = api.forward_dynamics
+    inertia_matrix = api.inertia_matrix
+    inertia_matrix_dot = api.inertia_matrix_dot
+    coriolis_matrix = api.coriolis_matrix
+    coriolis_vector = api.coriolis_vector
+    gravity_vector = api.gravity_vector
+    friction = api.friction
+    nonlinear_terms = api.nonlinear_terms
+    kinetic_energy = api.kinetic_energy
+    potential_energy = api.potential_energy
+    energies = api.energies
+
+    # linear parameterization (armdyn.dynamics.regressor)
+    regressor = parameterization.regressor
+    parameters = parameterization.parameters
+
+    # kinematics (armdyn.kinematics)
+    link_transforms = kinematics.link_transforms
+    tool_pose = kinematics.tool_pose
+    jacobian = kinematics.jacobian
+    jacobian_dot = kinematics.jacobian_dot
+    link_transform_derivatives = kinematics.link_transform_derivatives
