@@ -27,4 +27,5 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_dynamics.py
 
 clean:
-	rm -rf $(VENV) build src/*.egg-info .pytest_cache .ruff_cache
+	rm -rf $(VENV) build src/*.egg-info .pytest_cache .ruff_cache "$${XDG_CACHE_HOME:-$$HOME/.cache}/armdyn"
+	find src tests benchmarks examples -name __pycache__ -prune -exec rm -rf {} +

@@ -54,27 +54,35 @@ def test_rr_arm_bounds_are_the_exact_extremes_of_example_3_3_1() -> None:
     assert inertia_bounds(arm, limits=BOOK_RANGE) == pytest.approx((3 - np.sqrt(8), 3 + np.sqrt(8)), abs=1e-6)
 
 
-def test_a_non_christoffel_factorization_fails_the_skew_row() -> None:
-    arm = ad.models.puma560()
-    christoffel = arm.coriolis_matrix
+def _same_arm(cls: type, arm: ad.Robot) -> ad.Robot:
+    """The arm as an instance of a test subclass of Robot (a Robot never changes once made)."""
+    options = {"name": arm.name, "gravity": arm.gravity, "base": arm.base, "tool": arm.tool}
+    return cls(arm.links, tool_link=arm.tool_link, configurations=arm.configurations, **options)
 
-    def other(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+
+class _NotChristoffel(ad.Robot):
+    def coriolis_matrix(self, q: np.ndarray, qd: np.ndarray, out: None = None) -> np.ndarray:
         """Vm + u w^T with w orthogonal to qd: the same V = Vm qd, but not the Christoffel form."""
         qd = np.asarray(qd, dtype=float)
         ones = np.ones_like(qd)
         w = ones - (np.sum(ones * qd, -1) / (np.sum(qd * qd, -1) + 1e-300))[..., None] * qd
-        return christoffel(q, qd) + np.einsum("...i,...j->...ij", np.roll(qd, 1, axis=-1), w)
+        return super().coriolis_matrix(q, qd) + np.einsum("...i,...j->...ij", np.roll(qd, 1, axis=-1), w)
 
-    arm.coriolis_matrix = other  # a deliberately wrong Vm, set on this instance only
+
+class _Indefinite(ad.Robot):
+    def inertia_matrix(self, q: np.ndarray, out: None = None) -> np.ndarray:
+        return -super().inertia_matrix(q)  # forced past validation, in this test only
+
+
+def test_a_non_christoffel_factorization_fails_the_skew_row() -> None:
+    arm = _same_arm(_NotChristoffel, ad.models.puma560())
     report = check(arm, samples=40, only=("coriolis", "skew"))
     assert not report.row("skew symmetry").holds
     assert not report.all_hold
 
 
 def test_an_indefinite_inertia_fails_the_positive_definite_row() -> None:
-    arm = ad.models.scara()
-    honest = arm.inertia_matrix
-    arm.inertia_matrix = lambda q, out=None: -honest(q)  # forced past validation, in this test only
+    arm = _same_arm(_Indefinite, ad.models.scara())
     report = check(arm, samples=30, only=("inertia",))
     assert not report.row("positive definite").holds
     assert not report.all_hold

@@ -49,6 +49,29 @@ def two_link_planar(
     """Example 3.2-2: the two-link planar elbow (RR) arm, point masses at the link ends.
 
     Standard DH: a1, a2, alpha = 0; the arm moves in the vertical x-y plane, gravity -g y.
+    Configurations: qz (zero), qh (arm up, q = [pi/2, 0]).
+
+    Parameters
+    ----------
+    m1, m2 : float, optional
+        The point masses at the ends of links 1 and 2 (kg, default 1).
+    a1, a2 : float, optional
+        The link lengths (m, default 1).
+    g : float, optional
+        The acceleration of gravity (m/s^2, default 9.8).
+    symbolic : bool, optional
+        True replaces all five parameters by the positive SymPy symbols m1, m2, a1, a2, g,
+        for closed-form derivation (default False).
+
+    Returns
+    -------
+    Robot
+        The arm, named "two_link_planar".
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a mass is negative or a parameter is not finite.
     """
     if symbolic:
         m1, m2, a1, a2, g = _symbols("m1 m2 a1 a2 g")
@@ -73,6 +96,25 @@ def polar_rp(m: object = 1.0, g: object = 9.8, symbolic: bool = False) -> Robot:
     the extension along the arm; the mass sits at the end of the prismatic link. The
     extension is limited to [0.1, 1.5] m: at r = 0 the point mass would sit on the axis,
     where M = diag(m r^2, m) is singular.
+
+    Parameters
+    ----------
+    m : float, optional
+        The point mass (kg, default 1).
+    g : float, optional
+        The acceleration of gravity (m/s^2, default 9.8).
+    symbolic : bool, optional
+        True replaces m and g by the positive SymPy symbols m and g (default False).
+
+    Returns
+    -------
+    Robot
+        The arm, named "polar_rp", with the configuration qz = [0, 1].
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a mass is negative or a parameter is not finite.
     """
     if symbolic:
         (m,) = _symbols("m,")
@@ -102,6 +144,28 @@ def cylindrical(J: object = 1.0, m1: object = 1.0, m2: object = 1.0, g: object =
     The base turns about the vertical z axis with inertia J (a massless disc, so that J
     alone appears); the vertical stage (mass m1) slides along z by h; the radial stage
     (point mass m2) slides out along the arm by r. Gravity -g z.
+
+    Parameters
+    ----------
+    J : float, optional
+        The inertia of the base about the vertical axis (kg m^2, default 1).
+    m1, m2 : float, optional
+        The masses of the vertical and of the radial stage (kg, default 1).
+    g : float, optional
+        The acceleration of gravity (m/s^2, default 9.8).
+    symbolic : bool, optional
+        True replaces J, m1, m2 and g by positive SymPy symbols of those names (default
+        False).
+
+    Returns
+    -------
+    Robot
+        The arm, named "cylindrical", with the configuration qz = [0, 0, 1].
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a mass or J is negative or a parameter is not finite.
     """
     if symbolic:
         J, m1, m2, g = _symbols("J m1 m2 g")
@@ -136,6 +200,11 @@ def puma560() -> Robot:
     and 3 break the triangle inequality (link 1 is given only its Iyy about the vertical
     axis); they are kept as published so that results match the literature.
     Configurations: qz (zero), qr (ready, arm up), qs (stretched), qn (nominal).
+
+    Returns
+    -------
+    Robot
+        The arm, named "puma560": 6 revolute joints with limits, motors and friction.
     """
     deg = _PI / 180
     table = [
@@ -178,6 +247,11 @@ def stanford() -> Robot:
     As published, link 5's inertia breaks the triangle inequality and some centres of
     mass lie far outside the links (-6.447 m for link 3); they are kept as published.
     qz puts the prismatic joint at 0, outside its limits, as the Toolbox does.
+
+    Returns
+    -------
+    Robot
+        The arm, named "stanford": joints RRPRRR with limits, no friction.
     """
     deg, inch = _PI / 180, 0.0254
     table = [
@@ -211,6 +285,12 @@ def scara() -> Robot:
     Standard DH (a1 = 0.325 m, a2 = 0.275 m, d1 = 0.387 m, alpha2 = pi so the quill
     moves down). The masses and inertias are representative values for an arm of this
     size (slender links, a 2 kg quill), not a manufacturer's data sheet.
+    Configurations: qz (zero), qr.
+
+    Returns
+    -------
+    Robot
+        The arm, named "scara": joints RRPR with limits and friction.
     """
     deg = _PI / 180
     table = [
@@ -243,12 +323,34 @@ _CATALOG: dict[str, Callable[[], Robot]] = {
 
 
 def names() -> list[str]:
-    """The names of the built-in arms."""
+    """The names of the built-in arms.
+
+    Returns
+    -------
+    list of str
+        The names ``load`` takes, the book's examples first.
+    """
     return list(_CATALOG)
 
 
 def load(name: str) -> Robot:
-    """A built-in arm by name (see names())."""
+    """A built-in arm by name (see names()).
+
+    Parameters
+    ----------
+    name : str
+        One of ``names()``, in any case.
+
+    Returns
+    -------
+    Robot
+        A new arm with its default (numeric) parameters.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When no built-in arm has that name.
+    """
     try:
         return _CATALOG[name.lower()]()
     except KeyError:

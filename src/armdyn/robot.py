@@ -9,8 +9,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from armdyn import kinematics
 from armdyn.dynamics import api
 from armdyn.dynamics import regressor as parameterization
@@ -34,14 +32,14 @@ class Robot(ArmModel):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self.packed: np.ndarray | None = None if self.is_symbolic else pack(self)
+        object.__setattr__(self, "packed", None if self.is_symbolic else pack(self))
 
     def __getstate__(self) -> dict[str, Any]:
         return {key: value for key, value in self.__dict__.items() if key != "packed"}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        self.packed = None if self.is_symbolic else pack(self)  # unpickled arrays come back writable
+        self.__dict__["packed"] = None if self.is_symbolic else pack(self)  # unpickled arrays come back writable
 
     # dynamics (armdyn.dynamics.api)
     inverse_dynamics = api.inverse_dynamics

@@ -101,7 +101,7 @@ class Result:
 # ----- the compiled loop ------------------------------------------------------------------------------
 @njit(**NUMBA_OPTIONS)
 def _accelerations(
-    plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, w: np.ndarray, q: np.ndarray, qd: np.ndarray,
+    plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
     tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
 ) -> None:  # fmt: skip
     """qdd = M^-1 (tau - N - Fd_smooth) by CRBA, RNEA and a Cholesky solve.
@@ -109,7 +109,7 @@ def _accelerations(
     For the arms of this library (n up to about ten) this is faster than the O(n)
     articulated-body algorithm and equal to it to rounding; ``tau`` carries the disturbance.
     """
-    mass_matrix_and_bias(plant, w, q, qd, M, N)
+    mass_matrix_and_bias(plant, work, q, qd, M, N)
     _solve(M, N, tau, coulomb, eps, qd, qdd)
 
 
@@ -162,8 +162,8 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     x, tau_held, e_int = state
     T_, Q, QD, QDD, TAU, QDES = record
     n = q0.shape[0]
-    w = np.empty(workspace_size(n))
-    wc = np.empty(workspace_size(n))
+    work = np.empty(workspace_size(n))
+    control_work = np.empty(workspace_size(n))
     goal = np.empty((3, n))
     q, qd = x[:n].copy(), x[n:].copy()
     stages = np.empty((8, n))  # the RK4 slopes of q and qd
@@ -183,29 +183,29 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
         if kind > 0 and k % hold == 0:
             for i in range(n):
                 e_int[i] += (goal[0, i] - q[i]) * dt * hold
-            control_law(kind, model, model_coulomb, eps, wc, q, qd, goal, e_int, gain, u, M_, Nv, tau_held)
+            control_law(kind, model, model_coulomb, eps, control_work, q, qd, goal, e_int, gain, u, M_, Nv, tau_held)
         for i in range(n):
             applied[i] = tau_held[i] - disturbance[i]
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
             _solve(Mp, Nv, applied, coulomb, eps, qd, k1v)
         else:
-            _accelerations(plant_model, coulomb, eps, w, q, qd, applied, Mp, net, k1v)
+            _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, k1v)
         T_[k] = t
         for i in range(n):
             Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], goal[0, i]
         for i in range(n):
             k1q[i] = qd[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k1q[i], qd[i] + 0.5 * dt * k1v[i]
-        _accelerations(plant_model, coulomb, eps, w, qs, vs, applied, Mp, net, k2v)
+        _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k2v)
         for i in range(n):
             k2q[i] = vs[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k2q[i], qd[i] + 0.5 * dt * k2v[i]
-        _accelerations(plant_model, coulomb, eps, w, qs, vs, applied, Mp, net, k3v)
+        _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k3v)
         for i in range(n):
             k3q[i] = vs[i]
             qs[i], vs[i] = q[i] + dt * k3q[i], qd[i] + dt * k3v[i]
-        _accelerations(plant_model, coulomb, eps, w, qs, vs, applied, Mp, net, k4v)
+        _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k4v)
         for i in range(n):
             k4q[i] = vs[i]
             q[i] += dt / 6.0 * (k1q[i] + 2.0 * k2q[i] + 2.0 * k3q[i] + k4q[i])

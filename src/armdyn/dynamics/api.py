@@ -31,9 +31,11 @@ from armdyn.dynamics.rnea import (
     INVERSE_DYNAMICS,
     NONLINEAR,
     WITH_WRENCH,
+    coriolis_vector_one,
     gravity_one,
+    inverse_dynamics_one,
+    nonlinear_one,
     rnea_batch,
-    rnea_one,
 )
 from armdyn.dynamics.rnea_blocks import rnea_blocks
 from armdyn.errors import ModelError
@@ -129,7 +131,7 @@ def inverse_dynamics(
     if f_ext is None:
         tau = _empty(arm.n) if out is None else out
         try:
-            if rnea_one(arm.packed, q, qd, qdd, INVERSE_DYNAMICS, tau) == 0:
+            if inverse_dynamics_one(arm.packed, q, qd, qdd, tau) == 0:
                 return tau
         except TypeError:  # not one state of 1-D float64 arrays: the general path
             pass
@@ -160,7 +162,7 @@ def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     """
     result = _empty(arm.n) if out is None else out
     try:
-        if rnea_one(arm.packed, q, qd, qd, NONLINEAR, result) == 0:
+        if nonlinear_one(arm.packed, q, qd, result) == 0:
             return result
     except TypeError:
         pass
@@ -191,7 +193,7 @@ def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     """
     result = _empty(arm.n) if out is None else out
     try:
-        if rnea_one(arm.packed, q, qd, qd, CORIOLIS, result) == 0:
+        if coriolis_vector_one(arm.packed, q, qd, result) == 0:
             return result
     except TypeError:
         pass

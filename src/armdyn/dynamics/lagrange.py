@@ -16,7 +16,23 @@ from armdyn.model import ArmModel
 
 
 def pseudo_inertias(robot: ArmModel) -> np.ndarray:
-    """The pseudo-inertia matrices J_i of all links, in their link frames, (n, 4, 4) (3.2.27)."""
+    """The pseudo-inertia matrices J_i of all links, in their link frames, (n, 4, 4) (3.2.27).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+
+    Returns
+    -------
+    numpy.ndarray
+        J_i, float, (n, 4, 4), in link order; J_i e4 = [m_i r_i; m_i].
+
+    Raises
+    ------
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     return np.stack([link.inertial.pseudo_inertia() for link in robot.links]).astype(float)
 
 
@@ -26,7 +42,28 @@ def _homogeneous_gravity(robot: ArmModel) -> np.ndarray:
 
 
 def inertia_matrix(robot: ArmModel, q: np.ndarray) -> np.ndarray:
-    """M(q): m_jk = sum_i trace(dT_i/dq_j J_i (dT_i/dq_k)^T) (3.2.30), plus diag(G^2 Jm)."""
+    """M(q): m_jk = sum_i trace(dT_i/dq_j J_i (dT_i/dq_k)^T) (3.2.30), plus diag(G^2 Jm).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
+        derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        M, (..., n, n), symmetric; complex when ``q`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     dT = link_transform_derivatives(robot, q)
     M = np.einsum("...ijab,ibc,...ikac->...jk", dT, pseudo_inertias(robot), dT)
     return M + np.diag(robot.reflected_inertia)
@@ -37,6 +74,26 @@ def second_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
 
     Shape (..., n, n, n, 4, 4) indexed [i, j, l]; zero unless both j and l move link i.
     Parents come before children, so on one path to the root the smaller index is nearer it.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
+        derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        d2T_i/(dq_j dq_l), (..., n, n, n, 4, 4) indexed [..., i, j, l, :, :]; complex when ``q`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
     S, T = twist_generators(robot, q)
     n = robot.n
@@ -49,7 +106,29 @@ def second_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
 
 
 def inertia_matrix_partials(robot: ArmModel, q: np.ndarray) -> np.ndarray:
-    """dM/dq_l, shape (..., n, n, n) indexed [l, j, k] (differentiating 3.2.30)."""
+    """dM/dq_l, shape (..., n, n, n) indexed [l, j, k] (differentiating 3.2.30).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
+        derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        dm_jk/dq_l, (..., n, n, n) indexed [..., l, j, k], symmetric in j and k; complex when
+        ``q`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     dT = link_transform_derivatives(robot, q)
     d2T = second_derivatives(robot, q)
     J = pseudo_inertias(robot)
@@ -58,45 +137,201 @@ def inertia_matrix_partials(robot: ArmModel, q: np.ndarray) -> np.ndarray:
 
 
 def inertia_matrix_dot(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """Mdot = sum_l dM/dq_l qd_l."""
+    """Mdot = sum_l dM/dq_l qd_l.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
+        together. Complex values are kept (complex-step derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        Mdot, (..., n, n) for the broadcast batch shape; complex when a state is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
+    ValueError
+        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     qd = as_state(robot, qd, "qd")
     return np.einsum("...ljk,...l->...jk", inertia_matrix_partials(robot, q), qd)
 
 
 def christoffel_symbols(robot: ArmModel, q: np.ndarray) -> np.ndarray:
-    """v_ijk = 1/2 (dm_kj/dq_i + dm_ki/dq_j - dm_ij/dq_k) (3.3.47), shape (..., n, n, n)."""
+    """v_ijk = 1/2 (dm_kj/dq_i + dm_ki/dq_j - dm_ij/dq_k) (3.3.47), shape (..., n, n, n).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
+        derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        v_ijk, (..., n, n, n) indexed [..., i, j, k], symmetric in i and j; complex when ``q`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     dM = inertia_matrix_partials(robot, q)  # [l, j, k] = dm_jk/dq_l
     return 0.5 * (np.einsum("...ikj->...ijk", dM) + np.einsum("...jki->...ijk", dM) - np.einsum("...kij->...ijk", dM))
 
 
 def coriolis_matrix(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """The Christoffel form Vm(q, qd): (Vm)_kj = sum_i v_ijk qd_i (3.3.48)."""
+    """The Christoffel form Vm(q, qd): (Vm)_kj = sum_i v_ijk qd_i (3.3.48).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
+        together. Complex values are kept (complex-step derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        Vm, (..., n, n) indexed [..., k, j] for the broadcast batch shape; complex when a state is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
+    ValueError
+        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     qd = as_state(robot, qd, "qd")
     return np.einsum("...ijk,...i->...kj", christoffel_symbols(robot, q), qd)
 
 
 def coriolis_vector(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """V(q, qd) = Vm(q, qd) qd = Mdot qd - 1/2 d/dq (qd^T M qd) (3.2.42)."""
+    """V(q, qd) = Vm(q, qd) qd = Mdot qd - 1/2 d/dq (qd^T M qd) (3.2.42).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
+        together. Complex values are kept (complex-step derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        V, (..., n) for the broadcast batch shape; complex when a state is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
+    ValueError
+        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     qd = as_state(robot, qd, "qd")
     return np.einsum("...kj,...j->...k", coriolis_matrix(robot, q, qd), qd)
 
 
 def potential_energy(robot: ArmModel, q: np.ndarray) -> np.ndarray:
-    """P(q) = -sum_i g^T T_i J_i e4 = -sum_i m_i g^T T_i r_i (3.2.35, 3.2.36)."""
+    """P(q) = -sum_i g^T T_i J_i e4 = -sum_i m_i g^T T_i r_i (3.2.35, 3.2.36).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
+        derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        P, shape (...): a NumPy scalar for one state; complex when ``q`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     T = twist_generators(robot, q)[1]
     first_moments = pseudo_inertias(robot)[:, :, 3]  # J_i e4 = [m r; m]
     return -np.einsum("a,...iab,ib->...", _homogeneous_gravity(robot), T, first_moments)
 
 
 def gravity_vector(robot: ArmModel, q: np.ndarray) -> np.ndarray:
-    """G_j(q) = dP/dq_j = -sum_i g^T (dT_i/dq_j) J_i e4 (3.2.43)."""
+    """G_j(q) = dP/dq_j = -sum_i g^T (dT_i/dq_j) J_i e4 (3.2.43).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
+        derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        G, (..., n); complex when ``q`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     dT = link_transform_derivatives(robot, q)
     first_moments = pseudo_inertias(robot)[:, :, 3]
     return -np.einsum("a,...ijab,ib->...j", _homogeneous_gravity(robot), dT, first_moments)
 
 
 def kinetic_energy(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """K = 1/2 qd^T M(q) qd (3.2.29)."""
+    """K = 1/2 qd^T M(q) qd (3.2.29).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
+        together. Complex values are kept (complex-step derivatives).
+
+    Returns
+    -------
+    numpy.ndarray
+        K, shape (...) for the broadcast batch shape: a NumPy scalar for one state; complex when
+        a state is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
+    ValueError
+        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     qd = as_state(robot, qd, "qd")
     return 0.5 * np.einsum("...j,...jk,...k->...", qd, inertia_matrix(robot, q), qd)
 
@@ -105,6 +340,25 @@ def friction(robot: ArmModel, qd: np.ndarray) -> np.ndarray:
     """F(qd) = Fv qd + Fd(qd) (3.3.2): viscous G^2 B qd plus Coulomb |G| Tc+ or |G| Tc-.
 
     At qd_i = 0 the Coulomb term is zero (sgn 0 = 0).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    qd : array_like
+        Joint velocities, (n,) or a batch (..., n). Complex values are kept, the Coulomb branch
+        then chosen by NumPy's ordering of complex numbers (real part first); the Coulomb term
+        is not differentiable at qd_i = 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        F, (..., n); complex when ``qd`` is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
     """
     qd = as_state(robot, qd, "qd")
     coulomb = robot.coulomb_friction
@@ -112,7 +366,32 @@ def friction(robot: ArmModel, qd: np.ndarray) -> np.ndarray:
 
 
 def inverse_dynamics(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-    """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (3.3.1 without disturbance)."""
+    """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (3.3.1 without disturbance).
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
+    q, qd, qdd : array_like
+        Joint positions, velocities and accelerations, (n,) or a batch (..., n); the batch
+        shapes broadcast together. Complex values are kept: with a complex step i h in q, the
+        imaginary part of tau over h is d tau/dq (as statespace.linearize uses it, on the arm
+        without friction).
+
+    Returns
+    -------
+    numpy.ndarray
+        tau, (..., n) for the broadcast batch shape; complex when a state is.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``q``, ``qd`` or ``qdd`` is not numbers of shape (..., n) or holds NaN or infinity.
+    ValueError
+        When the batch shapes of the states do not broadcast together.
+    TypeError
+        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+    """
     qdd = as_state(robot, qdd, "qdd")
     return (
         np.einsum("...jk,...k->...j", inertia_matrix(robot, q), qdd)

@@ -47,9 +47,10 @@ def parameter_names(robot: ArmModel) -> list[str]:
 def parameters(robot: ArmModel) -> np.ndarray:
     """phi, the parameter vector with W(q, qd, qdd) phi = inverse_dynamics(q, qd, qdd).
 
-    The linear parameterization of Table 3.3.1, property 9. Per link [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz], the inertia about the
-    link-frame origin in link-frame axes; then per joint [Fv, Fc+, Fc-, Ia], the joint-side
-    viscous and Coulomb friction and the reflected motor inertia G^2 Jm.
+    The linear parameterization of Table 3.3.1, property 9. Per link [m, m cx, m cy, m cz,
+    Ixx, Ixy, Iyy, Ixz, Iyz, Izz], the inertia about the link-frame origin in link-frame
+    axes; then per joint [Fv, Fc+, Fc-, Ia], the joint-side viscous and Coulomb friction
+    and the reflected motor inertia G^2 Jm.
 
     Parameters
     ----------

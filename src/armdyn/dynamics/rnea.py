@@ -209,16 +209,36 @@ def add_tool_wrench(model: np.ndarray, work: np.ndarray, f: int, wrench: np.ndar
     add_force_to_parent(work, tmp, work, tmp + 12, work, f)
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR, types.int64, VECTOR), **NUMBA_OPTIONS)
-def rnea_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> int:
-    """One state: the parts of tau selected by ``flags``; unused state arguments may repeat q."""
-    count = 3 if (flags & WITH_QDD) != 0 else 2 if (flags & (WITH_VELOCITY | WITH_FRICTION)) != 0 else 1
+@njit(inline="always", **NUMBA_OPTIONS)
+def rnea_checked(
+    model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, count: int, tau: np.ndarray
+) -> int:
+    """One state: check the first ``count`` states and tau's length, then the parts of tau that
+    ``flags`` selects; returns the status (0 when computed)."""
     status = states_status(model, q, qd, qdd, count)
     if status == 0 and tau.shape[0] != int(model[N_JOINTS]):
         status = 4
     if status == 0:
         rnea_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, qd, qdd, qd, flags, tau)
     return status
+
+
+@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+def inverse_dynamics_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, tau: np.ndarray) -> int:
+    """tau = M qdd + Vm qd + F + G for one state."""
+    return rnea_checked(model, q, qd, qdd, INVERSE_DYNAMICS, 3, tau)
+
+
+@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+def nonlinear_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    """N = Vm qd + F + G for one state."""
+    return rnea_checked(model, q, qd, qd, NONLINEAR, 2, out)
+
+
+@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+def coriolis_vector_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
+    """V = Vm qd for one state."""
+    return rnea_checked(model, q, qd, qd, CORIOLIS, 2, out)
 
 
 @njit(parallel=True, **NUMBA_OPTIONS)

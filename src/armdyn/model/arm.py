@@ -54,8 +54,8 @@ class Link:
     Raises
     ------
     armdyn.ModelError
-        When the friction, motor inertia or gear ratio is not finite or breaks its sign rule
-        (B >= 0, Tc+ >= 0 >= Tc-, Jm >= 0, G != 0), or when lower > upper or a limit is NaN.
+        When B, Jm or G is not finite, Tc is not two finite numbers, a sign rule is broken
+        (B >= 0, Tc+ >= 0 >= Tc-, Jm >= 0, G != 0), or the limits have lower > upper or NaN.
     """
 
     name: str
@@ -151,6 +151,7 @@ class ArmModel:
         description: str = "",
     ) -> None:
         self._links = tuple(links)
+        self.n = len(self._links)  # a plain attribute: read in every compiled call
         self.name = name
         self.description = description
         if not self._links:
@@ -187,6 +188,12 @@ class ArmModel:
         self._dh = dict(dh) if dh else None
         self._parents = _frozen(np.array([link.parent for link in self._links], dtype=int))
         self._ancestors = _frozen(_ancestor_table(self._parents))
+        self._sealed = True
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if self.__dict__.get("_sealed"):
+            raise AttributeError(f"{type(self).__name__} '{self.name}' is immutable: replace(...) gives a changed copy")
+        object.__setattr__(self, name, value)
 
     # ----- construction -------------------------------------------------------------
     @classmethod
@@ -382,11 +389,6 @@ class ArmModel:
     @property
     def links(self) -> tuple[Link, ...]:
         return self._links
-
-    @property
-    def n(self) -> int:
-        """Number of joints (degrees of freedom)."""
-        return len(self._links)
 
     @property
     def joint_names(self) -> list[str]:

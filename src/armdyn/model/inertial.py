@@ -38,6 +38,21 @@ def inertia_from_vector(values: object) -> np.ndarray:
     """A 3x3 inertia tensor from 3 principal moments, 6 values or a 3x3 matrix.
 
     Six values are [Ixx, Iyy, Izz, Ixy, Iyz, Ixz], the Robotics Toolbox order.
+
+    Parameters
+    ----------
+    values : array_like
+        3 moments (a diagonal tensor), 6 values or a 3x3 matrix.
+
+    Returns
+    -------
+    numpy.ndarray
+        The tensor, (3, 3) (a 3x3 input is returned as given).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``values`` has another shape.
     """
     array = np.asarray(values)
     if array.shape == (3, 3):
@@ -52,14 +67,34 @@ def inertia_from_vector(values: object) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Inertial:
-    """Mass properties of a rigid link.
+    """Mass properties of a rigid link (BOOK.md section 2, 3.2.20 to 3.2.27).
 
-    mass: kg; com: centre of mass in the link frame (m); inertia: 3x3 tensor about the
-    centre of mass, axes of the link frame (kg m^2). ``name`` names the link in error
-    messages. ``strict=False`` accepts (with a warning) an inertia whose principal moments
-    break the triangle inequality, as CAD-exported URDFs sometimes carry; negative mass,
-    non-symmetric or indefinite tensors are always refused. SymPy expressions are accepted
-    as parameters (for closed-form work); numeric checks apply to numeric values only.
+    SymPy expressions are accepted as parameters (for closed-form work); numeric checks
+    apply to numeric values only. ``a + b`` joins two bodies described in one frame.
+
+    Parameters
+    ----------
+    mass : float, optional
+        Mass (kg), finite and >= 0 (default 0).
+    com : array_like, optional
+        Centre of mass in the link frame (m), 3 values (default the origin).
+    inertia : array_like, optional
+        Inertia tensor about the centre of mass, axes of the link frame (kg m^2): 3 moments,
+        6 values [Ixx Iyy Izz Ixy Iyz Ixz] or 3x3 (default zero).
+    name : str, optional
+        Names the link in error messages (default "link").
+    strict : bool, optional
+        True (default) refuses principal moments that break the triangle inequality; False
+        accepts them with a warning, as CAD-exported URDFs sometimes carry. Negative mass,
+        non-symmetric or indefinite tensors are always refused.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the mass is negative or not finite, the centre of mass is not 3 finite numbers,
+        the inertia is not 3, 6 or 3x3 finite values, is not symmetric or not positive
+        semi-definite, or (with ``strict``) its principal moments break the triangle
+        inequality; the message names the link.
     """
 
     mass: object = 0.0
@@ -126,13 +161,25 @@ class Inertial:
         return self.mass * self.com
 
     def inertia_about_origin(self) -> np.ndarray:
-        """Inertia about the link-frame origin, by the parallel-axis theorem."""
+        """Inertia about the link-frame origin, by the parallel-axis theorem.
+
+        Returns
+        -------
+        numpy.ndarray
+            I + m ((c . c) I3 - c c^T), (3, 3), in link-frame axes.
+        """
         c = self.com
         shift = (c @ c) * np.eye(3) - np.outer(c, c)
         return self.inertia + self.mass * shift
 
     def pseudo_inertia(self) -> np.ndarray:
-        """The 4x4 pseudo-inertia matrix J = integral of r r^T dm, r = [x y z 1] (3.2.27)."""
+        """The 4x4 pseudo-inertia matrix J = integral of r r^T dm, r = [x y z 1] (3.2.27).
+
+        Returns
+        -------
+        numpy.ndarray
+            J, (4, 4): the second moments, the first moment m c and the mass m.
+        """
         inertia = self.inertia_about_origin()
         second_moment = np.trace(inertia) / 2 * np.eye(3) - inertia
         pseudo = np.empty((4, 4), dtype=self.com.dtype)
@@ -142,7 +189,18 @@ class Inertial:
         return pseudo
 
     def transformed(self, transform: np.ndarray) -> Inertial:
-        """The same body described in a frame F, given transform = pose of this frame in F."""
+        """The same body described in a frame F, given transform = pose of this frame in F.
+
+        Parameters
+        ----------
+        transform : numpy.ndarray
+            The pose of the body's current frame in F, a 4x4 homogeneous transform.
+
+        Returns
+        -------
+        Inertial
+            The body with its centre of mass and inertia expressed in F.
+        """
         rotation, translation = transform[:3, :3], transform[:3, 3]
         return _trusted(self.mass, rotation @ self.com + translation, rotation @ self.inertia @ rotation.T, self.name)
 

@@ -38,16 +38,52 @@ def _homogeneous(rotation: object, translation: object) -> np.ndarray:
 
 
 def rot_x(angle: object) -> np.ndarray:
+    """Rx(angle), the 4x4 rotation about x.
+
+    Parameters
+    ----------
+    angle : float
+        The angle (rad); a SymPy expression gives a SymPy (object) matrix.
+
+    Returns
+    -------
+    numpy.ndarray
+        The homogeneous transform, (4, 4).
+    """
     c, s = _cos_sin(angle)
     return _homogeneous([[1, 0, 0], [0, c, -s], [0, s, c]], [0, 0, 0])
 
 
 def rot_z(angle: object) -> np.ndarray:
+    """Rz(angle), the 4x4 rotation about z.
+
+    Parameters
+    ----------
+    angle : float
+        The angle (rad); a SymPy expression gives a SymPy (object) matrix.
+
+    Returns
+    -------
+    numpy.ndarray
+        The homogeneous transform, (4, 4).
+    """
     c, s = _cos_sin(angle)
     return _homogeneous([[c, -s, 0], [s, c, 0], [0, 0, 1]], [0, 0, 0])
 
 
 def trans(x: object = 0, y: object = 0, z: object = 0) -> np.ndarray:
+    """The 4x4 translation by (x, y, z).
+
+    Parameters
+    ----------
+    x, y, z : float, optional
+        The offsets (m, default 0); SymPy expressions give a SymPy (object) matrix.
+
+    Returns
+    -------
+    numpy.ndarray
+        The homogeneous transform, (4, 4).
+    """
     return _homogeneous(np.eye(3), np.array([x, y, z], dtype=object if _any_symbolic(x, y, z) else float))
 
 
@@ -56,7 +92,25 @@ def _any_symbolic(*values: object) -> bool:
 
 
 def joint_kind(kind: str, where: str = "joint") -> str:
-    """Normalise a joint kind name ('R', 'revolute', 'P', 'prismatic')."""
+    """Normalise a joint kind name ('R', 'revolute', 'P', 'prismatic').
+
+    Parameters
+    ----------
+    kind : str
+        'R', 'revolute', 'continuous', 'P' or 'prismatic', in any case.
+    where : str, optional
+        What to name in the error message (default "joint").
+
+    Returns
+    -------
+    str
+        "revolute" or "prismatic".
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``kind`` is none of these.
+    """
     try:
         return _KIND_ALIASES[str(kind).lower()]
     except KeyError:
@@ -65,7 +119,29 @@ def joint_kind(kind: str, where: str = "joint") -> str:
 
 @dataclass(frozen=True, eq=False)
 class Joint:
-    """A revolute or prismatic joint: fixed placement, unit axis, link-frame offset."""
+    """A revolute or prismatic joint: fixed placement, unit axis, link-frame offset.
+
+    The link frame is T_parent @ placement @ motion(q) @ frame_offset (Appendix A).
+
+    Parameters
+    ----------
+    kind : str, optional
+        "revolute" (default) or "prismatic" ('R', 'P' and 'continuous' are accepted).
+    placement : array_like, optional
+        The joint frame in the parent's link frame, a 4x4 rigid transform (default identity).
+    axis : array_like, optional
+        The unit axis of the motion in the joint frame (default z, [0, 0, 1]).
+    frame_offset : array_like, optional
+        The link frame in the moved joint frame, a 4x4 rigid transform (default identity).
+    name : str, optional
+        Names the joint in error messages (default "joint").
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the kind is unknown, ``placement`` or ``frame_offset`` is not a finite 4x4
+        rigid homogeneous transform, or ``axis`` is not a unit 3-vector.
+    """
 
     kind: str = REVOLUTE
     placement: np.ndarray = field(default_factory=lambda: np.eye(4))
@@ -115,6 +191,27 @@ def dh_joint(
     (revolute) or d (prismatic), moving about/along z_{i-1}.
     Modified (Craig): A = Rx(alpha) Tx(a) Rz(theta) Tz(d), moving about/along z_i.
     theta and d are the constant offsets of the joint variable.
+
+    Parameters
+    ----------
+    kind : str
+        'R' or 'revolute', 'P' or 'prismatic'.
+    a, alpha, d, theta : float
+        The DH parameters (m and rad); SymPy expressions are accepted.
+    convention : str, optional
+        'standard' (default) or 'modified' (Craig).
+    name : str, optional
+        Names the joint in error messages (default "joint").
+
+    Returns
+    -------
+    Joint
+        The joint, moving about or along z of its joint frame.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``kind`` or ``convention`` is unknown.
     """
     kind = joint_kind(kind, f"joint '{name}'")
     revolute = kind == REVOLUTE

@@ -11,7 +11,7 @@ import numpy as np
 import symengine as se
 import sympy
 
-from armdyn.errors import ModelError
+from armdyn import inputs
 from armdyn.symbolic.derive import Derivation
 
 FUNCTIONS = {  # name -> (state arguments, shape of the result)
@@ -129,71 +129,45 @@ def c_source(raw: Derivation, parameters: list[str]) -> str:
 
 class CompiledClosedForm:
     """The closed form as Numba functions M(q), Vm(q, qd), G(q), tau(q, qd, qdd): each takes one
-    state (n,) or a batch (..., n) and an optional ``out`` array."""
+    state (n,) or a batch (..., n) and an optional ``out`` array, as the Robot methods do."""
 
     def __init__(self, n: int, one: dict[str, Callable], batch: dict[str, Callable]) -> None:
         self.n = n
-        for name, (args, kind) in FUNCTIONS.items():
-            shape = (n, n) if kind == "matrix" else (n,)
-            general = self._general(name, batch[name], shape)
-            setattr(self, name, _fast_call(len(args), one[name], general, shape))
+        self._one = one
+        self._batch = batch
 
-    def _general(self, name: str, kernel: Callable, shape: tuple[int, ...]) -> Callable:
+    def M(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
+        """M(q), (..., n, n)."""
+        return self._call("M", (q,), out)
+
+    def Vm(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
+        """Vm(q, qd), (..., n, n)."""
+        return self._call("Vm", (q, qd), out)
+
+    def G(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
+        """G(q), (..., n)."""
+        return self._call("G", (q,), out)
+
+    def tau(self, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
+        """tau(q, qd, qdd), (..., n)."""
+        return self._call("tau", (q, qd, qdd), out)
+
+    def _call(self, name: str, states: tuple[object, ...], out: np.ndarray | None) -> np.ndarray:
         n = self.n
-
-        def general(states: tuple[object, ...], out: np.ndarray | None) -> np.ndarray:
-            arrays = [np.asarray(s, dtype=float) for s in states]
-            for arg, a in zip(FUNCTIONS[name][0], arrays, strict=True):
-                if a.ndim == 0 or a.shape[-1] != n or not np.all(np.isfinite(a)):
-                    raise ModelError(f"{arg} must be a finite array of shape (..., {n}), got {a.shape}")
-            batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
-            full = (*batch, n)
-            flat = [
-                np.require(a if a.shape == full else np.broadcast_to(a, full), np.float64, ["C", "W"]).reshape(-1, n)
-                for a in arrays
-            ]
-            result = np.empty((*batch, *shape)) if out is None else out
-            kernel(*flat, result.reshape(-1, *shape))
-            return result
-
-        return general
-
-
-def _fast_call(arity: int, one: Callable, general: Callable, shape: tuple[int, ...]) -> Callable:
-    """A call that runs the one-state function on 1-D float64 arrays and the batch path otherwise."""
-    empty, ndarray = np.empty, np.ndarray
-
-    def fast(states: tuple[object, ...], out: np.ndarray | None) -> np.ndarray:
-        result = empty(shape) if out is None else out
-        try:
-            one(*states, result)
-        except TypeError:  # not 1-D C-contiguous float64 arrays
-            return general(states, out)
+        trailing = (n, n) if FUNCTIONS[name][1] == "matrix" else (n,)
+        one_state = all(s.__class__ is np.ndarray and s.shape == (n,) for s in states)
+        if one_state and (out is None or (out.__class__ is np.ndarray and out.shape == trailing)):
+            result = np.empty(trailing) if out is None else out
+            try:  # the generated function's signature takes C-contiguous float64 arrays only
+                self._one[name](*states, result)
+            except TypeError:
+                pass
+            else:
+                return result
+        batch, flat = inputs.batch_states(FUNCTIONS[name][0], states, n)
+        result = inputs.result(out, (*batch, *trailing))
+        self._batch[name](*flat, result.reshape(-1, *trailing))
         return result
-
-    if arity == 1:
-
-        def call1(q: object, out: np.ndarray | None = None) -> np.ndarray:
-            if q.__class__ is ndarray and q.ndim == 1 and q.shape == shape[-1:]:
-                return fast((q,), out)
-            return general((q,), out)
-
-        return call1
-    if arity == 2:
-
-        def call2(q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-            if q.__class__ is ndarray and q.ndim == 1:
-                return fast((q, qd), out)
-            return general((q, qd), out)
-
-        return call2
-
-    def call3(q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
-        if q.__class__ is ndarray and q.ndim == 1:
-            return fast((q, qd, qdd), out)
-        return general((q, qd, qdd), out)
-
-    return call3
 
 
 def _batch_loop(one: Callable, arity: int) -> Callable:

@@ -1,0 +1,197 @@
+"""The structure of the package: imports point one way, the model is never written, the
+Robot never changes after construction, and the kernel cache cannot go stale."""
+
+from __future__ import annotations
+
+import ast
+import pickle
+import shutil
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import armdyn as ad
+from armdyn.control import ComputedTorque, PDGravity
+from armdyn.dynamics import cache
+from armdyn.trajectories import Sinusoid
+
+SOURCE = Path(ad.__file__).resolve().parent
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SOURCE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(path): path for path in sorted(SOURCE.rglob("*.py"))}
+
+
+def _type_checking_lines(tree: ast.Module) -> set[int]:
+    """Lines inside `if TYPE_CHECKING:` blocks (type-only imports)."""
+    lines: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for child in node.body:
+                lines.update(range(child.lineno, (child.end_lineno or child.lineno) + 1))
+    return lines
+
+
+def imports_of(module: str) -> set[str]:
+    """armdyn modules that ``module`` imports anywhere in its body (module level or inside
+    functions), type-only imports excepted."""
+    tree = ast.parse(MODULES[module].read_text())
+    skipped = _type_checking_lines(tree)
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if getattr(node, "lineno", None) in skipped:
+            continue
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names if alias.name in MODULES)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("armdyn"):
+            for alias in node.names:
+                candidate = f"{node.module}.{alias.name}"
+                found.add(candidate if candidate in MODULES else node.module)
+    found.discard(module)
+    return found
+
+
+def test_no_import_cycle_in_the_package() -> None:
+    """Depth-first search for a cycle; lazy imports inside functions count as edges too."""
+    graph = {module: imports_of(module) for module in MODULES}
+    state: dict[str, str] = {}
+
+    def visit(module: str, path: list[str]) -> None:
+        state[module] = "open"
+        for target in sorted(graph[module]):
+            if state.get(target) == "open":
+                cycle = [*path[path.index(target) :], target] if target in path else [module, target]
+                pytest.fail("import cycle: " + " -> ".join(cycle))
+            if target not in state:
+                visit(target, [*path, target])
+        state[module] = "done"
+
+    for module in graph:
+        if module not in state:
+            visit(module, [module])
+
+
+def test_model_layer_imports_numpy_and_errors_only() -> None:
+    for module in MODULES:
+        if module == "armdyn.model" or module.startswith("armdyn.model."):
+            allowed = {m for m in MODULES if m.startswith("armdyn.model.")} | {"armdyn.errors"}
+            assert imports_of(module) <= allowed, module
+
+
+def test_algorithms_do_not_import_the_robot() -> None:
+    """dynamics/ and kinematics are free functions of an ArmModel: the Robot sits above them."""
+    for module in MODULES:
+        if module.startswith("armdyn.dynamics") or module == "armdyn.kinematics":
+            assert "armdyn.robot" not in imports_of(module), module
+
+
+def _every_call(arm: ad.Robot, rng: np.random.Generator) -> None:
+    """One state and a batch through every kind of call that reads the packed model."""
+    n = arm.n
+    for batch in ((), (5,)):
+        q, qd, qdd = rng.uniform(-1, 1, (3, *batch, n))
+        arm.inverse_dynamics(q, qd, qdd)
+        arm.inverse_dynamics(q, qd, qdd, f_ext=np.ones(6))
+        arm.forward_dynamics(q, qd, qdd)
+        arm.inertia_matrix(q)
+        arm.inertia_matrix_dot(q, qd)
+        arm.coriolis_matrix(q, qd)
+        arm.coriolis_vector(q, qd)
+        arm.gravity_vector(q)
+        arm.friction(qd)
+        arm.nonlinear_terms(q, qd)
+        arm.kinetic_energy(q, qd)
+        arm.potential_energy(q)
+        arm.jacobian(q)
+        arm.regressor(q, qd, qdd)
+
+
+def test_robot_does_not_change_after_construction() -> None:
+    arm = ad.models.puma560()
+    before = {key: id(value) for key, value in vars(arm).items()}
+    _every_call(arm, np.random.default_rng(0))
+    ad.simulate(arm, ComputedTorque(100, 20), Sinusoid(0.1, 0.5), t_final=0.05)
+    ad.simulate(arm, PDGravity(100, 20), t_final=0.05, method="rk45")
+    assert {key: id(value) for key, value in vars(arm).items()} == before
+    with pytest.raises(AttributeError, match="immutable"):
+        arm.name = "other"
+    with pytest.raises(AttributeError, match="immutable"):
+        arm.inverse_dynamics = None
+
+
+def test_packed_model_is_read_only_and_survives_pickling() -> None:
+    arm = ad.models.puma560()
+    assert not arm.packed.flags.writeable
+    with pytest.raises(ValueError, match="read-only"):
+        arm.packed[0] = 1.0
+    copy = pickle.loads(pickle.dumps(arm))
+    assert not copy.packed.flags.writeable
+    np.testing.assert_array_equal(copy.packed, arm.packed)
+    np.testing.assert_array_equal(copy.inertia_matrix(arm.qn), arm.inertia_matrix(arm.qn))
+
+
+@pytest.mark.parametrize("name", ["puma560", "stanford", "two_link_planar"])
+def test_packed_model_unchanged_by_every_call_from_two_threads(name: str) -> None:
+    arm = ad.models.load(name)
+    original = arm.packed.copy()
+    rng = np.random.default_rng(1)
+    q, qd, qdd = rng.uniform(-1, 1, (3, arm.n))
+    expected = arm.inverse_dynamics(q, qd, qdd), arm.inertia_matrix(q), arm.forward_dynamics(q, qd, qdd)
+    failures: list[str] = []
+
+    def work(seed: int) -> None:
+        local = np.random.default_rng(seed)
+        for _ in range(20):
+            _every_call(arm, local)
+            got = arm.inverse_dynamics(q, qd, qdd), arm.inertia_matrix(q), arm.forward_dynamics(q, qd, qdd)
+            if not all(np.array_equal(a, b) for a, b in zip(got, expected, strict=True)):
+                failures.append("a one-state result changed while another thread ran")
+        ad.simulate(arm, ComputedTorque(100, 20), Sinusoid(0.1, 0.5), t_final=0.02)
+
+    threads = [threading.Thread(target=work, args=(seed,)) for seed in (2, 3)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert not failures
+    np.testing.assert_array_equal(arm.packed, original)
+
+
+def test_kernel_cache_folder_follows_every_compiled_source(tmp_path: Path) -> None:
+    """Change a helper that kernels inline (not a kernel's own file): the cache folder changes."""
+    copy = tmp_path / "armdyn"
+    shutil.copytree(SOURCE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    before = cache.sources_hash(copy)
+    assert before == cache.sources_hash(SOURCE)
+    spatial = copy / "dynamics" / "spatial.py"
+    spatial.write_text(spatial.read_text().replace("_ROUND = 6755399441055744.0", "_ROUND = 6755399441055744.0 + 0.0"))
+    after = cache.sources_hash(copy)
+    assert after != before
+    assert cache.cache_folder(after, copy).name == f"kernels-{after}"
+    cli = copy / "cli.py"  # no compiled code: the kernels' cache stays
+    cli.write_text(cli.read_text() + "\n")
+    assert cache.sources_hash(copy) == after
+
+
+def test_stale_kernel_folders_are_removed(tmp_path: Path) -> None:
+    current, stale = tmp_path / "kernels-new", tmp_path / "kernels-old"
+    for folder in (current, stale):
+        folder.mkdir()
+        (folder / "x.nbi").write_text("")
+    (tmp_path / "other").mkdir()
+    cache.remove_stale(current)
+    assert current.exists() and (tmp_path / "other").exists() and not stale.exists()
+
+
+def test_armdyn_kernels_are_cached_in_the_hashed_folder() -> None:
+    from armdyn.dynamics.rnea import inverse_dynamics_one
+
+    locator = inverse_dynamics_one._cache._impl._locator
+    assert isinstance(locator, cache.KernelCacheLocator)
+    assert Path(locator.get_cache_path()).is_relative_to(cache.FOLDER)
