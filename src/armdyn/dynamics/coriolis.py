@@ -16,6 +16,8 @@ from armdyn.dynamics.spatial import (
     NUMBA_OPTIONS,
     VECTOR,
     add_inertia_to_parent,
+    dot_with,
+    inertia_apply,
     joint_transform,
     motion_cross,
     states_status,
@@ -106,13 +108,9 @@ def coriolis_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.nda
         dax, day, daz, dsx, dsy, dsz = work[dj], work[dj + 1], work[dj + 2], work[dj + 3], work[dj + 4], work[dj + 5]
         b00, b01, b02, b10, b11, b12 = work[bc], work[bc + 1], work[bc + 2], work[bc + 3], work[bc + 4], work[bc + 5]
         b20, b21, b22, lx, ly, lz = work[bc + 6], work[bc + 7], work[bc + 8], work[bc + 9], work[bc + 10], work[bc + 11]
-        # F2 = I^c S
-        f2a = i0 * ax + i1 * ay + i2 * az + hy * sz - hz * sy
-        f2b = i1 * ax + i3 * ay + i4 * az + hz * sx - hx * sz
-        f2c = i2 * ax + i4 * ay + i5 * az + hx * sy - hy * sx
-        f2d = mass * sx - (hy * az - hz * ay)
-        f2e = mass * sy - (hz * ax - hx * az)
-        f2f = mass * sz - (hx * ay - hy * ax)
+        f2a, f2b, f2c, f2d, f2e, f2f = inertia_apply(
+            (mass, hx, hy, hz, i0, i1, i2, i3, i4, i5), (ax, ay, az, sx, sy, sz)
+        )  # F2 = I^c S
         # F1 = I^c Sdot + B^c S, B^c S = [B11 a; -l x a]
         f1a = i0 * dax + i1 * day + i2 * daz + hy * dsz - hz * dsy + b00 * ax + b01 * ay + b02 * az
         f1b = i1 * dax + i3 * day + i4 * daz + hz * dsx - hx * dsz + b10 * ax + b11 * ay + b12 * az
@@ -129,22 +127,10 @@ def coriolis_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.nda
         i = parent
         while i >= 0:
             si, di = S + 6 * i, Sdot + 6 * i
-            C[i, j] = (
-                work[si] * f1a
-                + work[si + 1] * f1b
-                + work[si + 2] * f1c
-                + work[si + 3] * f1d
-                + work[si + 4] * f1e
-                + work[si + 5] * f1f
+            C[i, j] = dot_with(work, si, (f1a, f1b, f1c, f1d, f1e, f1f))
+            C[j, i] = dot_with(work, di, (f2a, f2b, f2c, f2d, f2e, f2f)) + (
+                work[si] * f3a + work[si + 1] * f3b + work[si + 2] * f3c
             )
-            C[j, i] = (
-                work[di] * f2a
-                + work[di + 1] * f2b
-                + work[di + 2] * f2c
-                + work[di + 3] * f2d
-                + work[di + 4] * f2e
-                + work[di + 5] * f2f
-            ) + (work[si] * f3a + work[si + 1] * f3b + work[si + 2] * f3c)
             i = int(model[HEADER + STRIDE * i + PARENT])
         if parent >= 0:
             for k in range(10):

@@ -43,6 +43,7 @@ from armdyn.dynamics.spatial import (
     add_force_to_parent,
     force_to_parent,
     joint_transform,
+    newton_euler_step,
     sin_cos,
     states_status,
 )
@@ -121,57 +122,17 @@ def rnea_core(
         else:
             wx = wy = wz = vx = vy = vz = ax = ay = az = 0.0
             lx, ly, lz = gx, gy, gz
-        # l + a x p, v + w x p
-        tx = vx + wy * pz - wz * py
-        ty = vy + wz * px - wx * pz
-        tz = vz + wx * py - wy * px
-        ux = lx + ay * pz - az * py
-        uy = ly + az * px - ax * pz
-        uz = lz + ax * py - ay * px
-        Wx = r00 * wx + r10 * wy + r20 * wz
-        Wy = r01 * wx + r11 * wy + r21 * wz
-        Wz = r02 * wx + r12 * wy + r22 * wz
-        Vx = r00 * tx + r10 * ty + r20 * tz
-        Vy = r01 * tx + r11 * ty + r21 * tz
-        Vz = r02 * tx + r12 * ty + r22 * tz
-        Ax = r00 * ax + r10 * ay + r20 * az
-        Ay = r01 * ax + r11 * ay + r21 * az
-        Az = r02 * ax + r12 * ay + r22 * az
-        Lx = r00 * ux + r10 * uy + r20 * uz
-        Ly = r01 * ux + r11 * uy + r21 * uz
-        Lz = r02 * ux + r12 * uy + r22 * uz
-        rate = vscale * qd[i]
-        acc = ascale * qdd[i]
-        rev = 1.0 - prism
-        # (X v_p) x S qd: revolute [W x e3; V x e3] qd, prismatic [0; W x e3] qd
-        Ax += rev * Wy * rate
-        Ay -= rev * Wx * rate
-        Az += rev * acc
-        Lx += (rev * Vy + prism * Wy) * rate
-        Ly -= (rev * Vx + prism * Wx) * rate
-        Lz += prism * acc
-        Wz += rev * rate
-        Vz += prism * rate
-        work[o + 12], work[o + 13], work[o + 14], work[o + 15], work[o + 16], work[o + 17] = Wx, Wy, Wz, Vx, Vy, Vz
-        work[o + 18], work[o + 19], work[o + 20], work[o + 21], work[o + 22], work[o + 23] = Ax, Ay, Az, Lx, Ly, Lz
-        mass = model[b + MASS]
-        hx, hy, hz = model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2]
         k = b + INERTIA
-        i0, i1, i2, i3, i4, i5 = model[k], model[k + 1], model[k + 2], model[k + 3], model[k + 4], model[k + 5]
-        # momentum of v: kk = Io W + h x V ; ll = m V - h x W
-        kx = i0 * Wx + i1 * Wy + i2 * Wz + hy * Vz - hz * Vy
-        ky = i1 * Wx + i3 * Wy + i4 * Wz + hz * Vx - hx * Vz
-        kz = i2 * Wx + i4 * Wy + i5 * Wz + hx * Vy - hy * Vx
-        llx = mass * Vx - (hy * Wz - hz * Wy)
-        lly = mass * Vy - (hz * Wx - hx * Wz)
-        llz = mass * Vz - (hx * Wy - hy * Wx)
-        # f = I a + v x* momentum
-        work[o + 24] = i0 * Ax + i1 * Ay + i2 * Az + hy * Lz - hz * Ly + Wy * kz - Wz * ky + Vy * llz - Vz * lly
-        work[o + 25] = i1 * Ax + i3 * Ay + i4 * Az + hz * Lx - hx * Lz + Wz * kx - Wx * kz + Vz * llx - Vx * llz
-        work[o + 26] = i2 * Ax + i4 * Ay + i5 * Az + hx * Ly - hy * Lx + Wx * ky - Wy * kx + Vx * lly - Vy * llx
-        work[o + 27] = mass * Lx - (hy * Az - hz * Ay) + Wy * llz - Wz * lly
-        work[o + 28] = mass * Ly - (hz * Ax - hx * Az) + Wz * llx - Wx * llz
-        work[o + 29] = mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx
+        body = (
+            model[b + MASS], model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2],
+            model[k], model[k + 1], model[k + 2], model[k + 3], model[k + 4], model[k + 5],
+        )  # fmt: skip
+        motion = newton_euler_step(
+            (r00, r01, r02, r10, r11, r12, r20, r21, r22), (px, py, pz), (wx, wy, wz, vx, vy, vz),
+            (ax, ay, az, lx, ly, lz), vscale * qd[i], ascale * qdd[i], prism, body,
+        )  # fmt: skip
+        for j in range(18):  # v, a, f
+            work[o + RNEA_VELOCITY + j] = motion[j]
     if (flags & WITH_WRENCH) != 0:
         add_tool_wrench(model, work, RNEA_JOINT * int(model[TOOL_LINK]) + RNEA_FORCE, wrench, RNEA_JOINT * n)
     for i in range(n - 1, -1, -1):

@@ -100,6 +100,88 @@ def force_to_parent(
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
+def inertia_apply(body: tuple, motion: tuple) -> tuple[float, float, float, float, float, float]:
+    """I v for a rigid-body inertia body = (m, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz) (I_O about
+    the origin, h = m c) and a motion v = [w; u]: [I_O w + h x u; m u - h x w]."""
+    mass, hx, hy, hz, i0, i1, i2, i3, i4, i5 = body
+    wx, wy, wz, ux, uy, uz = motion
+    return (
+        i0 * wx + i1 * wy + i2 * wz + hy * uz - hz * uy,
+        i1 * wx + i3 * wy + i4 * wz + hz * ux - hx * uz,
+        i2 * wx + i4 * wy + i5 * wz + hx * uy - hy * ux,
+        mass * ux - (hy * wz - hz * wy),
+        mass * uy - (hz * wx - hx * wz),
+        mass * uz - (hx * wy - hy * wx),
+    )
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def newton_euler_step(
+    rotation: tuple,
+    position: tuple,
+    parent_velocity: tuple,
+    parent_acceleration: tuple,
+    rate: float,
+    acc: float,
+    prism: float,
+    body: tuple,
+) -> tuple:
+    """One joint of RNEA's forward pass (Featherstone 2008, 5.3), for a joint along z.
+
+    From the parent's spatial velocity v_p and acceleration a_p (in the parent's axes), the
+    joint transform (R, p), the joint rate and acceleration and the joint kind (prism 0 for
+    revolute, 1 for prismatic): v = X v_p + S qd, a = X a_p + S qdd + (X v_p) x S qd and the
+    body's force f = I a + v x* I v, with body = (m, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz).
+    Returns v, a and f, each [angular; linear], as one flat tuple of 18 values.
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation
+    px, py, pz = position
+    wx, wy, wz, vx, vy, vz = parent_velocity
+    ax, ay, az, lx, ly, lz = parent_acceleration
+    mass, hx, hy, hz, i0, i1, i2, i3, i4, i5 = body
+    # l + a x p, v + w x p
+    tx = vx + wy * pz - wz * py
+    ty = vy + wz * px - wx * pz
+    tz = vz + wx * py - wy * px
+    ux = lx + ay * pz - az * py
+    uy = ly + az * px - ax * pz
+    uz = lz + ax * py - ay * px
+    Wx = r00 * wx + r10 * wy + r20 * wz
+    Wy = r01 * wx + r11 * wy + r21 * wz
+    Wz = r02 * wx + r12 * wy + r22 * wz
+    Vx = r00 * tx + r10 * ty + r20 * tz
+    Vy = r01 * tx + r11 * ty + r21 * tz
+    Vz = r02 * tx + r12 * ty + r22 * tz
+    Ax = r00 * ax + r10 * ay + r20 * az
+    Ay = r01 * ax + r11 * ay + r21 * az
+    Az = r02 * ax + r12 * ay + r22 * az
+    Lx = r00 * ux + r10 * uy + r20 * uz
+    Ly = r01 * ux + r11 * uy + r21 * uz
+    Lz = r02 * ux + r12 * uy + r22 * uz
+    rev = 1.0 - prism
+    # (X v_p) x S qd: revolute [W x e3; V x e3] qd, prismatic [0; W x e3] qd
+    Ax += rev * Wy * rate
+    Ay -= rev * Wx * rate
+    Az += rev * acc
+    Lx += (rev * Vy + prism * Wy) * rate
+    Ly -= (rev * Vx + prism * Wx) * rate
+    Lz += prism * acc
+    Wz += rev * rate
+    Vz += prism * rate
+    kx, ky, kz, llx, lly, llz = inertia_apply(body, (Wx, Wy, Wz, Vx, Vy, Vz))  # the body's momentum
+    # f = I a + v x* momentum
+    return (
+        Wx, Wy, Wz, Vx, Vy, Vz, Ax, Ay, Az, Lx, Ly, Lz,
+        i0 * Ax + i1 * Ay + i2 * Az + hy * Lz - hz * Ly + Wy * kz - Wz * ky + Vy * llz - Vz * lly,
+        i1 * Ax + i3 * Ay + i4 * Az + hz * Lx - hx * Lz + Wz * kx - Wx * kz + Vz * llx - Vx * llz,
+        i2 * Ax + i4 * Ay + i5 * Az + hx * Ly - hy * Lx + Wx * ky - Wy * kx + Vx * lly - Vy * llx,
+        mass * Lx - (hy * Az - hz * Ay) + Wy * llz - Wz * lly,
+        mass * Ly - (hz * Ax - hx * Az) + Wz * llx - Wx * llz,
+        mass * Lz - (hx * Ay - hy * Ax) + Wx * lly - Wy * llx,
+    )  # fmt: skip
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
 def add_force_to_parent(work: np.ndarray, t: int, src: np.ndarray, s: int, dst: np.ndarray, d: int) -> None:
     """dst += X^T src for a force at src[s:s+6], transform (R, p) at work[t:t+12]."""
     rotation = (work[t], work[t + 1], work[t + 2], work[t + 3], work[t + 4], work[t + 5], work[t + 6], work[t + 7],
@@ -267,6 +349,19 @@ def dot6(work: np.ndarray, a: int, b: int) -> float:
         + work[a + 3] * work[b + 3]
         + work[a + 4] * work[b + 4]
         + (work[a + 5] * work[b + 5])
+    )
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def dot_with(work: np.ndarray, a: int, values: tuple) -> float:
+    """work[a:a+6] . values, summed left to right."""
+    return (
+        work[a] * values[0]
+        + work[a + 1] * values[1]
+        + work[a + 2] * values[2]
+        + work[a + 3] * values[3]
+        + work[a + 4] * values[4]
+        + work[a + 5] * values[5]
     )
 
 
