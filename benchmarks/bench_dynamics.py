@@ -14,30 +14,26 @@ Four parts, all in this one process except the last:
 Before anything is timed, armdyn's result is checked against the peer's on the same inputs
 (relative to the largest entry, 1e-8), so a ratio never compares two different computations.
 Times are medians over repeats; the candidates' repeats are interleaved so that machine noise
-hits all of them alike. Prints plain tables and writes the same as Markdown to results.md.
+hits all of them alike (the timing, checking and tables are benchmarks/harness.py's). Prints plain
+tables and writes the same as Markdown to results.md; --quick is a smoke run of every part with
+few repeats and small batches, in well under a minute once Numba's cache is filled, and writes nothing.
 """
 
 from __future__ import annotations
 
-import datetime
-import gc
-import os
-import platform
-import statistics
 import subprocess
 import sys
 import sysconfig
-import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
 import numba
 import numpy as np
 import pinocchio as pin
-from common import _loop_ns, cpu_model, ratio, source_state, us
+from harness import MILLISECOND, Candidate, Report, Table, arguments, check, describe, measure, ratio, us, wall
 
 import armdyn as ad
 
@@ -62,6 +58,18 @@ STARTUP_RUNS = 3  # fresh interpreters per start-up script
 TOLERANCE = 1e-8
 SEED = 20240611
 RESULTS = Path(__file__).with_name("results.md")
+QUICK = {  # --quick: the same parts, small
+    "CALLS": 50,
+    "REPEATS": 3,
+    "TOOLBOX_CALLS": 5,
+    "TOOLBOX_REPEATS": 2,
+    "TOOLBOX_CORIOLIS_CALLS": 2,
+    "BATCH": 2000,
+    "BATCH_REPEATS": 2,
+    "LOOP_STATES": 200,
+    "CHECK_STATES": 20,
+    "STARTUP_RUNS": 1,
+}
 
 ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
 URDFS = {
@@ -69,75 +77,6 @@ URDFS = {
     "Panda": ROBOTS / "panda_description" / "urdf" / "panda.urdf",
 }
 FUNCTIONS = ("inverse_dynamics", "inertia_matrix", "gravity_vector", "coriolis_matrix", "forward_dynamics")
-
-
-# ----- timing -----------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Candidate:
-    """A zero-argument call to time: ``calls`` calls per timed loop, ``repeats`` loops, ``states`` per call."""
-
-    fn: Callable[[], object]
-    calls: int = CALLS
-    repeats: int = REPEATS
-    states: int = 1
-
-
-def measure(*candidates: Candidate) -> list[float]:
-    """Median microseconds per state of each candidate; repeats interleaved, garbage collector off."""
-    for candidate in candidates:
-        candidate.fn()  # warm-up: armdyn compiles or loads its machine code on a first call
-    samples: list[list[int]] = [[] for _ in candidates]
-    collecting = gc.isenabled()
-    gc.disable()
-    try:
-        for repeat in range(max(candidate.repeats for candidate in candidates)):
-            for candidate, times in zip(candidates, samples, strict=True):
-                if repeat < candidate.repeats:
-                    times.append(_loop_ns(candidate.fn, candidate.calls))
-    finally:
-        if collecting:
-            gc.enable()
-    return [
-        statistics.median(times) / (candidate.calls * candidate.states) / 1e3
-        for candidate, times in zip(candidates, samples, strict=True)
-    ]
-
-
-def check(what: str, ours: object, theirs: object) -> None:
-    """Refuse to time two computations that disagree (error relative to the largest entry)."""
-    ours, theirs = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
-    if ours.shape != theirs.shape:
-        raise AssertionError(f"{what}: shapes differ, armdyn {ours.shape} vs peer {theirs.shape}")
-    error = np.max(np.abs(ours - theirs)) / max(np.max(np.abs(theirs)), 1e-300)
-    if not error <= TOLERANCE:
-        raise AssertionError(f"{what}: armdyn and the peer differ by {error:.2e} (relative), more than {TOLERANCE}")
-
-
-# ----- tables -----------------------------------------------------------------------------------
-@dataclass
-class Table:
-    title: str
-    headers: Sequence[str]
-    rows: list[list[str]] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-
-    def text(self) -> str:
-        widths = [max(len(row[i]) for row in [self.headers, *self.rows]) for i in range(len(self.headers))]
-
-        def line(cells: Sequence[str]) -> str:
-            return "  ".join(cell.ljust(width) for cell, width in zip(cells, widths, strict=True)).rstrip()
-
-        rule = "  ".join("-" * width for width in widths)
-        body = [self.title, "=" * len(self.title), line(self.headers), rule, *map(line, self.rows)]
-        return "\n".join(body + [f"  * {note}" for note in self.notes]) + "\n"
-
-    def markdown(self) -> str:
-        body = [f"## {self.title}", "", "| " + " | ".join(self.headers) + " |"]
-        body.append("|" + "|".join("---" if i < 3 else "---:" for i in range(len(self.headers))) + "|")
-        body += ["| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |" for row in self.rows]
-        if self.notes:
-            body += ["", *(f"- {note}" for note in self.notes)]
-        return "\n".join(body) + "\n"
 
 
 # ----- the arms ---------------------------------------------------------------------------------
@@ -249,12 +188,12 @@ def one_state(robot: str, arm: ad.Robot, peers: dict, state: dict, peer_timing: 
         args = tuple(state[name] for name in ARGUMENTS[function])
         method = getattr(arm, function)
         ours = method(*args)
-        check(f"{robot} {function} vs {label}", ours, convert(peer()))
+        check(f"{robot} {function}: armdyn vs {label}", ours, convert(peer()), TOLERANCE)
         out = np.empty_like(ours)
         calls, repeats = peer_timing.get(function, (CALLS, REPEATS))
         plain, with_out, theirs = measure(
-            Candidate(partial(method, *args)),
-            Candidate(partial(method, *args, out=out)),
+            Candidate(partial(method, *args), CALLS, REPEATS),
+            Candidate(partial(method, *args, out=out), CALLS, REPEATS),
             Candidate(peer, calls, repeats),
         )
         rows.append([robot, function, label, us(plain), us(with_out), us(theirs), ratio(plain / theirs)])
@@ -280,9 +219,10 @@ def batch(robot: str, p: PinocchioArm, rng: np.random.Generator, notes: list[str
         convert = p.symmetric if algorithm == "crba" else p.vector
         for i in range(CHECK_STATES):
             check(
-                f"{robot} batch {function} vs pin.{algorithm}",
+                f"{robot} batch {function}: armdyn vs pin.{algorithm}",
                 ours[i],
                 convert(single(p.model, p.data, *(a[i] for a in theirs))),
+                TOLERANCE,
             )
         out = np.empty_like(ours)
         batched = partial(Candidate, calls=1, repeats=BATCH_REPEATS, states=BATCH)
@@ -300,13 +240,15 @@ def batch(robot: str, p: PinocchioArm, rng: np.random.Generator, notes: list[str
         else:
             columns = [a.T for a in theirs]  # (nq, B) Fortran-ordered views of the (B, nq) arrays: no copy
             check(
-                f"{robot} batch {function} vs pin.{algorithm}InParallel",
+                f"{robot} batch {function}: armdyn vs pin.{algorithm}InParallel",
                 ours,
                 p.columns(parallel(THREADS, p.pool, *columns)),
+                TOLERANCE,
             )
             target = np.empty((p.model.nv, BATCH), order="F")
             parallel(THREADS, p.pool, *columns, target)
-            check(f"{robot} batch {function} vs pin.{algorithm}InParallel(out)", ours, p.columns(target))
+            what = f"{robot} batch {function}: armdyn vs pin.{algorithm}InParallel(out)"
+            check(what, ours, p.columns(target), TOLERANCE)
             call = partial(parallel, THREADS, p.pool, *columns)
             candidates[f"pin.{algorithm}InParallel({THREADS}, pool, ...)"] = (batched(call), plain)
             candidates[f"pin.{algorithm}InParallel(..., out)"] = (batched(partial(call, target)), preallocated)
@@ -326,10 +268,17 @@ def puma_coriolis(arm: ad.Robot, puma: object, rng: np.random.Generator) -> list
     one, trajectory = random_state(rng, arm.n), random_state(rng, arm.n, (TRAJECTORY,))
     for label, state, states in (("one state", one, 1), (f"trajectory of {TRAJECTORY} states", trajectory, TRAJECTORY)):
         q, qd = state["q"], state["qd"]
-        check(f"PUMA 560 coriolis, {label}", arm.coriolis_matrix(q, qd), puma.coriolis(q, qd))
+        check(
+            f"PUMA 560 coriolis, {label}: armdyn vs puma.coriolis",
+            arm.coriolis_matrix(q, qd),
+            puma.coriolis(q, qd),
+            TOLERANCE,
+        )
         calls = TOOLBOX_CORIOLIS_CALLS if states == 1 else 1
         ours, theirs = measure(
-            Candidate(partial(arm.coriolis_matrix, q, qd), calls=CALLS // states, states=states),
+            Candidate(
+                partial(arm.coriolis_matrix, q, qd), calls=max(CALLS // states, 1), repeats=REPEATS, states=states
+            ),
             Candidate(partial(puma.coriolis, q, qd), calls=calls, repeats=TOOLBOX_REPEATS, states=states),
         )
         rows.append([label, us(ours), us(theirs), ratio(theirs / ours)])
@@ -349,20 +298,11 @@ STARTUP = {
 }
 
 
-def _wall_ms(code: str) -> float:
-    start = time.perf_counter_ns()
-    subprocess.run([sys.executable, "-c", code], check=True)
-    return (time.perf_counter_ns() - start) / 1e6
-
-
 def startup() -> list:
-    """Median wall time of fresh interpreters, after one untimed run that fills Numba's cache."""
-    _wall_ms(PRELUDE + "".join(f"; a.{f}(*[z] * {len(ARGUMENTS[f])})" for f in FUNCTIONS))
-    samples: dict[str, list[float]] = {label: [] for label in STARTUP}
-    for _ in range(STARTUP_RUNS):
-        for label, code in STARTUP.items():
-            samples[label].append(_wall_ms(code))
-    medians = {label: statistics.median(times) for label, times in samples.items()}
+    """Median wall time of fresh interpreters, each script's first (untimed) run filling Numba's cache."""
+    scripts = [partial(subprocess.run, [sys.executable, "-c", code], check=True) for code in STARTUP.values()]
+    times = measure(*(Candidate(script, repeats=STARTUP_RUNS) for script in scripts), unit=MILLISECOND)
+    medians = dict(zip(STARTUP, times, strict=True))
     base = medians["import armdyn, numpy; puma560()"]
     return [
         [label, f"{ms:,.0f}", f"{ms - base:+,.0f}" if label.startswith("...") else "-"] for label, ms in medians.items()
@@ -372,26 +312,23 @@ def startup() -> list:
 # ----- the run ----------------------------------------------------------------------------------
 
 
-def warm_up(arms: Sequence[ad.Robot]) -> float:
-    """Seconds for every function's first call, one state and a batch (Numba compiles or loads its cache)."""
-    start = time.perf_counter()
+def warm_up(arms: Sequence[ad.Robot]) -> None:
+    """Every function's first call, one state and a batch (Numba compiles or loads its cache)."""
     for arm in arms:
         for function in FUNCTIONS:
             for shape in ((arm.n,), (2, arm.n)):
                 getattr(arm, function)(*[np.zeros(shape)] * len(ARGUMENTS[function]))
-    return time.perf_counter() - start
 
 
 def header(source: tuple[str, str]) -> list[str]:
     toolbox = rtb.__version__ if rtb else f"not available ({TOOLBOX_MISSING})"
-    return [
-        f"Date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}",
-        f"CPU: {cpu_model()}, {os.cpu_count()} logical cores; Numba threads {numba.get_num_threads()}, "
-        f"Pinocchio *InParallel threads {THREADS}",
-        f"Versions: armdyn {ad.__version__}, numba {numba.__version__}, numpy {np.__version__}, "
-        f"pinocchio {pin.__version__}, roboticstoolbox {toolbox}, Python {platform.python_version()}",
-        f"armdyn source: {source[1]}, source hash {source[0]}",
-        "The machine is shared and noisy: absolute times move from run to run; the ratios are what matter.",
+    versions = {
+        "numba": numba.__version__,
+        "numpy": np.__version__,
+        "pinocchio": pin.__version__,
+        "roboticstoolbox": toolbox,
+    }
+    return describe(source, versions, f", Pinocchio *InParallel threads {THREADS}") + [
         f"Every time is a median: one state {CALLS} calls x {REPEATS} repeats (Toolbox {TOOLBOX_CALLS} x "
         f"{TOOLBOX_REPEATS}, its coriolis {TOOLBOX_CORIOLIS_CALLS} x {TOOLBOX_REPEATS}), batch {BATCH_REPEATS} "
         "repeats; the candidates' repeats are interleaved. armdyn and the peer are checked to agree "
@@ -400,30 +337,26 @@ def header(source: tuple[str, str]) -> list[str]:
 
 
 def main() -> None:
-    started = time.perf_counter()
+    args = arguments(__doc__).parse_args()
+    report = Report.begin(args, "armdyn dynamics benchmarks", RESULTS, globals(), QUICK)
     rng = np.random.default_rng(SEED)
-    source = source_state()
-    lines = header(source)
-    print("\n".join(lines), flush=True)
-    tables = []
-
-    def show(table: Table) -> None:
-        tables.append(table)
-        print(table.text(), flush=True)
+    report.note(*header(report.source))
 
     pinned = {name: PinocchioArm.load(name, path) for name, path in URDFS.items()}
     puma = ad.models.puma560()
     toolbox = rtb.models.DH.Puma560() if rtb else None
     if toolbox is None:
         print(f"NOTE: the Robotics Toolbox is not available ({TOOLBOX_MISSING}); its columns are skipped.")
-    seconds = warm_up([p.arm for p in pinned.values()] + [puma])
-    lines.append(f"armdyn's first calls in this process (compile or load machine code, untimed): {seconds:.1f} s")
-    print(lines[-1], end="\n\n", flush=True)
+    seconds = wall(partial(warm_up, [p.arm for p in pinned.values()] + [puma]))[1]
+    report.note(
+        f"armdyn's first calls in this process (compile or load machine code, untimed): {seconds:.1f} s", end="\n\n"
+    )
 
     single = Table(
         "1. One state per call (microseconds per call)",
         ["robot", "function", "peer", "armdyn", "armdyn out=", "peer", "armdyn/peer"],
         notes=[note for p in pinned.values() for note in p.notes],
+        left=3,
     )
     for name, p in pinned.items():
         state = random_state(rng, p.arm.n)
@@ -441,7 +374,7 @@ def main() -> None:
         "pin.crba is symmetrized from its upper triangle before the check.",
         "PUMA 560: armdyn's model and the Toolbox's both include motor inertia and friction.",
     ]
-    show(single)
+    report.show(single)
 
     many = Table(
         f"2. A batch of {BATCH:,} states (microseconds per state)",
@@ -453,10 +386,11 @@ def main() -> None:
             f"Fortran-ordered views, are passed without a copy; results come back as (nv, B). They take a "
             f"pin.ModelPool(model, {THREADS}), not (model, data).",
         ],
+        left=3,
     )
     for name, p in pinned.items():
         many.rows += batch(name, p, rng, many.notes)
-    show(many)
+    report.show(many)
 
     if toolbox is not None:
         coriolis = Table(
@@ -466,38 +400,24 @@ def main() -> None:
                 "puma.coriolis copies the robot without friction on every call (nofriction), which dominates "
                 "its one-state time; on a trajectory that copy is shared by all states.",
             ],
+            left=3,
         )
         coriolis.rows = puma_coriolis(puma, toolbox, rng)
-        show(coriolis)
+        report.show(coriolis)
 
-    show(
+    report.show(
         Table(
             f"4. Start-up: a fresh interpreter (median wall milliseconds of {STARTUP_RUNS} runs, cache filled)",
             ["script", "ms", "first call, ms"],
             startup(),
             notes=[
                 f"python -c with {sys.executable}; 'first call' is the time over importing armdyn and numpy "
-                "and building the PUMA 560."
+                "and building the PUMA 560. Each script runs once untimed first (filling Numba's cache)."
             ],
+            left=3,
         )
     )
-
-    elapsed = time.perf_counter() - started
-    if source_state()[0] != source[0]:
-        lines.append(
-            "WARNING: armdyn's source changed during the run: parts 1-3 timed the version imported at the start "
-            f"(hash {source[0]}), part 4 may have timed another (and compiled it)."
-        )
-        print(lines[-1])
-    print(f"Total run time {elapsed:.0f} s; written to {RESULTS}")
-    markdown = [
-        "# armdyn dynamics benchmarks",
-        "",
-        *(f"- {line}" for line in lines),
-        f"- Run time {elapsed:.0f} s.",
-        "",
-    ]
-    RESULTS.write_text("\n".join(markdown + [table.markdown() for table in tables]))
+    report.finish("parts 1-3 timed the version imported at the start, part 4 may have timed another (and compiled it).")
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ computed-torque tracking at 1 kHz against real time.
     .venv/bin/python benchmarks/bench_simulation.py                      # about 6 minutes (fdyn: up to 5)
     .venv/bin/python benchmarks/bench_simulation.py --skip-toolbox       # about 1 minute
     .venv/bin/python benchmarks/bench_simulation.py --fdyn-timeout 60
+    .venv/bin/python benchmarks/bench_simulation.py --quick              # a smoke run, fdyn capped at 10 s
 
 Four parts, all in this one process except the Toolbox's run:
 
@@ -19,39 +20,61 @@ Four parts, all in this one process except the Toolbox's run:
    computation on the same states), summed into the per-step cost of possible step designs.
 
 Times are medians over repeats; the candidates' repeats are interleaved so that machine noise hits all of
-them alike. The Toolbox's run is timed once. Prints plain tables and writes the same as Markdown to
-results_simulation.md.
+them alike (the timing, checking and tables are benchmarks/harness.py's). The Toolbox's run is timed once.
+Prints plain tables and writes the same as Markdown to results_simulation.md; --quick runs every part with
+few repeats, few kernel states and fdyn stopped after 10 s, and writes nothing.
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
-import gc
 import json
 import math
-import os
-import platform
 import signal
 import statistics
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
 import numba
 import numpy as np
-from common import cpu_model, ratio, source_state, us, version
+from harness import (
+    SECOND,
+    Candidate,
+    Report,
+    Spans,
+    Table,
+    arguments,
+    describe,
+    emit,
+    measure,
+    ms,
+    parse,
+    ratio,
+    relative_error,
+    run_worker,
+    samples,
+    sci,
+    timed_step,
+    us,
+    version,
+    wall,
+)
 from numba import njit
 
 import armdyn as ad
+from armdyn import simulation
 from armdyn.control import PID, ComputedTorque
-from armdyn.dynamics import kernels as K
-from armdyn.dynamics.compiled import compile_robot
-from armdyn.simulation import simulate
+from armdyn.dynamics.aba import aba_core
+from armdyn.dynamics.crba import crba_core, mass_matrix_and_bias
+from armdyn.dynamics.energy import energy_core
+from armdyn.dynamics.friction import smooth_coulomb
+from armdyn.dynamics.packed import workspace_size
+from armdyn.dynamics.rnea import INVERSE_DYNAMICS, NONLINEAR, rnea_core
+from armdyn.dynamics.spatial import NUMBA_OPTIONS
+from armdyn.simulation import _solve, simulate
 from armdyn.trajectories import Sinusoid
 
 # ----- settings -------------------------------------------------------------------------------
@@ -69,89 +92,11 @@ TOLERANCE = 1e-8
 RK4_LIMIT = 2.785  # fixed-step RK4 is stable for real eigenvalues lambda with -2.785 < lambda dt < 0
 SEED = 20240611
 RESULTS = Path(__file__).with_name("results_simulation.md")
-EVENT = "@@event "  # prefix of the worker's result lines on its stdout
+QUICK = {"FALL_REPEATS": 2, "RK45_REPEATS": 1, "TRACK_REPEATS": 2, "KERNEL_STATES": 100, "KERNEL_REPEATS": 2}
+QUICK_LIMITS = {"fdyn_timeout": 10.0}  # --quick: seconds for the Toolbox's fdyn at the most
 
 
-# ----- timing -----------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Candidate:
-    """A zero-argument call to time, ``repeats`` times."""
-
-    fn: Callable[[], object]
-    repeats: int = TRACK_REPEATS
-
-
-def samples(*candidates: Candidate) -> list[list[float]]:
-    """Seconds of each timed call of each candidate, after one warm-up call; repeats interleaved, garbage
-    collector off."""
-    for candidate in candidates:
-        candidate.fn()  # warm-up: armdyn compiles or loads its machine code on a first call
-    times: list[list[int]] = [[] for _ in candidates]
-    collecting = gc.isenabled()
-    gc.disable()
-    try:
-        for repeat in range(max(candidate.repeats for candidate in candidates)):
-            for candidate, values in zip(candidates, times, strict=True):
-                if repeat < candidate.repeats:
-                    start = time.perf_counter_ns()
-                    candidate.fn()
-                    values.append(time.perf_counter_ns() - start)
-    finally:
-        if collecting:
-            gc.enable()
-    return [[value / 1e9 for value in values] for values in times]
-
-
-def measure(*candidates: Candidate) -> list[float]:
-    """Median seconds per call of each candidate (see samples)."""
-    return [statistics.median(values) for values in samples(*candidates)]
-
-
-def relative_error(ours: object, theirs: object) -> float:
-    """Largest difference relative to the largest entry of the reference."""
-    ours, theirs = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
-    if ours.shape != theirs.shape:
-        raise AssertionError(f"shapes differ: {ours.shape} vs {theirs.shape}")
-    return float(np.max(np.abs(ours - theirs)) / max(np.max(np.abs(theirs)), 1e-300))
-
-
-# ----- tables -----------------------------------------------------------------------------------
-@dataclass
-class Table:
-    title: str
-    headers: Sequence[str]
-    rows: list[list[str]] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    left: int = 2  # columns aligned left in Markdown; the others are numbers
-
-    def text(self) -> str:
-        widths = [max(len(row[i]) for row in [self.headers, *self.rows]) for i in range(len(self.headers))]
-
-        def line(cells: Sequence[str]) -> str:
-            return "  ".join(cell.ljust(width) for cell, width in zip(cells, widths, strict=True)).rstrip()
-
-        rule = "  ".join("-" * width for width in widths)
-        body = [self.title, "=" * len(self.title), line(self.headers), rule, *map(line, self.rows)]
-        return "\n".join(body + [f"  * {note}" for note in self.notes]) + "\n"
-
-    def markdown(self) -> str:
-        body = [f"## {self.title}", "", "| " + " | ".join(self.headers) + " |"]
-        body.append("|" + "|".join("---" if i < self.left else "---:" for i in range(len(self.headers))) + "|")
-        body += ["| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |" for row in self.rows]
-        if self.notes:
-            body += ["", *(f"- {note}" for note in self.notes)]
-        return "\n".join(body) + "\n"
-
-
-def ms(value: float) -> str:
-    """Seconds shown as milliseconds, about three significant digits."""
-    return us(value * 1e3)
-
-
-def sci(value: float) -> str:
-    return f"{value:.1e}"
-
-
+# ----- formats ----------------------------------------------------------------------------------
 def verdict(value: float, target: float) -> str:
     if value >= target:
         return f"met ({ratio(value / target)}x the target)"
@@ -162,14 +107,13 @@ def verdict(value: float, target: float) -> str:
 def fdyn_worker(limit: float, q0: list[float]) -> None:
     """Runs in a subprocess: the Toolbox's fdyn once, stopped by an alarm after ``limit`` seconds."""
 
-    def emit(step: str, **values: object) -> None:
-        print(EVENT + json.dumps({"step": step, **values}), flush=True)
+    def build() -> object:
+        import roboticstoolbox as rtb
 
-    start = time.perf_counter()
-    import roboticstoolbox as rtb
+        return rtb.models.DH.Puma560()
 
-    puma = rtb.models.DH.Puma560()
-    emit("ready", seconds=time.perf_counter() - start, qr=[float(x) for x in puma.qr])
+    puma, build_s = timed_step("ready", build)
+    emit("ready", seconds=build_s, qr=[float(x) for x in puma.qr])
     n = puma.n
     progress = {"t": 0.0, "x": np.concatenate([q0, np.zeros(n)]), "evaluations": 0}
     rate = puma._fdyn  # the right-hand side fdyn integrates: counted, to say where a stopped run got to
@@ -194,14 +138,15 @@ def fdyn_worker(limit: float, q0: list[float]) -> None:
         result = puma.fdyn(T=T_FALL, q0=np.array(q0))  # Q=None: zero torque; solver="RK45", its defaults
     except OutOfTimeError:
         elapsed, x = time.perf_counter() - start, np.asarray(progress["x"], dtype=float)
-        emit("timeout", seconds=elapsed, t=progress["t"], evaluations=progress["evaluations"],
+        emit("fdyn", stopped=True, seconds=elapsed, t=progress["t"], evaluations=progress["evaluations"],
              q=x[:n].tolist(), qd=x[n:].tolist())  # fmt: skip
         return
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
     elapsed = time.perf_counter() - start
     emit(
-        "done",
+        "fdyn",
+        stopped=False,
         seconds=elapsed,
         steps=len(result.t) - 1,
         evaluations=progress["evaluations"],
@@ -212,23 +157,19 @@ def fdyn_worker(limit: float, q0: list[float]) -> None:
 
 
 def run_fdyn(limit: float, q0: np.ndarray) -> dict:
-    """The worker's outcome: {"step": "done", ...}, {"step": "timeout", ...} or {"step": "error", ...}."""
+    """The worker's outcome: {"step": "done", ...}, {"step": "timeout", ...} (fdyn stopped at its limit) or
+    {"step": "error", ...}."""
     command = [sys.executable, __file__, "--fdyn-worker", "--fdyn-timeout", str(limit), "--state"]
     command.append(json.dumps([float(x) for x in q0]))
-    try:
-        process = subprocess.run(command, capture_output=True, text=True, timeout=limit + WORKER_ALLOWANCE)
-    except subprocess.TimeoutExpired:
-        return {"step": "error", "error": f"the worker was killed after {limit + WORKER_ALLOWANCE:.0f} s"}
-    events = {}
-    for line in process.stdout.splitlines():
-        if line.startswith(EVENT):
-            event = json.loads(line[len(EVENT) :])
-            events[event["step"]] = event
-    for step in ("done", "timeout"):
-        if step in events:
-            return events[step] | {"ready": events.get("ready", {})}
-    tail = " ".join(process.stderr.strip().splitlines()[-3:])[-300:]
-    return {"step": "error", "error": f"worker exited with code {process.returncode}: {tail}"}
+    events = run_worker(command, [("ready", WORKER_ALLOWANCE), ("fdyn", limit + WORKER_ALLOWANCE)])
+    for phase in ("ready", "fdyn"):
+        event = events[phase]
+        if "timeout" in event:
+            return {"step": "error", "error": f"the worker was killed: no '{phase}' within {event['timeout']:.0f} s"}
+        if "error" in event:
+            return {"step": "error", "error": event["error"]}
+    fdyn = events["fdyn"]
+    return fdyn | {"step": "timeout" if fdyn["stopped"] else "done", "ready": events["ready"]}
 
 
 def stiffness(arm: ad.Robot, q: np.ndarray, eps: float) -> float:
@@ -262,7 +203,8 @@ def fall(arm: ad.Robot, args: argparse.Namespace) -> list[Table]:
     }
     print(f"  armdyn: {len(runs)} candidates ...", flush=True)
     results = {label: fn() for label, (fn, _) in runs.items()}
-    times = dict(zip(runs, measure(*(Candidate(fn, repeats) for fn, repeats in runs.values())), strict=True))
+    candidates = (Candidate(fn, repeats=repeats) for fn, repeats in runs.values())
+    times = dict(zip(runs, measure(*candidates, unit=SECOND), strict=True))
     default, _, adaptive = runs
 
     toolbox: dict = {"step": "skipped"}
@@ -339,6 +281,7 @@ def fall(arm: ad.Robot, args: argparse.Namespace) -> list[Table]:
          "max |dqd| vs fdyn", "max |dq| vs rk45"],
         rows,
         notes,
+        left=2,
     )  # fmt: skip
 
     names = {label: name for label, name in zip(runs, ["rk4 1 ms", f"rk4 {DT_FINE * 1e3:g} ms", "rk45"], strict=True)}
@@ -367,7 +310,7 @@ def tracking(arms: dict[str, tuple[ad.Robot, Sinusoid, float]]) -> tuple[list[li
         name: partial(simulate, arm, ComputedTorque(*GAINS), trajectory, t_final=t_final, dt=DT)
         for name, (arm, trajectory, t_final) in arms.items()
     }
-    timed = dict(zip(runs, samples(*(Candidate(fn) for fn in runs.values())), strict=True))
+    timed = dict(zip(runs, samples(*(Candidate(fn, repeats=TRACK_REPEATS) for fn in runs.values())), strict=True))
     times = {name: statistics.median(values) for name, values in timed.items()}
     rows = []
     for name, fn in runs.items():
@@ -404,140 +347,111 @@ def tracking_error(arm: ad.Robot, trajectory: Sinusoid) -> list[list[str]]:
 
 
 # ----- 4. where the time goes -------------------------------------------------------------------
-_NJIT = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
+# Each loop runs one of armdyn's kernels (inlined, as simulation.py inlines them into its loop) over
+# distinct states, with one workspace of packed.workspace_size(n) values for the whole loop.
+@njit(inline="always", **NUMBA_OPTIONS)
+def _torque(M: np.ndarray, N: np.ndarray, u: np.ndarray, tau: np.ndarray) -> None:
+    """tau = M u + N."""
+    n = N.shape[0]
+    for i in range(n):
+        total = N[i]
+        for j in range(n):
+            total += M[i, j] * u[j]
+        tau[i] = total
 
 
-@njit(**_NJIT)
-def _loop_aba(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
-    w = np.empty(200 * Q.shape[1] + 128)
+@njit(**NUMBA_OPTIONS)
+def _loop_aba(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
+    work = np.empty(workspace_size(Q.shape[1]))
     for s in range(Q.shape[0]):
-        K.aba_core(m, w, 0, Q[s], QD[s], TAU[s], out[s])
+        aba_core(model, work, Q[s], QD[s], TAU[s], out[s])
 
 
-@njit(**_NJIT)
-def _loop_crba(m: np.ndarray, Q: np.ndarray, out: np.ndarray) -> None:
-    w = np.empty(200 * Q.shape[1] + 128)
+@njit(**NUMBA_OPTIONS)
+def _loop_crba(model: np.ndarray, Q: np.ndarray, out: np.ndarray) -> None:
+    work = np.empty(workspace_size(Q.shape[1]))
     for s in range(Q.shape[0]):
-        K.crba_core(m, w, 0, Q[s], out[s])
+        crba_core(model, work, Q[s], out[s])
 
 
-@njit(**_NJIT)
-def _loop_nonlinear(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, out: np.ndarray) -> None:
-    w = np.empty(200 * Q.shape[1] + 128)
+@njit(**NUMBA_OPTIONS)
+def _loop_nonlinear(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, out: np.ndarray) -> None:
+    work = np.empty(workspace_size(Q.shape[1]))
     for s in range(Q.shape[0]):
-        K.rnea_core(m, w, 0, Q[s], QD[s], QD[s], QD[s], K.NONLINEAR, out[s])
+        rnea_core(model, work, Q[s], QD[s], QD[s], QD[s], NONLINEAR, out[s])
 
 
-@njit(**_NJIT)
-def _loop_inverse(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
-    w = np.empty(200 * Q.shape[1] + 128)
+@njit(**NUMBA_OPTIONS)
+def _loop_inverse(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
+    work = np.empty(workspace_size(Q.shape[1]))
     for s in range(Q.shape[0]):
-        K.rnea_core(m, w, 0, Q[s], QD[s], U[s], QD[s], K.INVERSE_DYNAMICS, out[s])
+        rnea_core(model, work, Q[s], QD[s], U[s], QD[s], INVERSE_DYNAMICS, out[s])
 
 
-@njit(**_NJIT)
-def _loop_computed_torque(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
+@njit(**NUMBA_OPTIONS)
+def _loop_computed_torque(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
     """tau = M(q) u + N(q, qd) by CRBA, RNEA and a matrix-vector product."""
     n = Q.shape[1]
-    w, M, N = np.empty(200 * n + 128), np.empty((n, n)), np.empty(n)
+    work, M, N = np.empty(workspace_size(n)), np.empty((n, n)), np.empty(n)
     for s in range(Q.shape[0]):
-        K.crba_core(m, w, 0, Q[s], M)
-        K.rnea_core(m, w, 0, Q[s], QD[s], QD[s], QD[s], K.NONLINEAR, N)
-        for i in range(n):
-            total = N[i]
-            for j in range(n):
-                total += M[i, j] * U[s, j]
-            out[s, i] = total
+        crba_core(model, work, Q[s], M)
+        rnea_core(model, work, Q[s], QD[s], QD[s], QD[s], NONLINEAR, N)
+        _torque(M, N, U[s], out[s])
 
 
-@njit(inline="always", **_NJIT)
-def _cholesky_solve(M: np.ndarray, N: np.ndarray, tau: np.ndarray, y: np.ndarray) -> None:
-    """y = M^-1 (tau - N) by a Cholesky factorization of M in place."""
-    n = N.shape[0]
-    for j in range(n):
-        total = M[j, j]
-        for k in range(j):
-            total -= M[j, k] * M[j, k]
-        pivot = math.sqrt(total)
-        M[j, j] = pivot
-        for i in range(j + 1, n):
-            total = M[i, j]
-            for k in range(j):
-                total -= M[i, k] * M[j, k]
-            M[i, j] = total / pivot
-    for i in range(n):
-        total = tau[i] - N[i]
-        for k in range(i):
-            total -= M[i, k] * y[k]
-        y[i] = total / M[i, i]
-    for i in range(n - 1, -1, -1):
-        total = y[i]
-        for k in range(i + 1, n):
-            total -= M[k, i] * y[k]
-        y[i] = total / M[i, i]
-
-
-@njit(**_NJIT)
-def _loop_cholesky(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
-    """qdd = M^-1 (tau - N) by CRBA, RNEA and a Cholesky solve."""
+@njit(**NUMBA_OPTIONS)
+def _loop_cholesky(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
+    """qdd = M^-1 (tau - N) by CRBA, RNEA and the simulation's Cholesky solve (simulation._solve)."""
     n = Q.shape[1]
-    w, M, N = np.empty(200 * n + 128), np.empty((n, n)), np.empty(n)
+    work, M, N = np.empty(workspace_size(n)), np.empty((n, n)), np.empty(n)
+    no_coulomb, no_smoothing = np.zeros((n, 2)), np.zeros(n)  # the model's own Coulomb friction is in N
     for s in range(Q.shape[0]):
-        K.crba_core(m, w, 0, Q[s], M)
-        K.rnea_core(m, w, 0, Q[s], QD[s], QD[s], QD[s], K.NONLINEAR, N)
-        _cholesky_solve(M, N, TAU[s], out[s])
+        crba_core(model, work, Q[s], M)
+        rnea_core(model, work, Q[s], QD[s], QD[s], QD[s], NONLINEAR, N)
+        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s])
 
 
-FUSED = hasattr(K, "mass_matrix_and_bias")  # M and N in one pass, in armdyn's newer kernels
-
-
-@njit(**_NJIT)
-def _loop_fused(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
-    """qdd = M^-1 (tau - N), M and N by kernels.mass_matrix_and_bias (compiled only when it exists)."""
+@njit(**NUMBA_OPTIONS)
+def _loop_fused(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
+    """qdd = M^-1 (tau - N), M and N by crba.mass_matrix_and_bias, then simulation._solve."""
     n = Q.shape[1]
-    w, M, N = np.empty(200 * n + 128), np.empty((n, n)), np.empty(n)
+    work, M, N = np.empty(workspace_size(n)), np.empty((n, n)), np.empty(n)
+    no_coulomb, no_smoothing = np.zeros((n, 2)), np.zeros(n)
     for s in range(Q.shape[0]):
-        K.mass_matrix_and_bias(m, w, 0, Q[s], QD[s], M, N)
-        _cholesky_solve(M, N, TAU[s], out[s])
+        mass_matrix_and_bias(model, work, Q[s], QD[s], M, N)
+        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s])
 
 
-@njit(**_NJIT)
-def _loop_fused_torque(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
-    """tau = M u + N, M and N by kernels.mass_matrix_and_bias (compiled only when it exists)."""
+@njit(**NUMBA_OPTIONS)
+def _loop_fused_torque(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: np.ndarray, out: np.ndarray) -> None:
+    """tau = M u + N, M and N by crba.mass_matrix_and_bias."""
     n = Q.shape[1]
-    w, M, N = np.empty(200 * n + 128), np.empty((n, n)), np.empty(n)
+    work, M, N = np.empty(workspace_size(n)), np.empty((n, n)), np.empty(n)
     for s in range(Q.shape[0]):
-        K.mass_matrix_and_bias(m, w, 0, Q[s], QD[s], M, N)
-        for i in range(n):
-            total = N[i]
-            for j in range(n):
-                total += M[i, j] * U[s, j]
-            out[s, i] = total
+        mass_matrix_and_bias(model, work, Q[s], QD[s], M, N)
+        _torque(M, N, U[s], out[s])
 
 
-@njit(**_NJIT)
-def _loop_energy(m: np.ndarray, Q: np.ndarray, QD: np.ndarray, out: np.ndarray) -> None:
-    w = np.empty(200 * Q.shape[1] + 128)
+@njit(**NUMBA_OPTIONS)
+def _loop_energy(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, out: np.ndarray) -> None:
+    work = np.empty(workspace_size(Q.shape[1]))
     for s in range(Q.shape[0]):
-        K.energy_core(m, w, 0, Q[s], QD[s], out[s])
+        energy_core(model, work, Q[s], QD[s], out[s])
 
 
-@njit(**_NJIT)
-def _loop_coulomb(coulomb: np.ndarray, eps: float, QD: np.ndarray, out: np.ndarray) -> None:
-    """The smoothed Coulomb friction of every joint, as simulate() applies it."""
+@njit(**NUMBA_OPTIONS)
+def _loop_coulomb(coulomb: np.ndarray, eps: np.ndarray, QD: np.ndarray, out: np.ndarray) -> None:
+    """The smoothed Coulomb friction of every joint, as simulate() applies it (friction.smooth_coulomb)."""
     for s in range(QD.shape[0]):
         for i in range(QD.shape[1]):
-            rate = QD[s, i]
-            smooth = math.tanh(rate / eps)
-            out[s, i] = smooth * coulomb[i, 0] if rate >= 0.0 else -smooth * coulomb[i, 1]
+            out[s, i] = smooth_coulomb(coulomb, eps, i, QD[s, i])
 
 
 def kernels(arm: ad.Robot, rng: np.random.Generator) -> tuple[list[list[str]], dict[str, float]]:
-    """Microseconds per call of each kernel in a compiled loop over distinct states; rows and the times."""
-    m = compile_robot(arm)
-    n = arm.n
+    """Microseconds per call of each kernel in a compiled loop over distinct states, each loop's result
+    checked against a reference before timing; rows and the times."""
+    model, n = arm.packed, arm.n
     Q, QD, U = rng.uniform(-1.0, 1.0, (3, KERNEL_STATES, n))
-    matrix = np.empty((KERNEL_STATES, n, n))
     reference_fd = np.array([arm.forward_dynamics(q, qd, u) for q, qd, u in zip(Q, QD, U, strict=True)])
     reference_M = np.array([arm.inertia_matrix(q) for q in Q])
     reference_N = np.array([arm.nonlinear_terms(q, qd) for q, qd in zip(Q, QD, strict=True)])
@@ -549,94 +463,35 @@ def kernels(arm: ad.Robot, rng: np.random.Generator) -> tuple[list[list[str]], d
         name: np.empty((KERNEL_STATES, n))
         for name in ("aba", "cholesky", "fused", "nonlinear", "inverse", "computed", "fused_torque", "coulomb")
     }
-    energy = np.empty((KERNEL_STATES, 2))
+    outs["crba"], outs["energy"] = np.empty((KERNEL_STATES, n, n)), np.empty((KERNEL_STATES, 2))
+    state, torque, coulomb = (model, Q, QD, U), (model, Q, QD), (arm.coulomb_friction.copy(), np.full(n, 1e-3), QD)
+    kinds = [  # name, label, loop, its inputs (before its output), the reference its result is checked against
+        ("aba", "forward dynamics, ABA (aba_core)", _loop_aba, state, reference_fd),
+        ("cholesky", "forward dynamics, CRBA + RNEA + Cholesky solve", _loop_cholesky, state, reference_fd),
+        ("fused", "forward dynamics, mass_matrix_and_bias + Cholesky solve", _loop_fused, state, reference_fd),
+        ("crba", "M(q), CRBA (crba_core)", _loop_crba, (model, Q), reference_M),
+        ("nonlinear", "N(q, qd), RNEA (rnea_core, NONLINEAR)", _loop_nonlinear, torque, reference_N),
+        ("computed", "computed torque M u + N: CRBA + RNEA + M u", _loop_computed_torque, state, reference_tau),
+        ("fused_torque", "computed torque M u + N: mass_matrix_and_bias + M u", _loop_fused_torque, state,
+         reference_tau),
+        ("inverse", "computed torque M u + N: one RNEA with qdd = u", _loop_inverse, state, reference_tau),
+        ("energy", "kinetic + potential energy (energy_core)", _loop_energy, torque, reference_energy),
+        ("coulomb", f"smoothed Coulomb friction, {n} tanh", _loop_coulomb, coulomb, None),
+    ]  # fmt: skip
     loops = {
-        "aba": ("forward dynamics, ABA (aba_core)", partial(_loop_aba, m, Q, QD, U, outs["aba"]), reference_fd),
-        "cholesky": (
-            "forward dynamics, CRBA + RNEA + Cholesky solve",
-            partial(_loop_cholesky, m, Q, QD, U, outs["cholesky"]),
-            reference_fd,
-        ),
-        "fused": (
-            "forward dynamics, mass_matrix_and_bias + Cholesky solve",
-            partial(_loop_fused, m, Q, QD, U, outs["fused"]),
-            reference_fd,
-        ),
-        "crba": ("M(q), CRBA (crba_core)", partial(_loop_crba, m, Q, matrix), reference_M),
-        "nonlinear": (
-            "N(q, qd), RNEA (rnea_core, NONLINEAR)",
-            partial(_loop_nonlinear, m, Q, QD, outs["nonlinear"]),
-            reference_N,
-        ),
-        "computed": (
-            "computed torque M u + N: CRBA + RNEA + M u",
-            partial(_loop_computed_torque, m, Q, QD, U, outs["computed"]),
-            reference_tau,
-        ),
-        "fused_torque": (
-            "computed torque M u + N: mass_matrix_and_bias + M u",
-            partial(_loop_fused_torque, m, Q, QD, U, outs["fused_torque"]),
-            reference_tau,
-        ),
-        "inverse": (
-            "computed torque M u + N: one RNEA with qdd = u",
-            partial(_loop_inverse, m, Q, QD, U, outs["inverse"]),
-            reference_tau,
-        ),
-        "energy": (
-            "kinetic + potential energy (energy_core)",
-            partial(_loop_energy, m, Q, QD, energy),
-            reference_energy,
-        ),
-        "coulomb": (
-            f"smoothed Coulomb friction, {n} tanh",
-            partial(_loop_coulomb, arm.coulomb_friction.copy(), 1e-3, QD, outs["coulomb"]),
-            None,
-        ),
+        name: (label, partial(loop, *inputs, outs[name]), reference) for name, label, loop, inputs, reference in kinds
     }
-    if not FUSED:
-        del loops["fused"], loops["fused_torque"]
-    times = measure(*(Candidate(call, KERNEL_REPEATS) for _, call, _ in loops.values()))
-    per_call = {name: seconds / KERNEL_STATES * 1e6 for name, seconds in zip(loops, times, strict=True)}
-    results = outs | {"crba": matrix, "energy": energy}
-    rows = []
-    for name, (label, _, reference) in loops.items():
-        agreement = "-"
+    agreement = {}
+    for name, (_, call, reference) in loops.items():
+        call()
+        agreement[name] = "-"
         if reference is not None:
-            error = relative_error(results[name], reference)
-            agreement = sci(error) + ("" if error <= TOLERANCE else f" (DIFFERS: more than {TOLERANCE:g})")
-        rows.append([label, us(per_call[name]), agreement])
+            error = relative_error(outs[name], reference)
+            agreement[name] = sci(error) + ("" if error <= TOLERANCE else f" (DIFFERS: more than {TOLERANCE:g})")
+    candidates = (Candidate(call, repeats=KERNEL_REPEATS, states=KERNEL_STATES) for _, call, _ in loops.values())
+    per_call = dict(zip(loops, measure(*candidates), strict=True))
+    rows = [[label, us(per_call[name]), agreement[name]] for name, (label, _, _) in loops.items()]
     return rows, per_call
-
-
-class Parts:
-    """Wraps named functions of armdyn.simulation in timers while in use (a name the module lacks is left
-    out); ``spent`` holds the nanoseconds of each since the last ``clear``."""
-
-    def __init__(self, names: Sequence[str]) -> None:
-        import armdyn.simulation as module
-
-        self.module, self.spent = module, {}
-        self.originals = {name: getattr(module, name) for name in names if callable(getattr(module, name, None))}
-
-    def _timer(self, name: str, original: Callable) -> Callable:
-        def timed(*args: object, **kwargs: object) -> object:
-            start = time.perf_counter_ns()
-            try:
-                return original(*args, **kwargs)
-            finally:
-                self.spent[name] = self.spent.get(name, 0) + time.perf_counter_ns() - start
-
-        return timed
-
-    def __enter__(self) -> Parts:
-        for name, original in self.originals.items():
-            setattr(self.module, name, self._timer(name, original))
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for name, original in self.originals.items():
-            setattr(self.module, name, original)
 
 
 def breakdown(arm: ad.Robot, trajectory: Sinusoid) -> tuple[list[list[str]], float]:
@@ -658,14 +513,13 @@ def breakdown(arm: ad.Robot, trajectory: Sinusoid) -> tuple[list[list[str]], flo
 
         return run
 
-    split: list[dict[str, int]] = []
-    with Parts(("run_rk4", "_energies")) as parts:
+    split: list[dict[str, float]] = []  # seconds of each part, and the total, per call
+    with Spans(simulation, ("run_rk4", "_energies")) as parts:
 
         def in_parts() -> None:
             parts.spent.clear()
-            start = time.perf_counter_ns()
-            tracking_run()
-            split.append(parts.spent | {"total": time.perf_counter_ns() - start})
+            total = wall(tracking_run)[1]
+            split.append({name: spent / 1e9 for name, spent in parts.spent.items()} | {"total": total})
 
         runs = {
             "ComputedTorque on the sinusoid (part 2), timed in parts: the whole call": in_parts,
@@ -680,7 +534,8 @@ def breakdown(arm: ad.Robot, trajectory: Sinusoid) -> tuple[list[list[str]], flo
             f"one step, numba.set_num_threads(1) (default {threads})": single_thread(one_step),
             "ComputedTorque on the sinusoid, numba.set_num_threads(1)": single_thread(tracking_run),
         }
-        times = dict(zip(runs, measure(*(Candidate(fn) for fn in runs.values())), strict=True))
+        candidates = (Candidate(fn, repeats=TRACK_REPEATS) for fn in runs.values())
+        times = dict(zip(runs, measure(*candidates, unit=SECOND), strict=True))
     split = split[1:]  # the first call was the warm-up
     whole, fixed, fixed_single = (list(times)[i] for i in (0, 1, 5))
 
@@ -688,7 +543,7 @@ def breakdown(arm: ad.Robot, trajectory: Sinusoid) -> tuple[list[list[str]], flo
         return us(seconds / steps * 1e6)
 
     rows = [[whole, ms(times[whole]), per_step(times[whole] - times[fixed])]]
-    median = {name: statistics.median(s.get(name, 0) for s in split) / 1e9 for name in parts.originals}
+    median = {name: statistics.median(s.get(name, 0.0) for s in split) for name in parts.originals}
     if "run_rk4" in median:
         rows.append(
             ["  of which the compiled loop (simulation.run_rk4)", ms(median["run_rk4"]), per_step(median["run_rk4"])]
@@ -697,7 +552,7 @@ def breakdown(arm: ad.Robot, trajectory: Sinusoid) -> tuple[list[list[str]], flo
         label = "  of which the energies after the run (simulation._energies, a Numba-parallel batch)"
         rows.append([label, ms(median["_energies"]), per_step(median["_energies"])])
     if len(median) == 2:
-        rest = statistics.median(s["total"] - sum(s.get(name, 0) for name in median) for s in split) / 1e9
+        rest = statistics.median(s["total"] - sum(s.get(name, 0.0) for name in median) for s in split)
         rows.append(["  of which the rest (set-up in Python, the Result)", ms(rest), "-"])
     for label in list(runs)[1:]:
         base = times[fixed_single] if "set_num_threads" in label else times[fixed]
@@ -711,74 +566,58 @@ def breakdown(arm: ad.Robot, trajectory: Sinusoid) -> tuple[list[list[str]], flo
 
 def header(source: tuple[str, str], args: argparse.Namespace) -> list[str]:
     toolbox = "skipped (--skip-toolbox)" if args.skip_toolbox else version("roboticstoolbox-python")
-    return [
-        f"Date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}",
-        f"CPU: {cpu_model()}, {os.cpu_count()} logical cores; Numba threads {numba.get_num_threads()} "
-        "(the simulation loop runs on one)",
-        f"Versions: armdyn {ad.__version__}, numba {numba.__version__}, numpy {np.__version__}, "
-        f"scipy {version('scipy')}, roboticstoolbox {toolbox}, Python {platform.python_version()}",
-        f"armdyn source: {source[1]}, source hash {source[0]}",
-        "The machine is shared and noisy: absolute times move from run to run; the ratios are what matter.",
+    versions = {
+        "numba": numba.__version__,
+        "numpy": np.__version__,
+        "scipy": version("scipy"),
+        "roboticstoolbox": toolbox,
+    }
+    return describe(source, versions, " (the simulation loop runs on one)") + [
         f"armdyn's times are medians: {FALL_REPEATS} runs each at dt = 1 ms and 0.2 ms, {RK45_REPEATS} with rk45, "
         f"{TRACK_REPEATS} per tracking run, {KERNEL_REPEATS} loops of {KERNEL_STATES:,} states per kernel; the "
         "candidates' runs are interleaved. Each simulate() time is the whole call (setup, loop, Result).",
     ]
 
 
-def warm_up(puma: ad.Robot, rr: ad.Robot, trajectories: Sequence[Sinusoid]) -> float:
-    """Seconds for the first simulate() calls (Numba compiles or loads its cache), untimed."""
-    start = time.perf_counter()
+def warm_up(puma: ad.Robot, rr: ad.Robot, trajectories: Sequence[Sinusoid]) -> None:
+    """The first simulate() calls (Numba compiles or loads its cache), untimed."""
     simulate(puma, None, None, t_final=0.01, dt=DT, q0=puma.qr)
     simulate(puma, None, None, t_final=0.01, dt=DT, q0=puma.qr, method="rk45")
     for arm, trajectory in zip((puma, rr), trajectories, strict=True):
         simulate(arm, ComputedTorque(*GAINS), trajectory, t_final=0.01, dt=DT)
     simulate(puma, PID(*GAINS), trajectories[0], t_final=0.01, dt=DT)
-    return time.perf_counter() - start
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--skip-toolbox", action="store_true", help="leave out the Robotics Toolbox's fdyn")
+    parser = arguments(__doc__, skip_toolbox="leave out the Robotics Toolbox's fdyn")
     parser.add_argument(
         "--fdyn-timeout", type=float, default=FDYN_TIMEOUT, help="seconds for the Toolbox's fdyn (default 300)"
     )
     parser.add_argument("--fdyn-worker", action="store_true", help=argparse.SUPPRESS)
-    parser.add_argument("--state", help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if args.fdyn_worker:
-        fdyn_worker(args.fdyn_timeout, json.loads(args.state))
-        return
-
-    started = time.perf_counter()
+    args = parse(parser, "fdyn_worker", lambda args: fdyn_worker(args.fdyn_timeout, json.loads(args.state)))
+    report = Report.begin(args, "armdyn simulation benchmarks", RESULTS, globals(), QUICK, QUICK_LIMITS)
     rng = np.random.default_rng(SEED)
-    source = source_state()
-    lines = header(source, args)
-    print("\n".join(lines), flush=True)
-    tables = []
-
-    def show(table: Table) -> None:
-        tables.append(table)
-        print(table.text(), flush=True)
+    report.note(*header(report.source, args))
 
     puma, rr = ad.models.puma560(), ad.models.two_link_planar()
     phases = np.where(np.arange(puma.n) % 2 == 0, 0.0, np.pi / 2)
     puma_trajectory = Sinusoid(0.1, 0.5, phase=phases, offset=puma.qz)
     rr_trajectory = Sinusoid([0.1, 0.1], [0.5, 0.5], phase=[0.0, np.pi / 2])
-    seconds = warm_up(puma, rr, (puma_trajectory, rr_trajectory))
-    lines.append(
-        f"armdyn's first simulate() calls in this process (compile or load machine code, untimed): {seconds:.1f} s"
+    seconds = wall(partial(warm_up, puma, rr, (puma_trajectory, rr_trajectory)))[1]
+    report.note(
+        f"armdyn's first simulate() calls in this process (compile or load machine code, untimed): {seconds:.1f} s",
+        end="\n\n",
     )
-    print(lines[-1], end="\n\n", flush=True)
 
     for table in fall(puma, args):
-        show(table)
+        report.show(table)
 
     arms = {
         f"PUMA 560, {T_PUMA:g} s": (puma, puma_trajectory, T_PUMA),
         f"RR arm (Example 4.4-1), {T_RR:g} s": (rr, rr_trajectory, T_RR),
     }
     rows, _ = tracking(arms)
-    show(
+    report.show(
         Table(
             f"2-3. Computed-torque tracking at {1 / DT:g} Hz (RK4, dt = {DT * 1e3:g} ms, compiled)",
             [
@@ -810,7 +649,7 @@ def main() -> None:
         )
     )
 
-    show(
+    report.show(
         Table(
             "2b. PUMA 560 tracking error (rad) of the same run with less friction stiffness or a finer step",
             ["variant", "final max |e|", "max |e|, last 1 s"],
@@ -834,11 +673,12 @@ def main() -> None:
         ("ABA design: 4 ABA + CRBA + RNEA + M u", 4 * per_call["aba"] + controller),
         ("Cholesky design: 4 (CRBA + RNEA + Cholesky) + CRBA + RNEA + M u", 4 * fd + controller),
         ("the same, the first stage from the controller's M and N: 3 FD + controller", 3 * fd + controller),
+        (
+            "the same with M and N by mass_matrix_and_bias: 3 FD + controller",
+            3 * per_call["fused"] + per_call["fused_torque"],
+        ),
     ]
-    if FUSED:
-        fused = 3 * per_call["fused"] + per_call["fused_torque"]
-        sums.append(("the same with M and N by mass_matrix_and_bias: 3 FD + controller", fused))
-    show(
+    report.show(
         Table(
             f"4a. Where the time goes: simulate() of the PUMA 560, {T_PUMA:g} s at {DT * 1e3:g} ms, in parts and "
             "with less work per step",
@@ -855,7 +695,7 @@ def main() -> None:
             left=1,
         )
     )
-    show(
+    report.show(
         Table(
             f"4b. PUMA 560 kernels in a compiled loop over {KERNEL_STATES:,} distinct states (microseconds per call)",
             ["kernel", "us/call", "max rel. diff vs reference"],
@@ -864,7 +704,9 @@ def main() -> None:
                 "Each kernel is inlined into a Numba loop of this file (cache=True), as simulation.py inlines it "
                 "into its loop; no Python call per state. References: arm.forward_dynamics, inertia_matrix, "
                 "nonlinear_terms, inertia_matrix @ u + nonlinear_terms, kinetic_energy + potential_energy "
-                "(forward dynamics with the arm's friction: Coulomb sgn(qd) in both).",
+                "(forward dynamics with the arm's friction: Coulomb sgn(qd) in both). Each loop's result is "
+                "checked against its reference before timing. The Cholesky solve is simulation._solve, given "
+                "a zero Coulomb table (the model's Coulomb friction is already in N).",
                 f"The sums are per-step costs of step designs, to compare with the compiled loop's "
                 f"{us(loop_per_step)} us per step (4a) and the budget of {us(budget)} us per step for "
                 f"{REAL_TIME_TARGET:g}x real time.",
@@ -873,22 +715,7 @@ def main() -> None:
         )
     )
 
-    elapsed = time.perf_counter() - started
-    if source_state()[0] != source[0]:
-        lines.append(
-            f"WARNING: armdyn's source changed during the run (hash {source[0]} at the start, "
-            f"{source_state()[0]} at the end): the parts may have timed different versions."
-        )
-        print(lines[-1])
-    print(f"Total run time {elapsed:.0f} s; written to {RESULTS}")
-    markdown = [
-        "# armdyn simulation benchmarks",
-        "",
-        *(f"- {line}" for line in lines),
-        f"- Run time {elapsed:.0f} s.",
-        "",
-    ]
-    RESULTS.write_text("\n".join(markdown + [table.markdown() for table in tables]))
+    report.finish("the parts may have timed different versions.")
 
 
 if __name__ == "__main__":

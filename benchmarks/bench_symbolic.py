@@ -4,6 +4,7 @@ against armdyn's recursive kernels, and the Robotics Toolbox's symbolic RNE for 
     .venv/bin/python benchmarks/bench_symbolic.py                      # about 5 minutes
     .venv/bin/python benchmarks/bench_symbolic.py --skip-toolbox       # about 1 minute
     .venv/bin/python benchmarks/bench_symbolic.py --simplify-timeout 60
+    .venv/bin/python benchmarks/bench_symbolic.py --quick              # a smoke run, Toolbox steps capped
 
 Five parts, all in this one process except where said:
 
@@ -20,27 +21,18 @@ Five parts, all in this one process except where said:
 
 Before anything is timed, the closed form is checked against the kernels on the same inputs (relative to
 the largest entry of each state, 1e-9). Times are medians over repeats; the candidates' repeats are
-interleaved so that machine noise hits all of them alike. Prints plain tables and writes the same as
-Markdown to results_symbolic.md.
+interleaved so that machine noise hits all of them alike (the timing, checking and tables are
+benchmarks/harness.py's). Prints plain tables and writes the same as Markdown to results_symbolic.md;
+--quick runs every part with few repeats, a small batch and short Toolbox limits, and writes nothing.
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
-import gc
 import json
-import os
-import platform
-import queue
-import statistics
 import subprocess
 import sys
-import tempfile
-import threading
-import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator, Sequence
 from functools import partial
 from pathlib import Path
 
@@ -48,7 +40,25 @@ import numba
 import numpy as np
 import symengine as se
 import sympy
-from common import _loop_ns, cpu_model, ratio, source_state, us, version
+from harness import (
+    Candidate,
+    Report,
+    Table,
+    arguments,
+    check,
+    describe,
+    emit,
+    measure,
+    parse,
+    ratio,
+    relative_error,
+    run_worker,
+    seconds,
+    timed_step,
+    us,
+    version,
+    wall,
+)
 
 import armdyn as ad
 from armdyn.symbolic import ClosedForm, derive
@@ -66,8 +76,9 @@ SIMPLIFY_TIMEOUT = 180.0  # seconds for sympy.simplify(tau[0]) (flag --simplify-
 BUILD_TIMEOUT = 120.0  # seconds for a worker to import the Toolbox and build the symbolic PUMA 560
 WORKER_MEMORY = 8 << 30  # bytes of address space a Toolbox worker may use (simplify can grow without end)
 RESULTS = Path(__file__).with_name("results_symbolic.md")
+QUICK = {"CALLS": 50, "REPEATS": 3, "BATCH": 2000, "BATCH_REPEATS": 2}
+QUICK_LIMITS = {"toolbox_timeout": 20.0, "count_timeout": 10.0, "simplify_timeout": 5.0}  # --quick: at the most
 NEWLINE = "\n"
-EVENT = "@@event "  # prefix of a Toolbox worker's result lines on its stdout
 
 ARMS: dict[str, Callable[[], ad.Robot]] = {
     "two_link_planar(symbolic=True)": partial(ad.models.two_link_planar, symbolic=True),
@@ -86,97 +97,7 @@ FUNCTIONS = {  # closed-form function -> (armdyn kernel, state arguments, dimens
 }
 
 
-# ----- timing -----------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Candidate:
-    """A zero-argument call to time: ``calls`` calls per timed loop, ``repeats`` loops, ``states`` per call."""
-
-    fn: Callable[[], object]
-    calls: int = CALLS
-    repeats: int = REPEATS
-    states: int = 1
-
-
-def measure(*candidates: Candidate) -> list[float]:
-    """Median microseconds per state of each candidate; repeats interleaved, garbage collector off."""
-    for candidate in candidates:
-        candidate.fn()  # warm-up: a first batch call compiles Numba's parallel loop
-    samples: list[list[int]] = [[] for _ in candidates]
-    collecting = gc.isenabled()
-    gc.disable()
-    try:
-        for repeat in range(max(candidate.repeats for candidate in candidates)):
-            for candidate, times in zip(candidates, samples, strict=True):
-                if repeat < candidate.repeats:
-                    times.append(_loop_ns(candidate.fn, candidate.calls))
-    finally:
-        if collecting:
-            gc.enable()
-    return [
-        statistics.median(times) / (candidate.calls * candidate.states) / 1e3
-        for candidate, times in zip(candidates, samples, strict=True)
-    ]
-
-
-def relative_error(ours: object, theirs: object, dims: int) -> float:
-    """Largest error over states, each relative to the largest entry of the peer's result for that state;
-    ``dims`` is 1 for vectors, 2 for matrices (the trailing dimensions of one state's result)."""
-    ours, theirs = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
-    if ours.shape != theirs.shape:
-        raise AssertionError(f"shapes differ: {ours.shape} vs {theirs.shape}")
-    states = theirs.shape[: theirs.ndim - dims]
-    error = np.abs(ours - theirs).reshape(*states, -1).max(axis=-1)
-    scale = np.maximum(np.abs(theirs).reshape(*states, -1).max(axis=-1), 1e-300)
-    return float(np.max(error / scale))
-
-
-def check(what: str, ours: object, theirs: object, dims: int) -> float:
-    """Refuse to time two computations that disagree."""
-    error = relative_error(ours, theirs, dims)
-    if not error <= TOLERANCE:
-        raise AssertionError(f"{what}: the closed form and the kernel differ by {error:.2e}, more than {TOLERANCE}")
-    return error
-
-
-def wall(fn: Callable[[], object]) -> tuple[object, float]:
-    """(result, seconds) of one call."""
-    start = time.perf_counter()
-    result = fn()
-    return result, time.perf_counter() - start
-
-
-# ----- tables -----------------------------------------------------------------------------------
-@dataclass
-class Table:
-    title: str
-    headers: Sequence[str]
-    rows: list[list[str]] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    left: int = 1  # columns aligned left in Markdown; the others are numbers
-
-    def text(self) -> str:
-        widths = [max(len(row[i]) for row in [self.headers, *self.rows]) for i in range(len(self.headers))]
-
-        def line(cells: Sequence[str]) -> str:
-            return "  ".join(cell.ljust(width) for cell, width in zip(cells, widths, strict=True)).rstrip()
-
-        rule = "  ".join("-" * width for width in widths)
-        body = [self.title, "=" * len(self.title), line(self.headers), rule, *map(line, self.rows)]
-        return "\n".join(body + [f"  * {note}" for note in self.notes]) + "\n"
-
-    def markdown(self) -> str:
-        body = [f"## {self.title}", "", "| " + " | ".join(self.headers) + " |"]
-        body.append("|" + "|".join("---" if i < self.left else "---:" for i in range(len(self.headers))) + "|")
-        body += ["| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |" for row in self.rows]
-        if self.notes:
-            body += ["", *(f"- {note}" for note in self.notes)]
-        return "\n".join(body) + "\n"
-
-
-def seconds(value: float) -> str:
-    return f"{value:.3f}" if value < 1 else f"{value:.2f}" if value < 100 else f"{value:,.0f}"
-
-
+# ----- formats ----------------------------------------------------------------------------------
 def count(value: int) -> str:
     return f"{value:,}"
 
@@ -228,9 +149,10 @@ print(imported - start, derived - imported, done - derived)
 
 def fresh_interpreter() -> tuple[float, list[float]]:
     """(wall seconds of a fresh interpreter, [import, derive, to_python + to_c] seconds measured inside it)."""
-    start = time.perf_counter()
-    run = subprocess.run([sys.executable, "-c", FRESH], capture_output=True, text=True, check=True)
-    return time.perf_counter() - start, [float(x) for x in run.stdout.split()]
+    run, elapsed = wall(
+        partial(subprocess.run, [sys.executable, "-c", FRESH], capture_output=True, text=True, check=True)
+    )
+    return elapsed, [float(x) for x in run.stdout.split()]
 
 
 def compilation(form: ClosedForm, n: int) -> tuple[object, list[list[str]]]:
@@ -264,19 +186,25 @@ def random_state(rng: np.random.Generator, n: int, batch: tuple[int, ...] = ()) 
     return {"q": q, "qd": qd, "qdd": qdd}
 
 
-def one_state(arm: ad.Robot, compiled: object, rng: np.random.Generator) -> list[list[str]]:
-    state = random_state(rng, arm.n)
-    rows = []
+def checked(arm: ad.Robot, compiled: object, state: dict[str, np.ndarray], what: str) -> Iterator[tuple]:
+    """Per function: (name, kernel name, closed-form call, kernel call, their relative difference), the two
+    calls zero-argument and checked to agree."""
     for name, (kernel_name, names, dims) in FUNCTIONS.items():
         args = [state[a] for a in names]
-        closed, kernel = getattr(compiled, name), getattr(arm, kernel_name)
-        error = check(f"PUMA 560 {name} vs {kernel_name}", closed(*args), kernel(*args), dims)
-        ours_out, theirs_out = np.empty_like(kernel(*args)), np.empty_like(kernel(*args))
+        closed, kernel = partial(getattr(compiled, name), *args), partial(getattr(arm, kernel_name), *args)
+        error = check(f"PUMA 560 {what}{name}: closed form vs {kernel_name}", closed(), kernel(), TOLERANCE, dims)
+        yield name, kernel_name, closed, kernel, error
+
+
+def one_state(arm: ad.Robot, compiled: object, rng: np.random.Generator) -> list[list[str]]:
+    rows = []
+    for name, kernel_name, closed, kernel, error in checked(arm, compiled, random_state(rng, arm.n), ""):
+        ours_out, theirs_out = np.empty_like(kernel()), np.empty_like(kernel())
         plain, with_out, reference, reference_out = measure(
-            Candidate(partial(closed, *args)),
-            Candidate(partial(closed, *args, out=ours_out)),
-            Candidate(partial(kernel, *args)),
-            Candidate(partial(kernel, *args, out=theirs_out)),
+            Candidate(closed, CALLS, REPEATS),
+            Candidate(partial(closed, out=ours_out), CALLS, REPEATS),
+            Candidate(kernel, CALLS, REPEATS),
+            Candidate(partial(kernel, out=theirs_out), CALLS, REPEATS),
         )
         rows.append(
             [
@@ -295,14 +223,12 @@ def one_state(arm: ad.Robot, compiled: object, rng: np.random.Generator) -> list
 
 
 def batch(arm: ad.Robot, compiled: object, rng: np.random.Generator) -> list[list[str]]:
-    state = random_state(rng, arm.n, (BATCH,))
     rows = []
-    for name, (kernel_name, names, dims) in FUNCTIONS.items():
-        args = [state[a] for a in names]
-        closed, kernel = getattr(compiled, name), getattr(arm, kernel_name)
-        error = check(f"PUMA 560 batch {name} vs {kernel_name}", closed(*args), kernel(*args), dims)
+    for name, kernel_name, closed, kernel, error in checked(
+        arm, compiled, random_state(rng, arm.n, (BATCH,)), "batch "
+    ):
         batched = partial(Candidate, calls=1, repeats=BATCH_REPEATS, states=BATCH)
-        ours, theirs = measure(batched(partial(closed, *args)), batched(partial(kernel, *args)))
+        ours, theirs = measure(batched(closed), batched(kernel))
         rows.append([name, kernel_name, f"{error:.1e}", us(ours), us(theirs), ratio(ours / theirs)])
     return rows
 
@@ -314,18 +240,6 @@ def toolbox_worker(task: str, state: list[float]) -> None:
 
     resource.setrlimit(resource.RLIMIT_AS, (WORKER_MEMORY, WORKER_MEMORY))
 
-    def emit(step: str, **values: object) -> None:
-        print(EVENT + json.dumps({"step": step, **values}), flush=True)
-
-    def timed(step: str, fn: Callable[[], object]) -> object:
-        start = time.perf_counter()
-        try:
-            result = fn()
-        except BaseException as error:  # the report says what went wrong, whatever it was (MemoryError too)
-            emit(step, error=f"{type(error).__name__}: {error}"[:300], seconds=time.perf_counter() - start)
-            raise SystemExit(1) from None
-        return result, time.perf_counter() - start
-
     def build() -> tuple:
         import roboticstoolbox as rtb
         from spatialmath.base import sym
@@ -333,12 +247,12 @@ def toolbox_worker(task: str, state: list[float]) -> None:
         puma = rtb.models.DH.Puma560(symbolic=True)
         return puma, [sym.symbol(f"{name}_:6") for name in ("q", "qd", "qdd")]
 
-    (puma, (q, qd, qdd)), build_s = timed("build", build)
+    (puma, (q, qd, qdd)), build_s = timed_step("build", build)
     emit("build", seconds=build_s)
-    tau, rne_s = timed("rne", lambda: puma.rne(q, qd, qdd, gravity=[0.0, 0.0, -9.81]))
+    tau, rne_s = timed_step("rne", lambda: puma.rne(q, qd, qdd, gravity=[0.0, 0.0, -9.81]))
     emit("rne", seconds=rne_s, entries=len(tau), kind=type(tau[0]).__name__)
     if task == "simplify":
-        simple, simplify_s = timed("simplify", lambda: sympy.simplify(tau[0]))
+        simple, simplify_s = timed_step("simplify", lambda: sympy.simplify(tau[0]))
         emit("simplify", seconds=simplify_s, count_ops=int(sympy.count_ops(simple)))
         return
 
@@ -353,62 +267,18 @@ def toolbox_worker(task: str, state: list[float]) -> None:
             "tau_after": sum(count_operations(x) for _, x in replacements) + sum(map(count_operations, reduced)),
         }
 
-    counts, cse_s = timed("cse", cse)
+    counts, cse_s = timed_step("cse", cse)
     emit("cse", seconds=cse_s, **counts)
     symbols = [se.Symbol(str(s)) for s in (*q, *qd, *qdd)]
-    values, evaluate_s = timed("evaluate", lambda: se.Lambdify(symbols, [se.sympify(x) for x in tau])(state))
+    values, evaluate_s = timed_step("evaluate", lambda: se.Lambdify(symbols, [se.sympify(x) for x in tau])(state))
     emit("evaluate", seconds=evaluate_s, values=[float(x) for x in np.ravel(values)])
-    ops, count_s = timed("count_ops", lambda: sympy.count_ops(tau[0]))
+    ops, count_s = timed_step("count_ops", lambda: sympy.count_ops(tau[0]))
     emit("count_ops", seconds=count_s, value=int(ops))
 
 
-def run_worker(task: str, phases: Sequence[tuple[str, float]], state: list[float]) -> dict[str, dict]:
-    """Start a worker; wait for each phase in turn at most its limit, and stop the worker when one overruns.
-
-    Result per phase: the worker's event, {"timeout": limit}, {"error": ...} or {"skipped": ...}."""
-    command = [sys.executable, __file__, "--toolbox-worker", task, "--state", json.dumps(state)]
-    results: dict[str, dict] = {}
-    with tempfile.TemporaryFile(mode="w+") as stderr:
-        process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True)
-        lines: queue.Queue[str | None] = queue.Queue()
-
-        def read() -> None:
-            for line in process.stdout:
-                if line.startswith(EVENT):
-                    lines.put(line[len(EVENT) :])
-            lines.put(None)
-
-        threading.Thread(target=read, daemon=True).start()
-        stopped = ""
-        try:
-            for phase, limit in phases:
-                if stopped:
-                    results[phase] = {"skipped": stopped}
-                    continue
-                deadline = time.monotonic() + limit
-                while phase not in results:
-                    try:
-                        line = lines.get(timeout=max(deadline - time.monotonic(), 0.0))
-                    except queue.Empty:
-                        results[phase] = {"timeout": limit}
-                        stopped = f"the worker was stopped after {phase}"
-                        break
-                    if line is None:
-                        process.wait()
-                        stderr.seek(0)
-                        tail = " ".join(stderr.read().strip().splitlines()[-3:])[-300:]
-                        results[phase] = {"error": f"worker exited with code {process.returncode}: {tail}"}
-                        stopped = f"the worker failed in {phase}"
-                        break
-                    event = json.loads(line)
-                    results[event["step"]] = event
-                if "error" in results[phase]:
-                    stopped = stopped or f"the worker failed in {phase}"
-        finally:
-            if process.poll() is None:
-                process.kill()
-            process.wait()
-    return results
+def worker(task: str, phases: Sequence[tuple[str, float]], state: list[float]) -> dict[str, dict]:
+    """Run a Toolbox worker (this script with --toolbox-worker) through its phases (harness.run_worker)."""
+    return run_worker([sys.executable, __file__, "--toolbox-worker", task, "--state", json.dumps(state)], phases)
 
 
 def outcome(result: dict) -> str:
@@ -427,7 +297,7 @@ def toolbox(
     state = random_state(rng, arm.n)
     flat = [float(x) for x in np.concatenate([state["q"], state["qd"], state["qdd"]])]
     print(f"  Toolbox worker 1: rne (limit {args.toolbox_timeout:.0f} s), analysis ...", flush=True)
-    analysis = run_worker(
+    analysis = worker(
         "analyse",
         [
             ("build", BUILD_TIMEOUT),
@@ -439,7 +309,7 @@ def toolbox(
         flat,
     )
     print(f"  Toolbox worker 2: simplify (limit {args.simplify_timeout:.0f} s) ...", flush=True)
-    simplify = run_worker(
+    simplify = worker(
         "simplify",
         [("build", BUILD_TIMEOUT), ("rne", args.toolbox_timeout), ("simplify", args.simplify_timeout)],
         flat,
@@ -531,14 +401,15 @@ def toolbox(
 
 def header(source: tuple[str, str], args: argparse.Namespace) -> list[str]:
     toolbox = "skipped (--skip-toolbox)" if args.skip_toolbox else version("roboticstoolbox-python")
-    return [
-        f"Date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}",
-        f"CPU: {cpu_model()}, {os.cpu_count()} logical cores; Numba threads {numba.get_num_threads()}",
-        f"Versions: armdyn {ad.__version__}, sympy {sympy.__version__}, symengine {se.__version__}, "
-        f"numba {numba.__version__}, numpy {np.__version__}, roboticstoolbox {toolbox}, "
-        f"spatialmath {version('spatialmath-python')}, Python {platform.python_version()}",
-        f"armdyn source: {source[1]}, source hash {source[0]}",
-        "The machine is shared and noisy: absolute times move from run to run; the ratios are what matter.",
+    versions = {
+        "sympy": sympy.__version__,
+        "symengine": se.__version__,
+        "numba": numba.__version__,
+        "numpy": np.__version__,
+        "roboticstoolbox": toolbox,
+        "spatialmath": version("spatialmath-python"),
+    }
+    return describe(source, versions) + [
         f"Evaluation times are medians: one state {CALLS} calls x {REPEATS} repeats, batch {BATCH_REPEATS} repeats; "
         "the candidates' repeats are interleaved. The closed form and the kernel are checked to agree "
         f"(to {TOLERANCE:g} relative to the largest entry, state by state) on the same inputs before timing.",
@@ -546,8 +417,7 @@ def header(source: tuple[str, str], args: argparse.Namespace) -> list[str]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--skip-toolbox", action="store_true", help="leave out part 5 (the Robotics Toolbox)")
+    parser = arguments(__doc__, skip_toolbox="leave out part 5 (the Robotics Toolbox)")
     parser.add_argument("--toolbox-timeout", type=float, default=TOOLBOX_TIMEOUT, help="seconds for its rne()")
     parser.add_argument(
         "--count-timeout", type=float, default=COUNT_TIMEOUT, help="seconds for each analysis of its tau"
@@ -556,22 +426,10 @@ def main() -> None:
         "--simplify-timeout", type=float, default=SIMPLIFY_TIMEOUT, help="seconds for sympy.simplify(tau[0])"
     )
     parser.add_argument("--toolbox-worker", choices=("analyse", "simplify"), help=argparse.SUPPRESS)
-    parser.add_argument("--state", help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if args.toolbox_worker:
-        toolbox_worker(args.toolbox_worker, json.loads(args.state))
-        return
-
-    started = time.perf_counter()
+    args = parse(parser, "toolbox_worker", lambda args: toolbox_worker(args.toolbox_worker, json.loads(args.state)))
+    report = Report.begin(args, "armdyn closed-form benchmarks", RESULTS, globals(), QUICK, QUICK_LIMITS)
     rng = np.random.default_rng(SEED)
-    source = source_state()
-    lines = header(source, args)
-    print("\n".join(lines), end="\n\n", flush=True)
-    tables = []
-
-    def show(table: Table) -> None:
-        tables.append(table)
-        print(table.text(), flush=True)
+    report.note(*header(report.source, args), end="\n\n")
 
     forms: dict[str, ClosedForm] = {}
     rows, firsts, totals = derivation(forms)
@@ -580,7 +438,7 @@ def main() -> None:
     puma = puma_form.robot
     compiled, compile_rows = compilation(puma_form, puma.n)
     verdict = "met" if max(totals["puma560()"], inside[1] + inside[2]) < REQUIREMENT else "NOT MET"
-    show(
+    report.show(
         Table(
             "1a. Derivation and code generation (wall seconds)",
             ["arm", "n", "method", "derive 1st", "derive 2nd", "to_python", "to_c", "derive+code", "lines py / C"],
@@ -598,7 +456,7 @@ def main() -> None:
             left=3,
         )
     )
-    show(
+    report.show(
         Table(
             "1b. PUMA 560: a fresh interpreter, and Numba compilation (wall seconds)",
             ["step", "seconds"],
@@ -616,7 +474,7 @@ def main() -> None:
             ],
         )
     )
-    show(
+    report.show(
         Table(
             "2. Operation counts before and after common-subexpression elimination",
             ["arm", "function", "before CSE", "after CSE", "after/before"],
@@ -625,7 +483,7 @@ def main() -> None:
             left=2,
         )
     )
-    show(
+    report.show(
         Table(
             "3. PUMA 560, one state per call: compiled closed form vs recursive kernel (microseconds per call)",
             ["function", "kernel", "max rel. error", "closed", "closed out=", "kernel", "kernel out=", "ratio", "out="],
@@ -639,7 +497,7 @@ def main() -> None:
             left=2,
         )
     )
-    show(
+    report.show(
         Table(
             f"4. PUMA 560, a batch of {BATCH:,} states (microseconds per state)",
             ["function", "kernel", "max rel. error", "closed form", "kernel", "ratio"],
@@ -652,22 +510,12 @@ def main() -> None:
         )
     )
     if args.skip_toolbox:
-        lines.append("Part 5 (the Robotics Toolbox's symbolic RNE) skipped: --skip-toolbox.")
-        print(lines[-1], flush=True)
+        report.note("Part 5 (the Robotics Toolbox's symbolic RNE) skipped: --skip-toolbox.")
     else:
         for table in toolbox(puma, puma_form, firsts["puma560()"], args, rng):
-            show(table)
+            report.show(table)
 
-    elapsed = time.perf_counter() - started
-    if source_state()[0] != source[0]:
-        lines.append(
-            f"WARNING: armdyn's source changed during the run (hash {source[0]} at the start): the subprocesses "
-            "may have run another version than this process."
-        )
-        print(lines[-1])
-    print(f"Total run time {elapsed:.0f} s; written to {RESULTS}")
-    markdown = ["# armdyn closed-form benchmarks", "", *(f"- {line}" for line in lines), f"- Run time {elapsed:.0f} s."]
-    RESULTS.write_text("\n".join([*markdown, ""] + [table.markdown() for table in tables]))
+    report.finish("the subprocesses may have run another version than this process.")
 
 
 if __name__ == "__main__":
