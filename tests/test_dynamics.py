@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 import armdyn as ad
-from armdyn.dynamics import lagrange as L
+from armdyn.dynamics import lagrange
 from tests.conftest import pinocchio_pair
 from tests.strategies import random_robot, random_state
 
@@ -27,16 +27,19 @@ def close(actual: np.ndarray, expected: np.ndarray, rtol: float = RELATIVE) -> N
 def test_every_kernel_equals_the_lagrange_reference(seed: int, n: int) -> None:
     arm = random_robot(seed, n)
     q, qd, qdd = random_state(arm, seed)
-    close(arm.inertia_matrix(q), L.inertia_matrix(arm, q))
-    close(arm.coriolis_matrix(q, qd), L.coriolis_matrix(arm, q, qd))
-    close(arm.coriolis_vector(q, qd), L.coriolis_vector(arm, q, qd))
-    close(arm.gravity_vector(q), L.gravity_vector(arm, q))
-    close(arm.friction(qd), L.friction(arm, qd))
-    close(arm.nonlinear_terms(q, qd), L.coriolis_vector(arm, q, qd) + L.friction(arm, qd) + L.gravity_vector(arm, q))
-    close(arm.inverse_dynamics(q, qd, qdd), L.inverse_dynamics(arm, q, qd, qdd))
-    close(arm.inertia_matrix_dot(q, qd), L.inertia_matrix_dot(arm, q, qd))
-    close(np.array(arm.kinetic_energy(q, qd)), L.kinetic_energy(arm, q, qd))
-    close(np.array(arm.potential_energy(q)), L.potential_energy(arm, q))
+    close(arm.inertia_matrix(q), lagrange.inertia_matrix(arm, q))
+    close(arm.coriolis_matrix(q, qd), lagrange.coriolis_matrix(arm, q, qd))
+    close(arm.coriolis_vector(q, qd), lagrange.coriolis_vector(arm, q, qd))
+    close(arm.gravity_vector(q), lagrange.gravity_vector(arm, q))
+    close(arm.friction(qd), lagrange.friction(arm, qd))
+    close(
+        arm.nonlinear_terms(q, qd),
+        lagrange.coriolis_vector(arm, q, qd) + lagrange.friction(arm, qd) + lagrange.gravity_vector(arm, q),
+    )
+    close(arm.inverse_dynamics(q, qd, qdd), lagrange.inverse_dynamics(arm, q, qd, qdd))
+    close(arm.inertia_matrix_dot(q, qd), lagrange.inertia_matrix_dot(arm, q, qd))
+    close(np.array(arm.kinetic_energy(q, qd)), lagrange.kinetic_energy(arm, q, qd))
+    close(np.array(arm.potential_energy(q)), lagrange.potential_energy(arm, q))
 
 
 @settings(max_examples=40, deadline=None)

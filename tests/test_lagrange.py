@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 import armdyn as ad
-from armdyn.dynamics import lagrange as L
+from armdyn.dynamics import lagrange
 from tests.conftest import pinocchio_pair
 from tests.strategies import random_robot, random_state
 
@@ -39,12 +39,12 @@ def test_two_link_planar_equals_example_3_2_2(state: tuple, m1: float, m2: float
     S = (2 * d1 + d2) * m2 * a1 * a2 * s2 * np.array([[0.0, 1.0], [-1.0, 0.0]])
     V1 = -m2 * a1 * a2 * s2 * np.array([[0.0, 1.0], [1.0, 1.0]])
     V2 = m2 * a1 * a2 * s2 * np.array([[1.0, 0.0], [0.0, 0.0]])
-    assert_allclose(L.inertia_matrix(arm, q), M, **TIGHT)
-    assert_allclose(L.coriolis_vector(arm, q, qd), V, **TIGHT)
-    assert_allclose(L.gravity_vector(arm, q), G, **TIGHT)
-    assert_allclose(L.coriolis_matrix(arm, q, qd), Vm, **TIGHT)
-    assert_allclose(L.inertia_matrix_dot(arm, q, qd) - 2 * L.coriolis_matrix(arm, q, qd), S, **TIGHT)
-    christoffel = L.christoffel_symbols(arm, q)  # V_k = [v_ijk]_ij (Table 3.3.1)
+    assert_allclose(lagrange.inertia_matrix(arm, q), M, **TIGHT)
+    assert_allclose(lagrange.coriolis_vector(arm, q, qd), V, **TIGHT)
+    assert_allclose(lagrange.gravity_vector(arm, q), G, **TIGHT)
+    assert_allclose(lagrange.coriolis_matrix(arm, q, qd), Vm, **TIGHT)
+    assert_allclose(lagrange.inertia_matrix_dot(arm, q, qd) - 2 * lagrange.coriolis_matrix(arm, q, qd), S, **TIGHT)
+    christoffel = lagrange.christoffel_symbols(arm, q)  # V_k = [v_ijk]_ij (Table 3.3.1)
     assert_allclose(christoffel[:, :, 0], V1, **TIGHT)
     assert_allclose(christoffel[:, :, 1], V2, **TIGHT)
 
@@ -55,9 +55,9 @@ def test_polar_arm_equals_example_3_2_1(state: tuple) -> None:
     arm = ad.models.polar_rp(m, g)
     (theta, r), (thd, rd), _ = (s[:2] for s in state)
     q, qd = np.array([theta, r]), np.array([thd, rd])
-    assert_allclose(L.inertia_matrix(arm, q), np.diag([m * r**2, m]), **TIGHT)
-    assert_allclose(L.coriolis_vector(arm, q, qd), [2 * m * r * rd * thd, -m * r * thd**2], **TIGHT)
-    assert_allclose(L.gravity_vector(arm, q), [m * g * r * np.cos(theta), m * g * np.sin(theta)], **TIGHT)
+    assert_allclose(lagrange.inertia_matrix(arm, q), np.diag([m * r**2, m]), **TIGHT)
+    assert_allclose(lagrange.coriolis_vector(arm, q, qd), [2 * m * r * rd * thd, -m * r * thd**2], **TIGHT)
+    assert_allclose(lagrange.gravity_vector(arm, q), [m * g * r * np.cos(theta), m * g * np.sin(theta)], **TIGHT)
 
 
 @pytest.mark.parametrize("state", STATES)
@@ -66,25 +66,25 @@ def test_cylindrical_arm_equals_exercise_3_2_3(state: tuple) -> None:
     arm = ad.models.cylindrical(J, m1, m2, g)
     (theta, h, r), (thd, hd, rd), _ = state
     q, qd = np.array([theta, h, r]), np.array([thd, hd, rd])
-    assert_allclose(L.inertia_matrix(arm, q), np.diag([J + m2 * r**2, m1 + m2, m2]), **TIGHT)
-    assert_allclose(L.coriolis_vector(arm, q, qd), [2 * m2 * r * rd * thd, 0.0, -m2 * r * thd**2], **TIGHT)
-    assert_allclose(L.gravity_vector(arm, q), [0.0, (m1 + m2) * g, 0.0], **TIGHT)
+    assert_allclose(lagrange.inertia_matrix(arm, q), np.diag([J + m2 * r**2, m1 + m2, m2]), **TIGHT)
+    assert_allclose(lagrange.coriolis_vector(arm, q, qd), [2 * m2 * r * rd * thd, 0.0, -m2 * r * thd**2], **TIGHT)
+    assert_allclose(lagrange.gravity_vector(arm, q), [0.0, (m1 + m2) * g, 0.0], **TIGHT)
 
 
 # ----- the Robotics Toolbox's published PUMA 560 values ----------------------------------------
 def test_puma560_gravity_at_qn_equals_the_toolbox() -> None:
     puma = ad.models.puma560()
-    assert_allclose(L.gravity_vector(puma, puma.qn), [0, 31.6399, 6.0351, 0, 0.0283, 0], atol=1e-4)
+    assert_allclose(lagrange.gravity_vector(puma, puma.qn), [0, 31.6399, 6.0351, 0, 0.0283, 0], atol=1e-4)
 
 
 def test_puma560_inertia_and_accel_at_qn_equal_the_toolbox() -> None:
     puma = ad.models.puma560()
-    M = L.inertia_matrix(puma, puma.qn)
+    M = lagrange.inertia_matrix(puma, puma.qn)
     assert_allclose(np.diag(M), [3.6594, 4.4137, 0.9378, 0.1925, 0.1713, 0.1941], atol=1e-4)
     assert_allclose(M[0, 1:4], [-0.4044, 0.1006, -0.0025], atol=1e-4)
     qd = np.array([0.1, 0.2, 0.8, 0.2, 0.5, 1.0])
     tau = np.array([1.0, 3.2, 1.8, 0.1, 0.7, 4.6])
-    qdd = np.linalg.solve(M, tau - L.inverse_dynamics(puma, puma.qn, qd, np.zeros(6)))
+    qdd = np.linalg.solve(M, tau - lagrange.inverse_dynamics(puma, puma.qn, qd, np.zeros(6)))
     assert_allclose(qdd, [-7.4102, -9.8432, -10.9694, -4.4314, -0.9881, 21.0228], atol=1e-4)
 
 
@@ -97,7 +97,7 @@ def test_puma560_inverse_dynamics_equals_the_toolbox_rne() -> None:
         (one, zero, [29.1421, 56.5044, 16.3528, 1.26448, 1.12392, 0.519648]),
     ]
     for qd, qdd, expected in cases:
-        assert_allclose(L.inverse_dynamics(puma, puma.qn, qd, qdd), expected, rtol=2e-5, atol=1e-5)
+        assert_allclose(lagrange.inverse_dynamics(puma, puma.qn, qd, qdd), expected, rtol=2e-5, atol=1e-5)
 
 
 # ----- identities on random trees (hypothesis) -----------------------------------------------
@@ -110,7 +110,7 @@ def finite_difference(f: object, q: np.ndarray, direction: np.ndarray, h: float 
 def test_inertia_matrix_is_symmetric_positive_definite(seed: int, n: int) -> None:
     arm = random_robot(seed, n)
     q, _, _ = random_state(arm, seed)
-    M = L.inertia_matrix(arm, q)
+    M = lagrange.inertia_matrix(arm, q)
     assert_allclose(M, M.T, rtol=0, atol=1e-13 * np.abs(M).max())
     assert np.linalg.eigvalsh(M)[0] > 0
 
@@ -120,17 +120,19 @@ def test_inertia_matrix_is_symmetric_positive_definite(seed: int, n: int) -> Non
 def test_christoffel_identities_on_random_trees(seed: int, n: int) -> None:
     arm = random_robot(seed, n)
     q, qd, x = random_state(arm, seed)
-    Mdot = L.inertia_matrix_dot(arm, q, qd)
+    Mdot = lagrange.inertia_matrix_dot(arm, q, qd)
     scale = np.abs(Mdot).max() + 1.0
-    assert_allclose(Mdot, finite_difference(lambda p: L.inertia_matrix(arm, p), q, qd), atol=1e-6 * scale)
-    S = Mdot - 2 * L.coriolis_matrix(arm, q, qd)
+    assert_allclose(Mdot, finite_difference(lambda p: lagrange.inertia_matrix(arm, p), q, qd), atol=1e-6 * scale)
+    S = Mdot - 2 * lagrange.coriolis_matrix(arm, q, qd)
     assert_allclose(S, -S.T, atol=1e-12 * scale)  # property 4
     assert_allclose(  # property 5: Vm(q, x) y = Vm(q, y) x
-        L.coriolis_matrix(arm, q, x) @ qd, L.coriolis_matrix(arm, q, qd) @ x, atol=1e-12 * scale * np.abs(x).max()
+        lagrange.coriolis_matrix(arm, q, x) @ qd,
+        lagrange.coriolis_matrix(arm, q, qd) @ x,
+        atol=1e-12 * scale * np.abs(x).max(),
     )
     # (3.2.42): V = Mdot qd - 1/2 d/dq (qd^T M qd)
-    grad = np.array([finite_difference(lambda p: qd @ L.inertia_matrix(arm, p) @ qd, q, e) for e in np.eye(n)])
-    assert_allclose(L.coriolis_vector(arm, q, qd), Mdot @ qd - 0.5 * grad, atol=1e-6 * scale)
+    grad = np.array([finite_difference(lambda p: qd @ lagrange.inertia_matrix(arm, p) @ qd, q, e) for e in np.eye(n)])
+    assert_allclose(lagrange.coriolis_vector(arm, q, qd), Mdot @ qd - 0.5 * grad, atol=1e-6 * scale)
 
 
 @settings(max_examples=25, deadline=None)
@@ -138,37 +140,37 @@ def test_christoffel_identities_on_random_trees(seed: int, n: int) -> None:
 def test_gravity_is_the_gradient_of_potential_energy(seed: int, n: int) -> None:
     arm = random_robot(seed, n)
     q, _, _ = random_state(arm, seed)
-    grad = np.array([finite_difference(lambda p: L.potential_energy(arm, p), q, e) for e in np.eye(n)])
-    assert_allclose(L.gravity_vector(arm, q), grad, atol=1e-6 * (np.abs(grad).max() + 1))
+    grad = np.array([finite_difference(lambda p: lagrange.potential_energy(arm, p), q, e) for e in np.eye(n)])
+    assert_allclose(lagrange.gravity_vector(arm, q), grad, atol=1e-6 * (np.abs(grad).max() + 1))
 
 
 def test_batches_match_single_states() -> None:
     arm = random_robot(3, 5)
     rng = np.random.default_rng(0)
     q, qd, qdd = (rng.uniform(-2, 2, (2, 3, 5)) for _ in range(3))
-    tau = L.inverse_dynamics(arm, q, qd, qdd)
-    M = L.inertia_matrix(arm, q)
+    tau = lagrange.inverse_dynamics(arm, q, qd, qdd)
+    M = lagrange.inertia_matrix(arm, q)
     assert tau.shape == (2, 3, 5) and M.shape == (2, 3, 5, 5)
     for index in np.ndindex(2, 3):
-        assert_allclose(tau[index], L.inverse_dynamics(arm, q[index], qd[index], qdd[index]), rtol=1e-14)
-        assert_allclose(M[index], L.inertia_matrix(arm, q[index]), rtol=1e-14)
-    assert L.kinetic_energy(arm, q, qd).shape == (2, 3)
-    assert L.potential_energy(arm, q).shape == (2, 3)
+        assert_allclose(tau[index], lagrange.inverse_dynamics(arm, q[index], qd[index], qdd[index]), rtol=1e-14)
+        assert_allclose(M[index], lagrange.inertia_matrix(arm, q[index]), rtol=1e-14)
+    assert lagrange.kinetic_energy(arm, q, qd).shape == (2, 3)
+    assert lagrange.potential_energy(arm, q).shape == (2, 3)
 
 
 def test_friction_follows_the_toolbox_convention() -> None:
     """F = G^2 B qd + |G| Tc+ (qd > 0) or |G| Tc- (qd < 0), and 0 Coulomb at rest."""
     link = ad.Link("j", ad.Joint(), ad.Inertial(1.0, name="j"), viscous=3.0, coulomb=(2.0, -1.0), gear_ratio=2.0)
     arm = ad.Robot([link])
-    assert_allclose(L.friction(arm, [[1.0], [-1.0], [0.0]]), [[16.0], [-14.0], [0.0]])
+    assert_allclose(lagrange.friction(arm, [[1.0], [-1.0], [0.0]]), [[16.0], [-14.0], [0.0]])
 
 
 def test_bad_states_are_refused() -> None:
     arm = ad.models.puma560()
     with pytest.raises(ad.ModelError, match=r"q must have shape \(6,\) or \(\.\.\., 6\)"):
-        L.inertia_matrix(arm, np.zeros(5))
+        lagrange.inertia_matrix(arm, np.zeros(5))
     with pytest.raises(ad.ModelError, match="qd must be finite"):
-        L.coriolis_matrix(arm, np.zeros(6), [0, 0, np.nan, 0, 0, 0])
+        lagrange.coriolis_matrix(arm, np.zeros(6), [0, 0, np.nan, 0, 0, 0])
 
 
 # ----- Pinocchio on real URDFs ------------------------------------------------------------
@@ -185,8 +187,8 @@ def test_lagrange_equals_pinocchio(urdf_path: object) -> None:
         M = pin.crba(model, data, qp)
         M = np.triu(M) + np.triu(M, 1).T
         cols = np.ix_(vi, vi)
-        assert_allclose(L.inertia_matrix(arm, q), M[cols], rtol=1e-10, atol=1e-12)
-        assert_allclose(L.gravity_vector(arm, q), pin.computeGeneralizedGravity(model, data, qp)[vi], atol=1e-10)
+        assert_allclose(lagrange.inertia_matrix(arm, q), M[cols], rtol=1e-10, atol=1e-12)
+        assert_allclose(lagrange.gravity_vector(arm, q), pin.computeGeneralizedGravity(model, data, qp)[vi], atol=1e-10)
         C = pin.computeCoriolisMatrix(model, data, qp, vp)
-        assert_allclose(L.coriolis_matrix(arm, q, qd), C[cols], atol=1e-10)
-        assert_allclose(L.inverse_dynamics(arm, q, qd, qdd), pin.rnea(model, data, qp, vp, ap)[vi], atol=1e-10)
+        assert_allclose(lagrange.coriolis_matrix(arm, q, qd), C[cols], atol=1e-10)
+        assert_allclose(lagrange.inverse_dynamics(arm, q, qd, qdd), pin.rnea(model, data, qp, vp, ap)[vi], atol=1e-10)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ from typer.testing import CliRunner
 import armdyn as ad
 from armdyn.cli import app
 from armdyn.control import PID, ComputedTorque, Digital, PDGravity, Saturated
-from armdyn.simulation import simulate
+from armdyn.simulation import PythonLoopWarning, simulate
 from armdyn.trajectories import CartesianCircle, Quintic, Sinusoid
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -100,7 +101,8 @@ def test_python_loop_and_adaptive_solver_agree_with_the_compiled_loop() -> None:
              e_int: np.ndarray) -> np.ndarray:  # fmt: skip
         return law(t, q, qd, q_d, qd_d, qdd_d, e_int)
 
-    python = simulate(arm, mine, desired, t_final=1.0, dt=1e-3)
+    with pytest.warns(PythonLoopWarning, match="Python loop"):
+        python = simulate(arm, mine, desired, t_final=1.0, dt=1e-3)
     assert python.info["method"] == "rk4 (Python)" and compiled.info["method"] == "rk4 (compiled)"
     assert_allclose(python.q, compiled.q, atol=1e-12)
     adaptive = simulate(arm, ComputedTorque(100, 20), desired, t_final=1.0, dt=1e-3, method="rk45")
@@ -200,3 +202,37 @@ def test_the_top_level_names() -> None:
     assert ad.statespace.linearize is not None and ad.symbolic.derive is not None
     with pytest.raises(AttributeError):
         _ = ad.no_such_name
+
+
+def test_users_controller_is_given_the_plant_and_its_errors_are_not_swallowed() -> None:
+    arm = ad.models.two_link_planar()
+    heavier = arm.with_payload(1.0)
+    seen = []
+
+    def with_plant(t, q, qd, q_d, qd_d, qdd_d, e_int, plant=None):
+        seen.append(plant)
+        return plant.gravity_vector(q)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PythonLoopWarning)
+        simulate(arm, with_plant, t_final=0.01, dt=1e-3, events=[(0.005, heavier)])
+    assert seen[0] is arm and seen[-1] is heavier
+
+    def broken(t, q, qd, q_d, qd_d, qdd_d, e_int):
+        raise TypeError("a bug inside the controller")
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PythonLoopWarning)
+        with pytest.raises(TypeError, match="a bug inside the controller"):
+            simulate(arm, broken, t_final=0.01)
+
+
+def test_built_in_controllers_run_compiled_without_a_warning() -> None:
+    arm = ad.models.two_link_planar()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PythonLoopWarning)
+        for controller in (ComputedTorque(100, 20), PDGravity(100, 20), PID(100, 20, 5), None):
+            result = simulate(arm, controller, Sinusoid(0.1, 0.5), t_final=0.01)
+            assert result.info["method"] == "rk4 (compiled)"
+    with pytest.raises(ad.ModelError, match="controller must be callable"):
+        simulate(arm, "computed-torque", t_final=0.01)

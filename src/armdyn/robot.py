@@ -27,19 +27,13 @@ class Robot(ArmModel):
     Attributes
     ----------
     packed : numpy.ndarray or None
-        The read-only model array the compiled kernels take (None for symbolic parameters).
+        The model array the compiled kernels read, made with the arm (None for symbolic
+        parameters). No call writes it; neither should you.
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         object.__setattr__(self, "packed", None if self.is_symbolic else pack(self))
-
-    def __getstate__(self) -> dict[str, Any]:
-        return {key: value for key, value in self.__dict__.items() if key != "packed"}
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        self.__dict__["packed"] = None if self.is_symbolic else pack(self)  # unpickled arrays come back writable
 
     # dynamics (armdyn.dynamics.api)
     inverse_dynamics = api.inverse_dynamics

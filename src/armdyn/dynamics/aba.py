@@ -9,6 +9,8 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.friction import joint_friction
 from armdyn.dynamics.packed import (
+    ABA_FIXED,
+    ABA_JOINT,
     ARMATURE,
     FIRST_MOMENT,
     GRAVITY,
@@ -157,7 +159,7 @@ def aba_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, q
     if status == 0 and qdd.shape[0] != int(model[N_JOINTS]):
         status = 4
     if status == 0:
-        aba_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, qd, tau, qdd)
+        aba_core(model, np.empty(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd)
     return status
 
 

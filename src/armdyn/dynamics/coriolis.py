@@ -8,7 +8,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange, types
 
-from armdyn.dynamics.packed import FIRST_MOMENT, HEADER, INERTIA, MASS, N_JOINTS, PARENT, STRIDE, workspace_size
+from armdyn.dynamics.packed import (
+    CORIOLIS_FIXED,
+    CORIOLIS_JOINT,
+    FIRST_MOMENT,
+    HEADER,
+    INERTIA,
+    MASS,
+    N_JOINTS,
+    PARENT,
+    STRIDE,
+    workspace_size,
+)
 from armdyn.dynamics.rnea import BATCH_CHUNKS
 from armdyn.dynamics.spatial import (
     MATRIX,
@@ -147,7 +158,7 @@ def coriolis_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray
     if status == 0 and (C.shape[0] != n or C.shape[1] != n):
         status = 4
     if status == 0:
-        coriolis_core(model, np.empty(workspace_size(n)), q, qd, C)
+        coriolis_core(model, np.empty(CORIOLIS_JOINT * n + CORIOLIS_FIXED), q, qd, C)
     return status
 
 

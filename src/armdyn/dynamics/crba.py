@@ -116,7 +116,7 @@ def crba_one(model: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
     if status == 0 and (M.shape[0] != n or M.shape[1] != n):
         status = 4
     if status == 0:
-        crba_core(model, np.empty(workspace_size(n)), q, M)
+        crba_core(model, np.empty((TRANSFORM + COMPOSITE) * n), q, M)
     return status
 
 

@@ -9,6 +9,8 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.packed import (
     ARMATURE,
+    ENERGY_FIXED,
+    ENERGY_JOINT,
     FIRST_MOMENT,
     GRAVITY,
     HEADER,
@@ -73,7 +75,7 @@ def energy_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray
     if status == 0 and out.shape[0] != 2:
         status = 4
     if status == 0:
-        energy_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, qd, out)
+        energy_core(model, np.empty(ENERGY_JOINT * int(model[N_JOINTS]) + ENERGY_FIXED), q, qd, out)
     return status
 
 

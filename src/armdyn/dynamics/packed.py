@@ -1,14 +1,14 @@
-"""An ArmModel packed once into one flat, read-only float array that the Numba kernels take,
+"""An ArmModel packed once into one flat float array that the Numba kernels read (never write),
 and the named sizes of the workspace (scratch) each kernel needs.
 
 Every array argument costs Numba dispatch time, so the whole model lives in one array:
 
     [ header | joint 0 | joint 1 | ... | joint n-1 ]
 
-No kernel writes it (it is flagged read only, and Numba compiles the kernels against a
-read-only array type, so a write would not compile). Scratch space is a separate
-workspace: each one-state call allocates its own inside the compiled code, each parallel
-chunk of a batch call its own, so calls from several threads never share one.
+No kernel writes it (the tests run every call, from two threads at once, and compare it
+before and after). Scratch space is a separate workspace: each one-state call allocates
+its own inside the compiled code, each parallel chunk of a batch call its own, so calls
+from several threads never share one.
 
 Each joint is rewritten so that it moves about or along its own z axis: the placement
 absorbs the rotation that carries z onto the joint axis and the parent's frame offset,
@@ -83,7 +83,7 @@ def body_frames(robot: ArmModel) -> tuple[list[np.ndarray], list[np.ndarray]]:
 
 
 def pack(robot: ArmModel) -> np.ndarray:
-    """The model array of a numeric arm (the layout constants above describe it), read only."""
+    """The model array of a numeric arm (the layout constants above describe it)."""
     if robot.is_symbolic:
         raise ModelError(f"robot '{robot.name}' has symbolic parameters; numeric kernels need numbers")
     n = robot.n
@@ -110,5 +110,4 @@ def pack(robot: ArmModel) -> np.ndarray:
         record[ARMATURE] = armature[i]
         record[VISCOUS] = viscous[i]
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
-    buffer.setflags(write=False)
     return buffer

@@ -25,6 +25,7 @@ from armdyn.dynamics.packed import (
     N_JOINTS,
     PARENT,
     POSITION,
+    RNEA_FIXED,
     RNEA_FORCE,
     RNEA_JOINT,
     RNEA_VELOCITY,
@@ -180,7 +181,7 @@ def rnea_checked(
     if status == 0 and tau.shape[0] != int(model[N_JOINTS]):
         status = 4
     if status == 0:
-        rnea_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, qd, qdd, qd, flags, tau)
+        rnea_core(model, np.empty(RNEA_JOINT * int(model[N_JOINTS]) + RNEA_FIXED), q, qd, qdd, qd, flags, tau)
     return status
 
 
@@ -260,5 +261,5 @@ def gravity_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     if status == 0 and out.shape[0] != int(model[N_JOINTS]):
         status = 4
     if status == 0:
-        gravity_core(model, np.empty(workspace_size(int(model[N_JOINTS]))), q, out)
+        gravity_core(model, np.empty(GRAVITY_JOINT * int(model[N_JOINTS])), q, out)
     return status

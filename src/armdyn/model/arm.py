@@ -102,8 +102,8 @@ class ArmModel:
     """An arm: a kinematic tree of links (parents before children), immutable.
 
     armdyn.Robot is this data with the dynamics and kinematics as methods; the algorithms
-    themselves take any ArmModel. A named configuration is also an attribute
-    (``arm.qn`` is ``arm.configuration("qn")``).
+    themselves take any ArmModel. A named configuration is also an attribute, read only
+    (``arm.qn``; ``arm.configuration("qn")`` gives a copy to change).
 
     Parameters
     ----------
@@ -127,6 +127,16 @@ class ArmModel:
         {"convention": ..., "rows": [...]}).
     description : str, optional
         A line describing the arm (default "").
+
+    Attributes
+    ----------
+    n : int
+        Number of joints (degrees of freedom).
+    name, description : str
+        As given.
+
+    The arm never changes once made: assigning an attribute raises AttributeError, and
+    ``replace``, ``with_payload`` and the like give new arms.
 
     Raises
     ------
@@ -186,6 +196,10 @@ class ArmModel:
                 raise ModelError(f"robot '{name}': configuration '{key}' must have {self.n} values, got {vector.shape}")
             self._configurations[key] = _frozen(vector)
         self._dh = dict(dh) if dh else None
+        for key, vector in self._configurations.items():  # also as attributes, read only: arm.qn
+            if not key.isidentifier() or hasattr(self, key):
+                raise ModelError(f"robot '{name}': configuration name '{key}' is not free for an attribute")
+            setattr(self, key, vector)
         self._parents = _frozen(np.array([link.parent for link in self._links], dtype=int))
         self._ancestors = _frozen(_ancestor_table(self._parents))
         self._sealed = True
@@ -497,12 +511,6 @@ class ArmModel:
             raise ModelError(
                 f"robot '{self.name}' has no configuration '{name}' (it has {sorted(self._configurations)})"
             ) from None
-
-    def __getattr__(self, name: str) -> np.ndarray:
-        configurations = self.__dict__.get("_configurations", {})
-        if name in configurations:
-            return configurations[name].copy()
-        raise AttributeError(f"'{type(self).__name__}' object has no attribute '{name}'")
 
     def __repr__(self) -> str:
         kinds = "".join("R" if kind == "revolute" else "P" for kind in self.kinds)
