@@ -408,7 +408,7 @@ def _loop_cholesky(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.nda
     for s in range(Q.shape[0]):
         crba_core(model, work, Q[s], M)
         rnea_core(model, work, Q[s], QD[s], QD[s], QD[s], NONLINEAR, N)
-        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s])
+        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s], 0.0)
 
 
 @njit(**NUMBA_OPTIONS)
@@ -419,7 +419,7 @@ def _loop_fused(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarra
     no_coulomb, no_smoothing = np.zeros((n, 2)), np.zeros(n)
     for s in range(Q.shape[0]):
         mass_matrix_and_bias(model, work, Q[s], QD[s], M, N)
-        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s])
+        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s], 0.0)
 
 
 @njit(**NUMBA_OPTIONS)

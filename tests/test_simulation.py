@@ -153,8 +153,8 @@ def test_pd_gravity_digital_and_saturation_compose() -> None:
     ("kwargs", "match"),
     [
         ({"method": "euler"}, "method must be"),
-        ({"dt": 0.0}, "must be positive"),
-        ({"q0": [0.0]}, "q0 and qd0 must have 2 values"),
+        ({"dt": 0.0}, "dt must be a positive number"),
+        ({"q0": [0.0]}, r"q0 must have shape \(2,\)"),
         ({"controller": Digital(PID(1, 1), 0.0015)}, "whole number of steps"),
         ({"controller": Digital(PID(1, 1), 0.01), "method": "rk45"}, "needs method='rk4'"),
         ({"controller": PID([1, 2, 3], 1)}, "gain kp"),

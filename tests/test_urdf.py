@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -268,8 +269,12 @@ def test_missing_package_mesh_is_ignored(tmp_path: Path) -> None:
 
 
 def test_link_without_inertial_is_massless(tmp_path: Path) -> None:
-    text = _robot("<link name='a'/>", "<link name='b'/>", _joint("j", "a", "b"))
-    arm = load_urdf(_write(tmp_path, text))
+    """A kinematics-only file: M(q) = 0, refused by default (a singular M), loaded with strict=False and a warning."""
+    path = _write(tmp_path, _robot("<link name='a'/>", "<link name='b'/>", _joint("j", "a", "b")))
+    with pytest.raises(ModelError, match=r"\['j'\] move no mass.*kinematics-only.*strict=False"):
+        load_urdf(path)
+    with pytest.warns(UserWarning, match=r"\['j'\] move no mass.*kinematics-only"):
+        arm = load_urdf(path, strict=False)
     assert arm.links[0].inertial.mass == 0.0
     assert_array_equal(arm.links[0].inertial.inertia, np.zeros((3, 3)))
     assert not arm.has_dynamics
@@ -509,3 +514,278 @@ def test_allegro_loads_with_strict_false(path: Path) -> None:
     assert np.count_nonzero(arm.parents == -1) == 4  # four fingers straight from the palm
     _assert_fk_matches_pinocchio(path, arm, count=2)
     _assert_inertias_match_pinocchio(path, arm)
+
+
+# ----- 1. NaN or inf in the file never reaches the model ----------------------------------------------------------
+def test_nan_in_fixed_joint_origin_is_refused(tmp_path: Path) -> None:
+    """A NaN in a fixed joint's origin used to be merged into the parent body, which became NaN."""
+    text = _robot(
+        _link("a"), _link("b"), _link("c"), _joint("j", "a", "b"),
+        _joint("f", "b", "c", "fixed", xyz="0 nan 0.1", extra=""),
+    )  # fmt: skip
+    with pytest.raises(ModelError, match=r"test\.urdf: joint 'f' \(fixed\): <origin> has a NaN or infinite"):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_inf_in_fixed_joint_origin_before_a_moving_joint_names_the_fixed_joint(tmp_path: Path) -> None:
+    """The fixed joint's placement is carried into the next moving joint's: the error names where it was written."""
+    text = _robot(
+        _link("a"), _link("b"), _link("c"), _joint("f", "a", "b", "fixed", rpy="0 inf 0", extra=""),
+        _joint("j", "b", "c"),
+    )  # fmt: skip
+    with pytest.raises(ModelError, match=r"joint 'f' \(fixed\): <origin>"):
+        load_urdf(_write(tmp_path, text))
+
+
+NON_FINITE = {
+    "joint-origin-xyz": (_robot(_link("a"), _link("b"), _joint("j", "a", "b", xyz="0 0 nan")), r"joint 'j'.*<origin>"),
+    "joint-origin-rpy": (_robot(_link("a"), _link("b"), _joint("j", "a", "b", rpy="inf 0 0")), r"joint 'j'.*<origin>"),
+    "axis": (_robot(_link("a"), _link("b"), _joint("j", "a", "b", axis="0 nan 1")), r"joint 'j'.*<axis>.*NaN or inf"),
+    "axis-inf": (_robot(_link("a"), _link("b"), _joint("j", "a", "b", axis="0 0 inf")), r"joint 'j'.*<axis>"),
+    "mass": (_robot(_link("a"), _link("b", mass="nan"), _joint("j", "a", "b")), r"link 'b'.*<mass> value is nan"),
+    "mass-inf": (_robot(_link("a"), _link("b", mass="inf"), _joint("j", "a", "b")), r"link 'b'.*<mass> value is inf"),
+    "inertia": (
+        _robot(_link("a"), _link("b", inertia=GOOD_INERTIA.replace("'0.03'", "'nan'")), _joint("j", "a", "b")),
+        r"link 'b'.*<inertia> holds NaN or infinite",
+    ),
+    "inertia-behind-fixed": (
+        _robot(
+            _link("a"),
+            _link("b"),
+            _link("c", inertia=GOOD_INERTIA.replace("'0.001'", "'-inf'")),
+            _joint("j", "a", "b"),
+            _joint("f", "b", "c", "fixed", extra=""),
+        ),
+        r"link 'c'.*<inertia> holds NaN or infinite",
+    ),
+    "inertial-origin": (
+        _robot(_link("a"), _link("b", rpy="0 nan 0"), _joint("j", "a", "b")),
+        r"link 'b': <inertial>: <origin> has a NaN",
+    ),
+    "limit-lower": (
+        _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra="<limit lower='nan' upper='1'/>")),
+        r"joint 'j': <limit> lower is nan",
+    ),
+    "limit-upper": (
+        _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra="<limit lower='-1' upper='inf'/>")),
+        r"joint 'j': <limit> upper is inf",
+    ),
+    "damping": (
+        _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra=LIMIT + "<dynamics damping='inf'/>")),
+        r"joint 'j': <dynamics> damping is inf",
+    ),
+    "friction": (
+        _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra=LIMIT + "<dynamics friction='nan'/>")),
+        r"joint 'j': <dynamics> friction is nan",
+    ),
+}
+
+
+@pytest.mark.parametrize(("text", "match"), list(NON_FINITE.values()), ids=list(NON_FINITE))
+def test_nan_or_inf_anywhere_that_reaches_the_model_is_refused(tmp_path: Path, text: str, match: str) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for strict in (True, False):
+            with pytest.raises(ModelError, match=f"test\\.urdf: .*{match}.*finite"):
+                load_urdf(_write(tmp_path, text), strict=strict)
+
+
+# ----- 2. <limit> without lower or upper: 0, as the URDF specification and Pinocchio say -------------------------
+@pytest.mark.parametrize(
+    ("limit", "expected"),
+    [
+        ("<limit upper='1.5' effort='1' velocity='1'/>", (0.0, 1.5)),
+        ("<limit lower='-0.7' effort='1' velocity='1'/>", (-0.7, 0.0)),
+        ("<limit effort='1' velocity='1'/>", (0.0, 0.0)),
+    ],
+    ids=["no-lower", "no-upper", "neither"],
+)
+@pytest.mark.parametrize("kind", ["revolute", "prismatic"])
+def test_limit_without_upper_or_lower_defaults_to_zero(tmp_path: Path, kind: str, limit: str, expected: tuple) -> None:
+    path = _write(tmp_path, _robot(_link("a"), _link("b"), _joint("j", "a", "b", kind, extra=limit)))
+    arm = load_urdf(path)
+    assert_array_equal(arm.qlim[:, 0], expected)
+    model = pin.buildModelFromUrdf(str(path))
+    assert_array_equal([model.lowerPositionLimit[0], model.upperPositionLimit[0]], expected)
+
+
+def test_limit_with_only_a_positive_lower_breaks_lower_le_upper(tmp_path: Path) -> None:
+    """upper defaults to 0, so lower='0.5' alone gives lower > upper: refused, not swapped or widened."""
+    joint = _joint("j", "a", "b", extra="<limit lower='0.5' effort='1' velocity='1'/>")
+    with pytest.raises(ModelError, match=r"'j'.*lower <= upper"):
+        load_urdf(_write(tmp_path, _robot(_link("a"), _link("b"), joint)))
+
+
+def test_robot_element_without_name_is_refused_with_the_reason(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _joint("j", "a", "b")).replace("<robot name='test'>", "<robot>")
+    with pytest.raises(ModelError, match=r"<robot> element has no name.*add name="):
+        load_urdf(_write(tmp_path, text))
+
+
+# ----- 3. inertia rounding noise passes, a genuinely indefinite tensor does not --------------------------------------
+NOISE_INERTIA = "ixx='0' iyy='0' izz='0' ixy='0' ixz='1.35525e-20' iyz='0'"  # iCub's l_ankle_2
+
+
+@pytest.mark.parametrize("strict", [True, False])
+def test_inertia_rounding_noise_is_not_an_indefinite_tensor(tmp_path: Path, strict: bool) -> None:
+    """iCub's l_ankle_2: all zero but ixz = 1.36e-20. The tolerance used to scale with the tensor's own largest
+    entry (1.36e-20 itself), so the eigenvalue -1.36e-20 was fatal; a floor of 1e-9 m l^2 lets it pass."""
+    text = _robot(
+        _link("a"), _link("b", mass=0.2675, xyz="0.008 0 0.0553", rpy="0 0 0", inertia=NOISE_INERTIA),
+        _joint("j", "a", "b", axis="1 0 0"),
+    )  # fmt: skip
+    path = _write(tmp_path, text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        arm = load_urdf(path, strict=strict)
+    assert_array_equal(arm.links[0].inertial.inertia[0, 2], 1.35525e-20)  # kept as given
+    _assert_inertias_match_pinocchio(path, arm)
+
+
+def test_inertia_tolerance_floor_is_tied_to_mass_and_size() -> None:
+    rotation = np.array([[0.6, -0.8, 0.0], [0.8, 0.6, 0.0], [0.0, 0.0, 1.0]])
+    # a genuinely indefinite tensor: principal moment -1e-3 kg m^2 on a 1 kg link, centre of mass anywhere
+    for com in ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [3.0, 0.0, 0.0]):
+        indefinite = rotation @ np.diag([-1e-3, 0.5, 0.5]) @ rotation.T
+        with pytest.raises(ModelError, match=r"link 'l'.*not positive semi-definite.*correct the tensor"):
+            ad.Inertial(1.0, com, indefinite, "l", strict=False)
+    # the same moment is refused on a 1 g link with only 1e-6 elsewhere: the floor does not hide it
+    with pytest.raises(ModelError, match=r"not positive semi-definite"):
+        ad.Inertial(1e-3, [0, 0, 0.1], np.diag([-1e-3, 1e-6, 1e-6]), "l")
+    # noise far below 1e-9 m l^2 passes, in any orientation, and is kept as given
+    noise = rotation @ np.array([[0.0, 0.0, 1e-17], [0.0, 0.0, 0.0], [1e-17, 0.0, 0.0]]) @ rotation.T
+    body = ad.Inertial(1.0, [0.0, 0.0, 0.0], noise, "l")
+    assert_array_equal(body.inertia, noise)
+    # a massless link has no floor beyond its own largest entry
+    with pytest.raises(ModelError, match=r"not positive semi-definite"):
+        ad.Inertial(0.0, [0.0, 0.0, 0.0], noise, "l")
+
+
+ICUB = sorted((ROBOTS / "icub_description" / "robots").glob("*.urdf"))
+
+
+@pytest.mark.parametrize("path", ICUB, ids=lambda path: path.stem)
+def test_icub_files_load(path: Path) -> None:
+    """Both iCub files were refused (rounding noise on l_ankle_2); they load, as in Pinocchio, strict or not."""
+    for strict in (False, True):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            arm = load_urdf(path, strict=strict)
+    assert arm.n == pin.buildModelFromUrdf(str(path)).nv
+    _assert_inertias_match_pinocchio(path, arm)
+    _assert_fk_matches_pinocchio(path, arm, count=1)
+
+
+# ----- 4. joints that move no mass: M(q) singular for every q ---------------------------------------------------------
+_POINT_MASS = "ixx='0' iyy='0' izz='0' ixy='0' ixz='0' iyz='0'"
+SINGULAR_ARMS = {
+    # a massless leaf: nothing moves about 'j2'
+    "massless-leaf": (
+        _robot(_link("a"), _link("b"), "<link name='c'/>", _joint("j1", "a", "b"), _joint("j2", "b", "c")),
+        ["j2"],
+    ),
+    # a point mass on its own joint's axis (behind a fixed joint, so merged first)
+    "point-mass-on-axis": (
+        _robot(
+            _link("a"),
+            _link("b"),
+            "<link name='c'/>",
+            _link("d", xyz="0 0 0.3", rpy="0 0 0", inertia=_POINT_MASS),
+            _joint("j1", "a", "b"),
+            _joint("j2", "b", "c", xyz="0.2 0 0", rpy="0 0 0", axis="0 0 1"),
+            _joint("f", "c", "d", "fixed", xyz="0 0 0.1", rpy="0 0 0", extra=""),
+        ),
+        ["j2"],
+    ),
+    # two coincident axes with a massless link between: j3 repeats j2's motion (each diagonal entry is positive)
+    "repeated-axis": (
+        _robot(
+            _link("a"),
+            _link("b"),
+            "<link name='c'/>",
+            _link("d"),
+            _joint("j1", "a", "b", axis="1 0 0"),
+            _joint("j2", "b", "c", xyz="0 0 0.3", rpy="0 0 0", axis="0 0 1"),
+            _joint("j3", "c", "d", xyz="0 0 0.2", rpy="0 0 0", axis="0 0 1"),
+        ),
+        ["j3"],
+    ),
+}
+
+
+@pytest.mark.parametrize(("text", "joints"), list(SINGULAR_ARMS.values()), ids=list(SINGULAR_ARMS))
+def test_massless_joints_make_the_inertia_matrix_singular(tmp_path: Path, text: str, joints: list[str]) -> None:
+    path = _write(tmp_path, text)
+    named = re.escape(f"joints {joints} move no mass")
+    with pytest.raises(ModelError, match=f"{named}.*singular.*strict=False"):
+        load_urdf(path)
+    with pytest.warns(UserWarning, match=named) as record:
+        arm = load_urdf(path, strict=False)
+    assert sum("move no mass" in str(w.message) for w in record) == 1
+    q = np.random.default_rng(3).uniform(-2, 2, (5, arm.n))
+    assert np.all(np.abs(np.linalg.eigvalsh(arm.inertia_matrix(q))[:, 0]) < 1e-12)  # singular wherever one looks
+    assert np.all(np.isfinite(arm.inverse_dynamics(q, q, q)))
+
+
+def test_point_mass_off_its_axis_is_not_singular(tmp_path: Path) -> None:
+    """The same leaf as above, 5 cm off the axis of 'j2': M(q) is positive definite, no warning."""
+    text = _robot(
+        _link("a"), _link("b"), "<link name='c'/>", _link("d", xyz="0.05 0 0.3", rpy="0 0 0", inertia=_POINT_MASS),
+        _joint("j1", "a", "b"), _joint("j2", "b", "c", xyz="0.2 0 0", rpy="0 0 0", axis="0 0 1"),
+        _joint("f", "c", "d", "fixed", xyz="0 0 0.1", rpy="0 0 0", extra=""),
+    )  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        arm = load_urdf(_write(tmp_path, text))
+    assert np.all(np.isfinite(arm.forward_dynamics([0.3, -0.2], [0.1, 0.2], [0.5, 0.1])))
+
+
+def test_configuration_dependent_singularity_is_not_flagged(tmp_path: Path) -> None:
+    """A polar arm (Example 3.2-1): a point mass on a prismatic joint is singular only at r = 0, inside its limits."""
+    text = _robot(
+        _link("a"), "<link name='b'/>", _link("c", xyz="0 0 0", rpy="0 0 0", inertia=_POINT_MASS),
+        _joint("theta", "a", "b", xyz="0 0 0", rpy="0 0 0", axis="0 0 1"),
+        _joint("r", "b", "c", "prismatic", xyz="0 0 0", rpy="0 0 0", axis="1 0 0",
+               extra="<limit lower='-1' upper='1' effort='1' velocity='1'/>"),
+    )  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        arm = load_urdf(_write(tmp_path, text))
+    assert np.linalg.det(arm.inertia_matrix([0.4, 0.0])) == pytest.approx(0.0, abs=1e-15)  # singular at r = 0
+    assert np.linalg.det(arm.inertia_matrix([0.4, 0.5])) > 0.2
+
+
+ROMEO = ROBOTS / "romeo_description" / "urdf" / "romeo.urdf"
+
+
+def test_romeo_massless_fingers_refused_by_default_and_warned_with_strict_false() -> None:
+    fingers = {f"{side}{name}" for side in "LR" for name in ["Hand", "Thumb1", "Thumb2", "Thumb3"]}
+    fingers |= {f"{side}Finger{i}{j}" for side in "LR" for i in (1, 2, 3) for j in (1, 2, 3) if (i, j) != (1, 1)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # its mimic joints
+        with pytest.raises(ModelError, match=r"romeo\.urdf: joints \[.*\] move no mass.*strict=False") as info:
+            load_urdf(ROMEO)
+    assert {name for name in fingers if f"'{name}'" in str(info.value)} == fingers
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        arm = load_urdf(ROMEO, strict=False)
+    (message,) = [str(w.message) for w in record if "move no mass" in str(w.message)]
+    assert re.match(r"romeo\.urdf: joints \['LHand', 'LFinger12'.* move no mass", message)
+    assert all(issubclass(w.category, UserWarning) for w in record)
+    assert set(re.findall(r"'(\w+)'", message)) == fingers  # exactly the 24 joints, nothing more
+    assert arm.n == 55
+
+
+def test_strict_governs_both_the_triangle_inequality_and_massless_joints(tmp_path: Path) -> None:
+    text = _robot(
+        _link("a"), _link("b", inertia=TRIANGLE_BREAKER, rpy="0 0 0"), "<link name='c'/>",
+        _joint("j1", "a", "b"), _joint("j2", "b", "c"),
+    )  # fmt: skip
+    path = _write(tmp_path, text)
+    with pytest.raises(ModelError, match=r"triangle inequality"):  # the first rule met stops the strict load
+        load_urdf(path)
+    with pytest.warns(UserWarning) as record:
+        load_urdf(path, strict=False)
+    messages = " | ".join(str(w.message) for w in record)
+    assert "link 'b'" in messages and "triangle inequality" in messages
+    assert "joints ['j2'] move no mass" in messages

@@ -170,8 +170,10 @@ class Digital:
     period: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.period) and self.period > 0):
-            raise ModelError(f"a Digital controller needs a positive sample period, got {self.period}")
+        if not (isinstance(self.period, (int, float, np.number)) and np.isfinite(self.period) and self.period > 0):
+            raise ModelError(f"a Digital controller needs a positive, finite sample period, got {self.period!r}")
+        if not callable(self.controller):
+            raise ModelError(f"Digital needs a controller (a callable), got {type(self.controller).__name__}")
 
     def spec(self) -> Spec | None:
         inner = getattr(self.controller, "spec", None)
@@ -189,10 +191,20 @@ class Digital:
 
 @dataclass
 class Saturated:
-    """A controller whose torques are clipped to +-limit (scalar or per joint)."""
+    """A controller whose torques are clipped to +-limit (scalar or per joint, > 0; inf for none)."""
 
     controller: object
     limit: object = field(default=np.inf)
+
+    def __post_init__(self) -> None:
+        try:
+            limit = np.atleast_1d(np.asarray(self.limit, dtype=float))
+        except (TypeError, ValueError):
+            raise ModelError(f"a torque limit must be a positive number or one per joint, got {self.limit!r}") from None
+        if limit.ndim != 1 or np.any(np.isnan(limit)) or np.any(limit <= 0):
+            raise ModelError(f"a torque limit must be positive (inf for none), got {self.limit!r}")
+        if not callable(self.controller):
+            raise ModelError(f"Saturated needs a controller (a callable), got {type(self.controller).__name__}")
 
     def spec(self) -> Spec | None:
         inner = getattr(self.controller, "spec", None)

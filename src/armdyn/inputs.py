@@ -13,18 +13,35 @@ import numpy as np
 
 from armdyn.errors import ModelError
 
+LARGEST_STATE = 1e15  # beyond this a joint angle's sine and cosine are no longer exact in float64
 
-def state(value: object, n: int, name: str = "q", where: str = "", complex_ok: bool = False) -> np.ndarray:
-    """A finite float array of shape (..., n) (complex kept when ``complex_ok``, for complex-step
-    derivatives of the Lagrange reference), or a ModelError naming the argument."""
+
+def state(
+    value: object, n: int, name: str = "q", where: str = "", complex_ok: bool = False, bounded: bool = True
+) -> np.ndarray:
+    """A finite float array of shape (..., n), with ``bounded`` values below LARGEST_STATE in
+    magnitude (complex kept when ``complex_ok``, for complex-step derivatives of the Lagrange
+    reference), or a ModelError naming the argument."""
+    if value is None or isinstance(value, (str, bytes, dict)):
+        raise ModelError(f"{name} must be an array of numbers of shape ({n},) or (..., {n}){where}, got {value!r}")
     try:
-        array = np.asarray(value, dtype=complex if complex_ok and np.iscomplexobj(value) else float)
-    except (TypeError, ValueError):
-        raise ModelError(f"{name} must be an array of numbers of shape (..., {n}){where}") from None
+        complex_input = np.iscomplexobj(value)
+        if complex_input and not complex_ok:
+            raise ModelError(f"{name} must be real{where}; it is complex")
+        array = np.asarray(value, dtype=complex if complex_input else float)
+    except (TypeError, ValueError) as error:
+        if isinstance(error, ModelError):
+            raise
+        raise ModelError(f"{name} must be an array of numbers of shape ({n},) or (..., {n}){where}") from None
     if array.ndim == 0 or array.shape[-1] != n:
         raise ModelError(f"{name} must have shape ({n},) or (..., {n}){where}, got {array.shape}")
     if array.size and not _finite(array):
         raise ModelError(f"{name} must be finite (it holds NaN or infinity){where}")
+    if bounded and array.size and np.abs(array).max() >= LARGEST_STATE:
+        raise ModelError(
+            f"{name} holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: angles that large have no "
+            "exact sine or cosine in double precision; reduce them modulo 2 pi"
+        )
     return array
 
 
@@ -37,8 +54,9 @@ def _finite(array: np.ndarray) -> bool:
 def batch_states(
     names: Sequence[str], values: Sequence[object], n: int, where: str = ""
 ) -> tuple[tuple[int, ...], list[np.ndarray]]:
-    """Check and broadcast state arguments; return the batch shape and each as a (B, n) C array."""
-    arrays = [state(value, n, name, where) for name, value in zip(names, values, strict=True)]
+    """Check and broadcast state arguments; return the batch shape and each as a (B, n) C array.
+    Joint positions ``q`` are bounded by LARGEST_STATE (their sine and cosine must be exact)."""
+    arrays = [state(value, n, name, where, bounded=name == "q") for name, value in zip(names, values, strict=True)]
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
     except ValueError:

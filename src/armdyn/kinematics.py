@@ -1,7 +1,9 @@
 """Forward kinematics, the geometric Jacobian and its time derivative (Appendix A).
 
 Every function takes one state q of shape (n,) or a batch (..., n) and works on the
-whole batch at once with NumPy; the loop runs over the joints, never over states.
+whole batch at once with NumPy; the loop runs over the joints, never over states. Arguments
+are checked first: a wrong type or shape is a ModelError (TypeError for an arm that is not
+an ArmModel) that names the argument.
 """
 
 from __future__ import annotations
@@ -11,6 +13,45 @@ import numpy as np
 from armdyn import inputs
 from armdyn.errors import ModelError
 from armdyn.model import ArmModel
+
+FRAMES = ("base", "tool")
+
+
+def _check_arm(robot: object) -> None:
+    """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot)."""
+    if not isinstance(robot, ArmModel):
+        raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
+
+
+def _numbers(value: object, name: str) -> np.ndarray:
+    """A finite float (or complex) array of any shape, or a ModelError naming the argument."""
+    if value is None or isinstance(value, (str, bytes, dict)):
+        raise ModelError(f"{name} must be a number or an array of numbers, got {value!r}")
+    try:
+        array = np.asarray(value, dtype=complex if np.iscomplexobj(value) else float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{name} must be a number or an array of numbers, got {type(value).__name__}") from None
+    if not np.all(np.isfinite(array)):
+        raise ModelError(f"{name} must be finite (it holds NaN or infinity)")
+    return array
+
+
+def _link_index(robot: ArmModel, link: object) -> int:
+    """The tool link for None, else ``link`` checked as an integer index of a link of the arm."""
+    if link is None:
+        return robot.tool_link
+    if isinstance(link, (bool, np.bool_)) or not isinstance(link, (int, np.integer)):
+        raise ModelError(
+            f"link must be an integer link index (0..{robot.n - 1}) or None, got {link!r} ({type(link).__name__})"
+        )
+    if not 0 <= link < robot.n:
+        raise ModelError(f"link index {link} is out of range for '{robot.name}' (0..{robot.n - 1})")
+    return int(link)
+
+
+def _check_frame(frame: object) -> None:
+    if not (isinstance(frame, str) and frame in FRAMES):
+        raise ModelError(f"frame must be 'base' or 'tool', got {frame!r}")
 
 
 def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
@@ -36,7 +77,10 @@ def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
     ------
     armdyn.ModelError
         When ``value`` is not numbers, does not end in n, or holds NaN or infinity.
+    TypeError
+        When ``robot`` is not an arm (an ArmModel).
     """
+    _check_arm(robot)
     return inputs.state(value, robot.n, name, f" for '{robot.name}'", complex_ok=True)
 
 
@@ -52,7 +96,16 @@ def skew(v: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         [v]x, (..., 3, 3), with [v]x u = v x u.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``v`` is not numbers of shape (..., 3) or holds NaN or infinity.
     """
+    return _skew(inputs.state(v, 3, "v", complex_ok=True))
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
     zero = np.zeros_like(v[..., 0])
     return np.stack(
         [
@@ -80,11 +133,26 @@ def joint_motion(revolute: bool, axis: np.ndarray, q: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         The homogeneous transforms, (..., 4, 4), of the dtype of ``q``.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``revolute`` is not a bool, ``axis`` is not a finite unit 3-vector, or ``q`` is
+        not numbers or holds NaN or infinity.
     """
+    if not isinstance(revolute, (bool, np.bool_)):
+        raise ModelError(f"revolute must be True or False, got {revolute!r}")
+    axis = inputs.state(axis, 3, "axis")
+    if axis.ndim != 1 or abs(np.linalg.norm(axis) - 1.0) > 1e-9:
+        raise ModelError(f"axis must be a unit 3-vector, got {axis.tolist()}")
+    return _joint_motion(bool(revolute), axis, _numbers(q, "q"))
+
+
+def _joint_motion(revolute: bool, axis: np.ndarray, q: np.ndarray) -> np.ndarray:
     motion = np.zeros((*q.shape, 4, 4), dtype=q.dtype)
     motion[..., 3, 3] = 1.0
     if revolute:
-        k = skew(axis)
+        k = _skew(axis)
         s, c = np.sin(q)[..., None, None], np.cos(q)[..., None, None]
         motion[..., :3, :3] = np.eye(3) + s * k + (1.0 - c) * (k @ k)
     else:
@@ -118,7 +186,8 @@ def joint_frames(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
     q = as_state(robot, q)
     shape = q.shape[:-1] + (robot.n, 4, 4)
@@ -126,7 +195,7 @@ def joint_frames(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray
     for i, link in enumerate(robot.links):
         parent = robot.base if link.parent < 0 else links[..., link.parent, :, :]
         joint = link.joint
-        joints[..., i, :, :] = parent @ joint.placement @ joint_motion(joint.is_revolute, joint.axis, q[..., i])
+        joints[..., i, :, :] = parent @ joint.placement @ _joint_motion(joint.is_revolute, joint.axis, q[..., i])
         links[..., i, :, :] = joints[..., i, :, :] @ joint.frame_offset
     return links, joints
 
@@ -151,7 +220,8 @@ def link_transforms(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
     return joint_frames(robot, q)[0]
 
@@ -176,7 +246,8 @@ def tool_pose(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
     return link_transforms(robot, q)[..., robot.tool_link, :, :] @ robot.tool
 
@@ -197,7 +268,22 @@ def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndar
         The unit joint axes in the world, (..., n, 3).
     o : numpy.ndarray
         The joint-frame origins in the world, (..., n, 3).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``joints`` is not numbers of shape (..., n, 4, 4) or holds NaN or infinity.
+    TypeError
+        When ``robot`` is not an arm (an ArmModel).
     """
+    _check_arm(robot)
+    joints = _numbers(joints, "joints")
+    if joints.ndim < 3 or joints.shape[-3:] != (robot.n, 4, 4):
+        raise ModelError(f"joints must have shape (..., {robot.n}, 4, 4) for '{robot.name}', got {joints.shape}")
+    return _joint_axes(robot, joints)
+
+
+def _joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     axes = np.stack([link.joint.axis for link in robot.links])
     return np.einsum("...jab,jb->...ja", joints[..., :3, :3], axes), joints[..., :3, 3]
 
@@ -205,11 +291,9 @@ def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndar
 def _target(robot: ArmModel, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Which link, its pose (tool applied for the tool link), and the joint axes/origins."""
     links, joints = joint_frames(robot, q)
-    index = robot.tool_link if link is None else int(link)
-    if not 0 <= index < robot.n:
-        raise ModelError(f"link index {link} is out of range for '{robot.name}' (0..{robot.n - 1})")
+    index = _link_index(robot, link)
     pose = links[..., index, :, :] @ robot.tool if link is None else links[..., index, :, :]
-    z, o = joint_axes(robot, joints)
+    z, o = _joint_axes(robot, joints)
     return index, pose, z, o
 
 
@@ -254,21 +338,20 @@ def jacobian(robot: ArmModel, q: np.ndarray, frame: str = "base", link: int | No
     ------
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity, when ``link``
-        is not a link index, or when ``frame`` is not "base" or "tool".
+        is not None or an integer index of a link (a float or a bool is refused), or when ``frame``
+        is not "base" or "tool".
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
+    _check_frame(frame)
     index, pose, z, o = _target(robot, q, link)
     jac = _columns(robot, z, o, pose[..., :3, 3], robot.ancestors[index])
     return _expressed(jac, pose, frame)
 
 
 def _expressed(jac: np.ndarray, pose: np.ndarray, frame: str) -> np.ndarray:
-    if frame == "base":
-        return jac
-    if frame == "tool":
-        return _in_frame(jac, pose[..., :3, :3])
-    raise ModelError(f"frame must be 'base' or 'tool', got '{frame}'")
+    return jac if frame == "base" else _in_frame(jac, pose[..., :3, :3])
 
 
 def jacobian_dot(
@@ -301,10 +384,13 @@ def jacobian_dot(
     ------
     armdyn.ModelError
         When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, when
-        ``link`` is not a link index, or when ``frame`` is not "base" or "tool".
+        ``link`` is not None or an integer index of a link (a float or a bool is refused), or when ``frame``
+        is not "base" or "tool".
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
+    _check_frame(frame)
     qd = as_state(robot, qd, "qd")
     index, pose, z, o = _target(robot, q, link)
     revolute = np.array([kind == "revolute" for kind in robot.kinds])
@@ -329,10 +415,8 @@ def jacobian_dot(
     jdot = np.swapaxes(np.concatenate([lin, ang], axis=-1) * moves[:, None], -1, -2)
     if frame == "base":
         return jdot
-    if frame != "tool":
-        raise ModelError(f"frame must be 'base' or 'tool', got '{frame}'")
     omega = np.einsum("...an,...n->...a", jac[..., 3:, :], qd)
-    w = skew(omega)
+    w = _skew(omega)
     corrected = np.concatenate([jdot[..., :3, :] - w @ jac[..., :3, :], jdot[..., 3:, :] - w @ jac[..., 3:, :]], -2)
     return _in_frame(corrected, pose[..., :3, :3])
 
@@ -361,13 +445,14 @@ def twist_generators(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.nda
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
     links, joints = joint_frames(robot, q)
-    z, o = joint_axes(robot, joints)
+    z, o = _joint_axes(robot, joints)
     revolute = np.array([kind == "revolute" for kind in robot.kinds])
     generators = np.zeros((*z.shape[:-1], 4, 4), dtype=z.dtype)
-    zhat = skew(z)
+    zhat = _skew(z)
     generators[..., :3, :3] = np.where(revolute[:, None, None], zhat, 0.0)
     generators[..., :3, 3] = np.where(revolute[:, None], -np.einsum("...ab,...b->...a", zhat, o), z)
     return generators, links
@@ -396,7 +481,8 @@ def link_transform_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric kinematics need numbers.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+        numeric kinematics need numbers.
     """
     generators, links = twist_generators(robot, q)
     derivative = generators[..., None, :, :, :] @ links[..., :, None, :, :]

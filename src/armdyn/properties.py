@@ -9,16 +9,52 @@ from the best samples. The report says for each bound how it was found.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize
 
+from armdyn import inputs
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
 TOLERANCE = 1e-9
+GROUPS = ("inertia", "coriolis", "skew", "friction", "gravity", "linearity", "passivity")
+"""The groups of properties ``check`` evaluates; ``only`` picks some of them by name."""
+
+
+def _check_robot(robot: object) -> None:
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be an armdyn Robot, got {type(robot).__name__}")
+
+
+def _integer(value: object, name: str, minimum: int) -> int:
+    """An int (or NumPy integer, not a bool) of at least ``minimum``, or an error naming it."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+    if value < minimum:
+        raise ModelError(f"{name} must be at least {minimum}, got {value}")
+    return int(value)
+
+
+def _groups(only: object) -> set[str]:
+    """The groups named by ``only``: None for all, one name, or a sequence of names."""
+    if only is None:
+        return set(GROUPS)
+    valid = ", ".join(repr(group) for group in GROUPS)
+    if isinstance(only, str):
+        names = [only]
+    elif isinstance(only, (bytes, Mapping)) or not isinstance(only, Iterable):
+        raise TypeError(f"only must be a group name or a sequence of group names ({valid}), got {only!r}")
+    else:
+        names = list(only)
+    if not names:
+        raise ModelError(f"only must name at least one group ({valid}), got {only!r}")
+    unknown = [name for name in names if not (isinstance(name, str) and name in GROUPS)]
+    if unknown:
+        raise ModelError(f"only names unknown groups {unknown}; the groups are {valid}")
+    return set(names)
 
 
 @dataclass
@@ -149,13 +185,23 @@ def joint_ranges(
     Raises
     ------
     armdyn.ModelError
-        When ``limits`` is not n finite (lower, upper) pairs with lower <= upper.
+        When ``limits`` is not n finite (lower, upper) pairs with lower <= upper, or when
+        ``prismatic_span`` is not one positive finite number.
+    TypeError
+        When ``robot`` is not a Robot.
     """
+    _check_robot(robot)
+    span = inputs.vector(prismatic_span, "prismatic_span")
+    if span.shape != (1,) or span[0] <= 0:
+        raise ModelError(f"prismatic_span must be one positive finite number, got {prismatic_span!r}")
+    prismatic_span = float(span[0])
     if limits is not None:
-        ranges = [(float(lo), float(hi)) for lo, hi in limits]
-        if len(ranges) != robot.n or any(not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi) for lo, hi in ranges):
-            raise ModelError(f"limits must be {robot.n} finite (lower, upper) pairs with lower <= upper")
-        return ranges
+        pairs = inputs.state(limits, 2, "limits")
+        if pairs.shape != (robot.n, 2) or np.any(pairs[:, 0] > pairs[:, 1]):
+            raise ModelError(
+                f"limits must be {robot.n} finite (lower, upper) pairs with lower <= upper, got {pairs.tolist()}"
+            )
+        return [(float(lo), float(hi)) for lo, hi in pairs]
     ranges = []
     for (lower, upper), kind in zip(robot.qlim.T, robot.kinds, strict=True):
         if np.isfinite(lower) and np.isfinite(upper):
@@ -217,8 +263,10 @@ def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequ
     Raises
     ------
     armdyn.ModelError
-        When ``samples`` is below 4 or ``limits`` is invalid (see ``joint_ranges``), or when
-        the arm has symbolic parameters.
+        When ``samples`` is below 4, ``seed`` is negative or ``limits`` is invalid (see
+        ``joint_ranges``), or when the arm has symbolic parameters.
+    TypeError
+        When ``robot`` is not a Robot, or ``samples`` or ``seed`` is not an integer.
     """
     report = check(robot, samples=samples, seed=seed, limits=limits, only=("inertia",))
     return report.bounds["mu1"], report.bounds["mu2"]
@@ -246,9 +294,9 @@ def check(
         Seed of the random generator (default 0).
     limits : sequence of (float, float), optional
         (lower, upper) per joint to use instead of the arm's own (see ``joint_ranges``).
-    only : sequence of str, optional
-        Restrict to some groups, for speed: "inertia", "coriolis", "skew", "friction",
-        "gravity", "linearity", "passivity" (default all).
+    only : str or sequence of str, optional
+        Restrict to some groups, for speed: one name or several of "inertia", "coriolis",
+        "skew", "friction", "gravity", "linearity", "passivity" (GROUPS); default None, all.
 
     Returns
     -------
@@ -258,12 +306,17 @@ def check(
     Raises
     ------
     armdyn.ModelError
-        When ``samples`` is below 4, when ``limits`` is not n finite (lower, upper) pairs
-        with lower <= upper, or when the arm has symbolic parameters.
+        When ``samples`` is below 4, ``seed`` is negative, ``limits`` is not n finite
+        (lower, upper) pairs with lower <= upper, ``only`` is empty or names a group not in
+        GROUPS (the message lists them), or when the arm has symbolic parameters.
+    TypeError
+        When ``robot`` is not a Robot, ``samples`` or ``seed`` is not an integer, or ``only``
+        is neither a string nor a sequence of them.
     """
-    if samples < 4:
-        raise ModelError(f"samples must be at least 4, got {samples}")
-    groups = set(only or ("inertia", "coriolis", "skew", "friction", "gravity", "linearity", "passivity"))
+    _check_robot(robot)
+    samples = _integer(samples, "samples", 4)
+    seed = _integer(seed, "seed", 0)
+    groups = _groups(only)
     n = robot.n
     ranges = joint_ranges(robot, limits)
     box = [(lo, hi) for lo, hi in ranges]

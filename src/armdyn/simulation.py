@@ -33,13 +33,26 @@ from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.friction import smooth_coulomb
-from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, STRIDE, workspace_size
+from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, PIVOT_FLOOR, STRIDE, workspace_size
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
+from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
 
 ADAPTIVE = ("rk45", "rk23", "dop853", "radau", "bdf", "lsoda")
+
+
+SINGULAR, DIVERGED = 1, 2  # why a compiled run stopped
+
+
+class SimulationError(ModelError):
+    """A run that could not go on: M(q) became singular or the state non-finite (a diverging
+    closed loop). ``result`` holds the run up to the last good sample."""
+
+    def __init__(self, message: str, result: Result) -> None:
+        super().__init__(message)
+        self.result = result
 
 
 class PythonLoopWarning(UserWarning):
@@ -103,26 +116,33 @@ class Result:
 def _accelerations(
     plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
     tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
-) -> None:  # fmt: skip
-    """qdd = M^-1 (tau - N - Fd_smooth) by CRBA, RNEA and a Cholesky solve.
+) -> int:  # fmt: skip
+    """qdd = M^-1 (tau - N - Fd_smooth) by CRBA, RNEA and a Cholesky solve; -1, or the joint where
+    M is singular (see _solve).
 
     For the arms of this library (n up to about ten) this is faster than the O(n)
     articulated-body algorithm and equal to it to rounding; ``tau`` carries the disturbance.
     """
     mass_matrix_and_bias(plant, work, q, qd, M, N)
-    _solve(M, N, tau, coulomb, eps, qd, qdd)
+    return _solve(M, N, tau, coulomb, eps, qd, qdd, plant[PIVOT_FLOOR])
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def _solve(
-    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, qd: np.ndarray, qdd: np.ndarray
-) -> None:
-    """qdd = M^-1 (tau - N - Fd_smooth) by Cholesky factorization (M is overwritten)."""
+    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, qd: np.ndarray,
+    qdd: np.ndarray, floor: float,
+) -> int:  # fmt: skip
+    """qdd = M^-1 (tau - N - Fd_smooth) by Cholesky factorization (M is overwritten).
+
+    Returns -1, or the first joint whose pivot is not above ``floor`` (M singular; qdd not
+    computed)."""
     n = qd.shape[0]
     for j in range(n):
         total = M[j, j]
         for k in range(j):
             total -= M[j, k] * M[j, k]
+        if not total > floor:
+            return j
         pivot = math.sqrt(total)
         M[j, j] = pivot
         for i in range(j + 1, n):
@@ -140,6 +160,7 @@ def _solve(
         for k in range(i + 1, n):
             total -= M[k, i] * qdd[k]
         qdd[i] = total / M[i, i]
+    return -1
 
 
 @njit(**NUMBA_OPTIONS)
@@ -152,14 +173,16 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     control.control_law every ``hold`` steps on ``model``; "shares plant" when the model is
     the plant's own, so that the plant reuses the controller's M and N.
     trajectory = (kind, params (4, n), q0 (n,)): trajectories.desired.
-    steps = (t0, dt, first, last). state = ([q; qd], held torque, integral of e), advanced in
-    place. record = (t, q, qd, qdd, tau, q_d), each indexed by step.
+    steps = (t0, dt, first, last). state = ([q; qd], held torque, integral of e, outcome),
+    advanced in place. record = (t, q, qd, qdd, tau, q_d), each indexed by step.
+    The run stops where M becomes singular or the state non-finite: outcome = (rows recorded,
+    SINGULAR or DIVERGED, joint); it stays (-1, 0, -1) while all is well.
     """
     models, coulombs, switches, disturbance, eps = plant
     kind, model, model_coulomb, gain, hold, shares_plant = controller
     trajectory_kind, params, q0 = trajectory
     t0, dt, first, last = steps
-    x, tau_held, e_int = state
+    x, tau_held, e_int, outcome = state
     T_, Q, QD, QDD, TAU, QDES = record
     n = q0.shape[0]
     work = np.empty(workspace_size(n))
@@ -188,28 +211,39 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             applied[i] = tau_held[i] - disturbance[i]
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
-            _solve(Mp, Nv, applied, coulomb, eps, qd, k1v)
+            singular = _solve(Mp, Nv, applied, coulomb, eps, qd, k1v, plant_model[PIVOT_FLOOR])
         else:
-            _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, k1v)
+            singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, k1v)
+        if singular >= 0:
+            outcome[0], outcome[1], outcome[2] = k, SINGULAR, singular
+            break
         T_[k] = t
         for i in range(n):
             Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], goal[0, i]
         for i in range(n):
             k1q[i] = qd[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k1q[i], qd[i] + 0.5 * dt * k1v[i]
-        _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k2v)
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k2v))
         for i in range(n):
             k2q[i] = vs[i]
             qs[i], vs[i] = q[i] + 0.5 * dt * k2q[i], qd[i] + 0.5 * dt * k2v[i]
-        _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k3v)
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k3v))
         for i in range(n):
             k3q[i] = vs[i]
             qs[i], vs[i] = q[i] + dt * k3q[i], qd[i] + dt * k3v[i]
-        _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k4v)
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k4v))
         for i in range(n):
             k4q[i] = vs[i]
             q[i] += dt / 6.0 * (k1q[i] + 2.0 * k2q[i] + 2.0 * k3q[i] + k4q[i])
             qd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
+        for i in range(n):  # a state that blew up explains a singular stage too
+            if not (abs(q[i]) < LARGEST_STATE and abs(qd[i]) < np.inf):  # NaN fails both
+                outcome[0], outcome[1], outcome[2] = k + 1, DIVERGED, i
+                break
+        if outcome[0] < 0 and singular >= 0:
+            outcome[0], outcome[1], outcome[2] = k + 1, SINGULAR, singular
+        if outcome[0] >= 0:
+            break
     x[:n] = q
     x[n:] = qd
 
@@ -245,6 +279,32 @@ def _unwrap(controller: object) -> tuple[control.Spec | None, float, object]:
             period = inner.period
         inner = inner.controller
     return spec, period, controller
+
+
+def _one_state(value: object, n: int, name: str, allow_scalar: bool = False) -> np.ndarray:
+    """One finite state vector (n,) (or a scalar for every joint), checked by armdyn.inputs."""
+    if allow_scalar and np.ndim(value) == 0:
+        value = np.full(n, value, dtype=float) if isinstance(value, (int, float, np.number)) else value
+    array = inputs.state(value, n, name, bounded=name in ("q0", "qd0"))
+    if array.shape != (n,):
+        raise ModelError(f"{name} must be one state of {n} values, got shape {array.shape}")
+    return array
+
+
+def _events(arm: Robot, events: object) -> list[tuple[float, Robot]]:
+    """(time, arm) pairs sorted by time; each time finite and >= 0, each arm a Robot with the plant's joints."""
+    checked = []
+    for event in events:
+        try:
+            time, plant = event
+        except (TypeError, ValueError):
+            raise ModelError(f"each event must be a (time, arm) pair, got {event!r}") from None
+        if not (isinstance(time, (int, float, np.number)) and np.isfinite(time) and time >= 0):
+            raise ModelError(f"an event time must be a finite number of seconds >= 0, got {time!r}")
+        if not isinstance(plant, Robot) or plant.n != arm.n:
+            raise ModelError(f"the arm of the event at t = {time} must be a Robot with {arm.n} joints")
+        checked.append((float(time), plant))
+    return sorted(checked, key=lambda e: e[0])
 
 
 def _users_own(item: object) -> bool:
@@ -319,14 +379,16 @@ def simulate(
         not callable or its model does not match the arm, a Digital period is not a whole
         number of steps (or meets an adaptive method), or the method is unknown.
     """
+    if not isinstance(arm, Robot):
+        raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
     n = arm.n
-    if not (t_final > 0 and dt > 0 and np.isfinite(t_final) and np.isfinite(dt)):
-        raise ModelError(f"t_final and dt must be positive, got {t_final}, {dt}")
-    q0 = np.zeros(n) if q0 is None else np.array(q0, dtype=float)
-    qd0 = np.zeros(n) if qd0 is None else np.array(qd0, dtype=float)
-    if q0.shape != (n,) or qd0.shape != (n,):
-        raise ModelError(f"q0 and qd0 must have {n} values")
-    events = sorted(events, key=lambda e: e[0])
+    for name, value in (("t_final", t_final), ("dt", dt)):
+        if not (isinstance(value, (int, float, np.number)) and np.isfinite(value) and value > 0):
+            raise ModelError(f"{name} must be a positive number of seconds, got {value!r}")
+    q0, qd0 = (np.zeros(n) if x is None else _one_state(x, n, name) for x, name in ((q0, "q0"), (qd0, "qd0")))
+    if disturbance is not None and not callable(disturbance):
+        disturbance = np.broadcast_to(_one_state(disturbance, n, "disturbance", allow_scalar=True), (n,)).copy()
+    events = _events(arm, events)
     arms = [arm] + [e[1] for e in events]
     steps = round(t_final / dt)
     spec, period, controller = _unwrap(controller)
@@ -377,7 +439,7 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
     tau_d = np.zeros(n) if disturbance is None else np.broadcast_to(np.asarray(disturbance, float), (n,)).copy()
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
-    state, tau_held, e_int = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n)
+    state, tau_held, e_int, outcome = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n), np.array([-1, 0, -1])
     smoothing = _smoothing(arm, eps, dt, q0)
     chunks = 20 if progress is not None else 1
     bounds = np.linspace(0, steps + 1, chunks + 1).astype(int)
@@ -387,15 +449,37 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
             (spec.kind, model, model_coulomb, gain, hold, spec.model is None),
             (trajectory_kind, params, q0),
             (0.0, dt, int(a), int(b)),
-            (state, tau_held, e_int),
+            (state, tau_held, e_int, outcome),
             (times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"]),
         )
+        if outcome[0] >= 0:
+            break
         if progress is not None:
             progress(b / (steps + 1))
-    q_d = arrays["q_d"] if trajectory is not None else None
-    return Result(times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], q_d, arm,
-                  {"method": "rk4 (compiled)", "dt": dt, "integral": e_int},
-                  lambda: _energies(arms, events, times, arrays["q"], arrays["qd"]))  # fmt: skip
+    rows = steps + 1 if outcome[0] < 0 else int(outcome[0])
+    q_d = arrays["q_d"][:rows] if trajectory is not None else None
+    result = Result(times[:rows], arrays["q"][:rows], arrays["qd"][:rows], arrays["qdd"][:rows], arrays["tau"][:rows],
+                    q_d, arm, {"method": "rk4 (compiled)", "dt": dt, "integral": e_int},
+                    lambda: _energies(arms, events, times[:rows], arrays["q"][:rows], arrays["qd"][:rows]))  # fmt: skip
+    if outcome[0] >= 0:
+        raise _stopped(arm, int(outcome[1]), int(outcome[2]), rows * dt, state[:n], result)
+    return result
+
+
+def _stopped(arm: Robot, reason: int, joint: int, t: float, q: np.ndarray, result: Result) -> SimulationError:
+    """The error of a run that cannot go on, naming the time and the joint."""
+    name = arm.joint_names[joint]
+    if reason == SINGULAR:
+        message = (
+            f"the simulation of '{arm.name}' stopped at t = {t:.6g} s: M(q) is singular at q = "
+            f"{np.array2string(q, precision=4)}, nothing with mass or inertia moves about joint '{name}'"
+        )
+    else:
+        message = (
+            f"the simulation of '{arm.name}' diverged at t = {t:.6g} s: joint '{name}' reached a non-finite "
+            "state (lower the gains, or the step dt); the run up to then is in this error's .result"
+        )
+    return SimulationError(message, result)
 
 
 def _energies(arms: list[Robot], events: list, times: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
@@ -417,7 +501,9 @@ def _smoothing(arm: Robot, eps: object, dt: float, q0: np.ndarray) -> np.ndarray
         if eps != "auto":
             raise ModelError(f"coulomb_smoothing must be 'auto' or a number, got '{eps}'")
         largest = np.abs(arm.coulomb_friction).max(axis=1)
-        return np.maximum(1e-3, largest * dt / np.diag(arm.inertia_matrix(q0)))
+        diagonal = np.diag(arm.inertia_matrix(q0))  # zero where M(q0) is singular: the run then stops there
+        stiffness = np.divide(largest * dt, diagonal, out=np.zeros(arm.n), where=diagonal > 0)
+        return np.maximum(1e-3, stiffness)
     value = float(eps)
     if not (np.isfinite(value) and value >= 0):
         raise ModelError(f"coulomb_smoothing must be a non-negative number, got {eps}")
@@ -440,6 +526,7 @@ def _dynamics(arms, events, eps):
     bare = [a.replace([_no_coulomb(link) for link in a.links]) for a in arms]
 
     def qdd(t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        _check_bounded(q, qd)
         index = sum(1 for e in events if t >= e[0])
         return bare[index].forward_dynamics(q, qd, tau - _smooth_coulomb(arms[index], qd, eps))
 
@@ -463,16 +550,18 @@ def _torque(controller, plant, t, q, qd, desired, e_int):
     if controller is None:
         return np.zeros_like(q)
     if control.accepts_plant(controller):
-        return np.asarray(controller(t, q, qd, *desired, e_int, plant=plant), dtype=float)
-    return np.asarray(controller(t, q, qd, *desired, e_int), dtype=float)
+        tau = controller(t, q, qd, *desired, e_int, plant=plant)
+    else:
+        tau = controller(t, q, qd, *desired, e_int)
+    return _one_state(tau, q.shape[0], f"the controller's torque at t = {t}", allow_scalar=True)
 
 
 def _tau_d(disturbance: object, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     if disturbance is None:
         return np.zeros_like(q)
     if callable(disturbance):
-        return np.asarray(disturbance(t, q, qd), dtype=float)
-    return np.broadcast_to(np.asarray(disturbance, dtype=float), q.shape)
+        return _one_state(disturbance(t, q, qd), q.shape[0], f"the disturbance at t = {t}")
+    return disturbance
 
 
 def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt, eps):
@@ -494,16 +583,40 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
         k1v = qdd_of(t, q, qd, applied)
         times[k] = t
         out["q"][k], out["qd"][k], out["qdd"][k], out["tau"][k], out["q_d"][k] = q, qd, k1v, tau, desired[0]
-        k2v = qdd_of(t + dt / 2, q + dt / 2 * qd, qd + dt / 2 * k1v, applied)
-        k3v = qdd_of(t + dt / 2, q + dt / 2 * (qd + dt / 2 * k1v), qd + dt / 2 * k2v, applied)
-        k4v = qdd_of(t + dt, q + dt * (qd + dt / 2 * k2v), qd + dt * k3v, applied)
-        k2q, k3q, k4q = qd + dt / 2 * k1v, qd + dt / 2 * k2v, qd + dt * k3v
-        q = q + dt / 6 * (qd + 2 * k2q + 2 * k3q + k4q)
-        qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-    q_d = out["q_d"] if trajectory is not None else None
-    return Result(times, out["q"], out["qd"], out["qdd"], out["tau"], q_d, arms[0],
-                  {"method": "rk4 (Python)", "dt": dt, "integral": e_int},
-                  lambda: _energies(arms, events, times, out["q"], out["qd"]))  # fmt: skip
+        try:
+            k2v = qdd_of(t + dt / 2, q + dt / 2 * qd, qd + dt / 2 * k1v, applied)
+            k3v = qdd_of(t + dt / 2, q + dt / 2 * (qd + dt / 2 * k1v), qd + dt / 2 * k2v, applied)
+            k4v = qdd_of(t + dt, q + dt * (qd + dt / 2 * k2v), qd + dt * k3v, applied)
+            k2q, k3q, k4q = qd + dt / 2 * k1v, qd + dt / 2 * k2v, qd + dt * k3v
+            q = q + dt / 6 * (qd + 2 * k2q + 2 * k3q + k4q)
+            qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+            _check_bounded(q, qd)
+        except _DivergedError as diverged:
+            rows, joint = k + 1, diverged.joint
+            break
+    else:
+        rows = steps + 1
+    q_d = out["q_d"][:rows] if trajectory is not None else None
+    result = Result(times[:rows], out["q"][:rows], out["qd"][:rows], out["qdd"][:rows], out["tau"][:rows], q_d,
+                    arms[0], {"method": "rk4 (Python)", "dt": dt, "integral": e_int},
+                    lambda: _energies(arms, events, times[:rows], out["q"][:rows], out["qd"][:rows]))  # fmt: skip
+    if rows <= steps:
+        raise _stopped(arms[0], DIVERGED, joint, rows * dt, q, result)
+    return result
+
+
+class _DivergedError(Exception):
+    """A state of the Python loop that blew up (joint ``joint``)."""
+
+    def __init__(self, joint: int) -> None:
+        super().__init__(joint)
+        self.joint = joint
+
+
+def _check_bounded(q: np.ndarray, qd: np.ndarray) -> None:
+    bad = ~((np.abs(q) < LARGEST_STATE) & np.isfinite(qd))
+    if bad.any():
+        raise _DivergedError(int(np.flatnonzero(bad)[0]))
 
 
 def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps):
@@ -522,8 +635,9 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
     times = np.arange(steps + 1) * dt
     solution = solve_ivp(rate, (0.0, times[-1]), np.concatenate([q0, qd0, np.zeros(n)]), method=method.upper()
                          if method.lower() != "lsoda" else "LSODA", t_eval=times, rtol=1e-8, atol=1e-10)  # fmt: skip
-    if not solution.success:
-        raise ModelError(f"the {method} solver failed: {solution.message}")
+    if not solution.success or not np.all(np.isfinite(solution.y)):
+        raise ModelError(f"the {method} solver failed at t = {solution.t[-1]:.6g} s: {solution.message} (the closed "
+                         "loop may diverge: lower the gains)")  # fmt: skip
     x = solution.y.T
     q, qd, e_int = x[:, :n], x[:, n : 2 * n], x[:, 2 * n :]
     qdd, tau, q_d = np.empty_like(q), np.empty_like(q), np.empty_like(q)

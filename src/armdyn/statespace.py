@@ -12,6 +12,10 @@
   B = [0; M^-1], with dID/dq by complex-step differentiation of the Lagrange-Euler
   reference (exact to rounding, no step-size error) and dID/dqd = 2 Vm + Fv exactly
   (Vm is the Christoffel form, so d(Vm qd)/dqd = 2 Vm).
+
+Every function but ``linearize`` takes one state or a batch (leading axes (...)) and returns
+the matching shape. Arguments are checked first (armdyn.inputs): a wrong type or shape is a
+ModelError naming the argument, a wrong kind of arm or callable a TypeError.
 """
 
 from __future__ import annotations
@@ -21,15 +25,43 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
 
+def _check_arm(arm: object) -> None:
+    if not isinstance(arm, Robot):
+        raise TypeError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+
+
+def _where(arm: Robot) -> str:
+    return f" for '{arm.name}'"
+
+
+def _states(arm: Robot, names: tuple[str, ...], values: tuple[object, ...]) -> list[np.ndarray]:
+    """The arm checked, then each value as a finite float array (..., n), named in any error."""
+    _check_arm(arm)
+    return [inputs.state(value, arm.n, name, _where(arm)) for name, value in zip(names, values, strict=True)]
+
+
+def _broadcast(*named: tuple[str, np.ndarray]) -> tuple[int, ...]:
+    """The common batch shape of (name, array (..., k)) pairs, or a ModelError naming them."""
+    try:
+        return np.broadcast_shapes(*(array.shape[:-1] for _, array in named))
+    except ValueError:
+        shapes = ", ".join(f"{name} {array.shape}" for name, array in named)
+        raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
+
+
+def _matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    return np.einsum("...ij,...j->...i", A, x)
+
+
 def _split(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
-    x = np.asarray(x, dtype=float)
-    if x.ndim == 0 or x.shape[-1] != 2 * arm.n:
-        raise ModelError(f"x must have shape (..., {2 * arm.n}) for '{arm.name}' (x = [q; qd]), got {x.shape}")
+    _check_arm(arm)
+    x = inputs.state(x, 2 * arm.n, "x", f" for '{arm.name}' (x = [q; qd])")
     return x[..., : arm.n], x[..., arm.n :]
 
 
@@ -53,11 +85,15 @@ def state_derivative(arm: Robot, x: object, tau: object) -> np.ndarray:
     Raises
     ------
     armdyn.ModelError
-        When ``x`` does not end in 2 n, or when ``tau`` or the state is rejected by
-        ``forward_dynamics`` (wrong shape, NaN or infinity, symbolic parameters).
+        When ``x`` is not numbers of shape (..., 2 n) or holds NaN or infinity, or when
+        ``tau`` is rejected by ``forward_dynamics`` (not numbers of shape (..., n), NaN or
+        infinity, a batch shape that does not broadcast, symbolic parameters).
+    TypeError
+        When ``arm`` is not a Robot.
     """
     q, qd = _split(arm, x)
-    return np.concatenate([qd, arm.forward_dynamics(q, qd, tau)], -1)
+    qdd = arm.forward_dynamics(q, qd, tau)
+    return np.concatenate([np.broadcast_to(qd, qdd.shape), qdd], -1)
 
 
 def drift_and_input(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
@@ -82,14 +118,16 @@ def drift_and_input(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     armdyn.ModelError
-        When ``x`` does not end in 2 n or holds NaN or infinity, or the arm has symbolic
-        parameters.
+        When ``x`` is not numbers of shape (..., 2 n) or holds NaN or infinity, or the arm
+        has symbolic parameters.
+    TypeError
+        When ``arm`` is not a Robot.
     """
     q, qd = _split(arm, x)
     M = arm.inertia_matrix(q)
     N = arm.nonlinear_terms(q, qd)
     Minv = np.linalg.inv(M)
-    f = np.concatenate([qd, -np.einsum("...ij,...j->...i", Minv, N)], -1)
+    f = np.concatenate([qd, -_matvec(Minv, N)], -1)
     g = np.concatenate([np.zeros_like(Minv), Minv], -2)
     return f, g
 
@@ -111,7 +149,19 @@ def brunovsky(n: int) -> tuple[np.ndarray, np.ndarray]:
         (2 n, 2 n).
     B : numpy.ndarray
         (2 n, n).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``n`` is below 1.
+    TypeError
+        When ``n`` is not an integer (a bool is not one).
     """
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
+        raise TypeError(f"n must be an integer number of joints, got {n!r} ({type(n).__name__})")
+    if n < 1:
+        raise ModelError(f"n must be at least 1, got {n}")
+    n = int(n)
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
     B = np.vstack([np.zeros((n, n)), np.eye(n)])
@@ -137,32 +187,53 @@ def linearizing_torque(
     arm : Robot
         The arm.
     q, qd : array_like
-        Joint positions and velocities, one state (n,).
+        Joint positions and velocities, one state (n,) or a batch (..., n).
     u : array_like
-        The desired output acceleration yddot: (n,) without an output, else (m,).
+        The desired output acceleration yddot: (n,) or (..., n) without an output, else (m,)
+        or (..., m); its batch shape broadcasts with the states'.
     output_jacobian : callable, optional
-        J(q) -> (m, n), the Jacobian of the output y = h(q); default None (y = q).
+        J(q) -> (m, n) for one state, (..., m, n) for a batch q: the Jacobian of the output
+        y = h(q); default None (y = q).
     output_jacobian_dot_qd : callable, optional
-        (q, qd) -> Jdot qd, (m,); default zero.
+        (q, qd) -> Jdot qd, (m,) or (..., m); default zero.
 
     Returns
     -------
     numpy.ndarray
-        tau, (n,).
+        tau, (..., n): (n,) for one state.
 
     Raises
     ------
     armdyn.ModelError
-        When ``q`` or ``qd`` is rejected by the dynamics (wrong shape, NaN or infinity,
-        symbolic parameters).
+        When ``q``, ``qd`` or ``u`` is not numbers of the shape above or holds NaN or
+        infinity, when their batch shapes do not broadcast, when an output callable returns
+        an array of the wrong shape or non-finite values, or when the arm has symbolic
+        parameters.
+    TypeError
+        When ``arm`` is not a Robot, or an output argument is neither None nor callable.
     """
-    q, qd, u = (np.asarray(v, dtype=float) for v in (q, qd, u))
+    q, qd = _states(arm, ("q", "qd"), (q, qd))
+    for name, function in (("output_jacobian", output_jacobian), ("output_jacobian_dot_qd", output_jacobian_dot_qd)):
+        if function is not None and not callable(function):
+            raise TypeError(f"{name} must be a callable or None, got {type(function).__name__}")
+    if output_jacobian is None and output_jacobian_dot_qd is not None:
+        raise ModelError("output_jacobian_dot_qd needs output_jacobian (without it the output is y = q)")
     M, N = arm.inertia_matrix(q), arm.nonlinear_terms(q, qd)
     if output_jacobian is None:
-        return M @ u + N
-    J = np.asarray(output_jacobian(q), dtype=float)
-    jdot_qd = np.zeros(J.shape[0]) if output_jacobian_dot_qd is None else output_jacobian_dot_qd(q, qd)
-    return M @ (np.linalg.pinv(J) @ (u - jdot_qd)) + N
+        u = inputs.state(u, arm.n, "u", _where(arm))
+        _broadcast(("q", q), ("qd", qd), ("u", u))
+        return _matvec(M, u) + N
+    J = inputs.state(output_jacobian(q), arm.n, "output_jacobian(q)", _where(arm))
+    if J.ndim < 2:
+        raise ModelError(f"output_jacobian(q) must return an (m, {arm.n}) matrix (or a batch of them), got {J.shape}")
+    m = J.shape[-2]
+    u = inputs.state(u, m, "u", f" (the output has {m} components)")
+    if output_jacobian_dot_qd is None:
+        jdot_qd = np.zeros(m)
+    else:
+        jdot_qd = inputs.state(output_jacobian_dot_qd(q, qd), m, "output_jacobian_dot_qd(q, qd)")
+    _broadcast(("q", q), ("qd", qd), ("u", u), ("output_jacobian(q)", J[..., 0]), ("Jdot qd", jdot_qd))
+    return _matvec(M, _matvec(np.linalg.pinv(J), u - jdot_qd)) + N
 
 
 def hamiltonian(arm: Robot, q: object, p: object) -> float:
@@ -173,23 +244,29 @@ def hamiltonian(arm: Robot, q: object, p: object) -> float:
     arm : Robot
         The arm.
     q : array_like
-        Joint positions, one state (n,).
+        Joint positions, one state (n,) or a batch (..., n).
     p : array_like
-        Generalized momenta p = M(q) qd, (n,).
+        Generalized momenta p = M(q) qd, (n,) or (..., n), broadcasting with q.
 
     Returns
     -------
-    float
-        H.
+    float or numpy.ndarray
+        H: a float for one state, (...) for a batch.
 
     Raises
     ------
     armdyn.ModelError
-        When ``q`` is rejected by the dynamics (wrong shape, NaN or infinity, symbolic
-        parameters).
+        When ``q`` or ``p`` is not numbers of shape (..., n) or holds NaN or infinity, when
+        their batch shapes do not broadcast, or when the arm has symbolic parameters.
+    TypeError
+        When ``arm`` is not a Robot.
     """
-    q, p = np.asarray(q, dtype=float), np.asarray(p, dtype=float)
-    return float(0.5 * p @ np.linalg.solve(arm.inertia_matrix(q), p) + arm.potential_energy(q))
+    q, p = _states(arm, ("q", "p"), (q, p))
+    batch = _broadcast(("q", q), ("p", p))
+    M = np.broadcast_to(arm.inertia_matrix(q), (*batch, arm.n, arm.n))
+    p = np.broadcast_to(p, (*batch, arm.n))
+    H = 0.5 * np.einsum("...i,...i->...", p, np.linalg.solve(M, p[..., None])[..., 0]) + arm.potential_energy(q)
+    return float(H) if not batch else H
 
 
 def hamiltonian_rates(arm: Robot, q: object, p: object, tau: object) -> tuple[np.ndarray, np.ndarray]:
@@ -202,28 +279,34 @@ def hamiltonian_rates(arm: Robot, q: object, p: object, tau: object) -> tuple[np
     arm : Robot
         The arm.
     q : array_like
-        Joint positions, one state (n,).
+        Joint positions, one state (n,) or a batch (..., n).
     p : array_like
-        Generalized momenta p = M(q) qd, (n,).
+        Generalized momenta p = M(q) qd, (n,) or (..., n).
     tau : array_like
-        Joint torques, (n,).
+        Joint torques, (n,) or (..., n); the batch shapes of q, p and tau broadcast.
 
     Returns
     -------
     qdot : numpy.ndarray
-        (n,).
+        (..., n).
     pdot : numpy.ndarray
-        (n,).
+        (..., n).
 
     Raises
     ------
     armdyn.ModelError
-        When ``q`` is rejected by the dynamics (wrong shape, NaN or infinity, symbolic
-        parameters).
+        When ``q``, ``p`` or ``tau`` is not numbers of shape (..., n) or holds NaN or
+        infinity, when their batch shapes do not broadcast, or when the arm has symbolic
+        parameters.
+    TypeError
+        When ``arm`` is not a Robot.
     """
-    q, p, tau = (np.asarray(v, dtype=float) for v in (q, p, tau))
-    qd = np.linalg.solve(arm.inertia_matrix(q), p)
-    pdot = arm.coriolis_matrix(q, qd).T @ qd - arm.gravity_vector(q) - arm.friction(qd) + tau
+    q, p, tau = _states(arm, ("q", "p", "tau"), (q, p, tau))
+    batch = _broadcast(("q", q), ("p", p), ("tau", tau))
+    M = np.broadcast_to(arm.inertia_matrix(q), (*batch, arm.n, arm.n))
+    qd = np.linalg.solve(M, np.broadcast_to(p, (*batch, arm.n))[..., None])[..., 0]
+    Vm = arm.coriolis_matrix(q, qd)
+    pdot = np.einsum("...ji,...j->...i", Vm, qd) - arm.gravity_vector(q) - arm.friction(qd) + tau
     return qd, pdot
 
 
@@ -291,13 +374,17 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
     Raises
     ------
     armdyn.ModelError
-        When q0, qd0 or tau0 does not have n values, or when a joint with Coulomb friction
-        has zero velocity in qd0 (not differentiable there).
+        When q0, qd0 or tau0 is not n finite numbers (one state, not a batch), or when a
+        joint with Coulomb friction has zero velocity in qd0 (not differentiable there).
+    TypeError
+        When ``arm`` is not a Robot.
     """
-    q0, qd0, tau0 = (np.asarray(v, dtype=float).copy() for v in (q0, qd0, tau0))
+    names = ("q0", "qd0", "tau0")
+    q0, qd0, tau0 = (v.copy() for v in _states(arm, names, (q0, qd0, tau0)))
     n = arm.n
-    if any(v.shape != (n,) for v in (q0, qd0, tau0)):
-        raise ModelError(f"q0, qd0 and tau0 must each have {n} values")
+    for name, value in zip(names, (q0, qd0, tau0), strict=True):
+        if value.shape != (n,):
+            raise ModelError(f"{name} must be one state of {n} values{_where(arm)}, got shape {value.shape}")
     if np.any(qd0 == 0) and np.any(arm.coulomb_friction[qd0 == 0] != 0):
         raise ModelError("Coulomb friction is not differentiable at zero velocity; linearize elsewhere")
     qdd0 = arm.forward_dynamics(q0, qd0, tau0)

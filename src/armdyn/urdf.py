@@ -2,7 +2,9 @@
 
 Revolute, continuous (one coordinate, the angle), prismatic and fixed joints; branching
 trees. Fixed joints are merged into their parent body (parallel-axis theorem). Joints
-are numbered depth first from the root, children in file order.
+are numbered depth first from the root, children in file order. Every number that reaches
+the model is checked finite where it is read, so an error names the element; joints that
+move no mass in any configuration (a singular M(q)) are found after the arm is built.
 """
 
 from __future__ import annotations
@@ -20,6 +22,11 @@ from armdyn.model.joint import Joint
 from armdyn.robot import Robot
 
 _MOVING = {"revolute", "continuous", "prismatic"}
+# The test for joints that move no mass: M(q) is factored at this many random configurations
+# (a fixed seed, so that loading is deterministic); a pivot counts as zero below these.
+_SAMPLES, _SEED = 4, 20240531
+_PIVOT_RELATIVE = 1e-9  # of the joint's own diagonal entry M_jj
+_DIAGONAL_RELATIVE = 1e-13  # of the largest diagonal entry of M
 
 
 def _parse(path: Path):
@@ -27,14 +34,22 @@ def _parse(path: Path):
     from lxml import etree
 
     try:  # yourdfpy would recover from broken XML on its own: parse strictly first
-        etree.parse(str(path))
+        root = etree.parse(str(path)).getroot()
     except etree.XMLSyntaxError as error:
         raise ModelError(f"{path}: malformed XML ({error})") from None
-    try:
-        urdf = yourdfpy.URDF.load(
-            str(path), build_scene_graph=False, build_collision_scene_graph=False, load_meshes=False,
-            load_collision_meshes=False,
-        )  # fmt: skip
+    if root.tag != "robot":
+        raise ModelError(f"{path}: not a URDF: the root element is <{root.tag}>, where a URDF has <robot name='...'>")
+    if not root.get("name"):
+        raise ModelError(
+            f"{path}: the <robot> element has no name, which the URDF specification requires "
+            "(Pinocchio's parser refuses it too); add name='...' to <robot>"
+        )
+    try:  # NaN or inf in an rpy makes NumPy warn inside yourdfpy: the loader refuses them itself, naming the element
+        with np.errstate(invalid="ignore", over="ignore"):
+            urdf = yourdfpy.URDF.load(
+                str(path), build_scene_graph=False, build_collision_scene_graph=False, load_meshes=False,
+                load_collision_meshes=False,
+            )  # fmt: skip
     except etree.XMLSyntaxError as error:
         raise ModelError(f"{path}: malformed XML ({error})") from None
     except Exception as error:  # yourdfpy raises several kinds on bad content
@@ -42,20 +57,42 @@ def _parse(path: Path):
     return urdf.robot
 
 
-def _origin(element: object) -> np.ndarray:
+def _origin(element: object, where: str) -> np.ndarray:
+    """The pose an element's ``<origin>`` gives (identity when absent), refused unless finite."""
     origin = getattr(element, "origin", None)
-    return np.eye(4) if origin is None else np.array(origin, dtype=float)
+    pose = np.eye(4) if origin is None else np.array(origin, dtype=float)
+    if not np.all(np.isfinite(pose)):
+        raise ModelError(f"{where}: <origin> has a NaN or infinite xyz or rpy; write finite numbers in the file")
+    return pose
 
 
-def _body(urdf_link: object, strict: bool) -> Inertial:
+def _finite(value: object, where: str, what: str) -> float:
+    """``value`` as a float, refused with a ModelError naming ``where`` and ``what`` unless finite."""
+    number = float(value)  # yourdfpy has already read it as a number
+    if not np.isfinite(number):
+        raise ModelError(f"{where}: {what} is {number}, not a finite number; write a finite number in the file")
+    return number
+
+
+def _body(file: str, urdf_link: object, strict: bool) -> Inertial:
     """The link's mass properties in its own frame (URDF gives them in the inertial frame)."""
+    where = f"{file}: link '{urdf_link.name}'"
     inertial = urdf_link.inertial
     if inertial is None or inertial.mass is None:
         return Inertial(0.0, name=urdf_link.name)
-    pose = _origin(inertial)
+    mass = _finite(inertial.mass, where, "<inertial><mass> value")
+    pose = _origin(inertial, f"{where}: <inertial>")
     rotation = pose[:3, :3]
     tensor = np.zeros((3, 3)) if inertial.inertia is None else np.array(inertial.inertia, dtype=float)
-    return Inertial(inertial.mass, pose[:3, 3], rotation @ tensor @ rotation.T, urdf_link.name, strict)
+    if not np.all(np.isfinite(tensor)):
+        raise ModelError(
+            f"{where}: <inertial><inertia> holds NaN or infinite values ({tensor[np.triu_indices(3)]}); "
+            "write finite ixx ixy ixz iyy iyz izz in the file"
+        )
+    try:
+        return Inertial(mass, pose[:3, 3], rotation @ tensor @ rotation.T, urdf_link.name, strict)
+    except ModelError as error:
+        raise ModelError(f"{file}: {error}") from None
 
 
 def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object = (0.0, 0.0, -9.81)) -> Robot:
@@ -64,8 +101,20 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     Revolute, continuous, prismatic and fixed joints, in branching trees; fixed joints are
     merged into their parent body and the moving joints numbered depth first from the root,
     children in file order. ``<dynamics damping friction>`` become viscous and (symmetric)
-    Coulomb friction. Mimic joints load as independent joints, with a warning naming them.
-    Meshes are never loaded.
+    Coulomb friction. ``<limit lower upper>`` are the joint limits; as the URDF
+    specification says (and as Pinocchio reads them), a missing ``lower`` or ``upper`` is 0.
+    A continuous joint, or a revolute or prismatic joint without ``<limit>``, is unlimited.
+    Mimic joints load as independent joints, with a warning naming them. Meshes are never
+    loaded.
+
+    A joint whose motion moves no mass or inertia in any configuration (its subtree is
+    massless, or only a point mass on its own axis or a thin rod along it, or its motion repeats
+    that of the joints before it) makes M(q) singular for every q, and forward dynamics
+    undefined. Such joints are found by factoring M(q) (LDL^T, parents first) at 4 random
+    configurations within the joint limits (a range wider than a turn, or 2 m, is sampled
+    on a turn, or 2 m, inside it): joint j counts when its pivot is zero at every one
+    (below 1e-9 M_jj, or M_jj below 1e-13 of M's largest diagonal entry). A file whose
+    links carry no mass at all (a kinematics-only file) is such an arm, every joint named.
 
     Parameters
     ----------
@@ -73,7 +122,10 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
         The URDF file.
     strict : bool, optional
         True (default) refuses inertias whose principal moments break the triangle
-        inequality; False accepts them with a warning, as CAD exports sometimes carry.
+        inequality, and arms whose M(q) is singular in every configuration (joints that move
+        no mass, above). False loads both with a UserWarning naming the links or joints: CAD
+        exports sometimes carry such inertias, and a kinematics-only file carries no mass;
+        M, G and inverse dynamics are then defined, forward dynamics is not.
     gravity : array_like, optional
         Acceleration of gravity in the world frame, 3 values (default [0, 0, -9.81]).
 
@@ -85,11 +137,22 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     Raises
     ------
     armdyn.ModelError
-        When the file is missing, is malformed XML or not a valid URDF; when it has floating
-        or planar joints, a joint of unknown type, a kinematic loop, a link defined twice, a
-        joint naming an undefined link, more or fewer than one root link, or no moving joint;
-        when a joint axis has no direction; and when a link's mass properties, friction or
-        limits are invalid (see Inertial and Link).
+        When the file is missing, is malformed XML or not a valid URDF (the ``<robot>``
+        element without a name included); when it has floating or planar joints, a joint of
+        unknown type, a kinematic loop, a link defined twice, a joint naming an undefined
+        link, more or fewer than one root link, or no moving joint; when a number that reaches
+        the model (an ``<origin>`` of a joint or an ``<inertial>``, an axis, a mass, an
+        inertia, a limit, a damping or friction) is NaN or infinite; when a joint axis has no
+        direction; when a link's mass properties, friction or limits are invalid (see
+        Inertial and Link); and, with ``strict``, when an inertia breaks the triangle
+        inequality or some joint moves no mass in any configuration (the message names them).
+
+    Warns
+    -----
+    UserWarning
+        Mimic joints loaded as independent joints; an axis that is not a unit vector; and,
+        with ``strict=False``, inertias that break the triangle inequality and joints that
+        move no mass (a singular M(q)).
     """
     path = Path(path)
     if not path.is_file():
@@ -127,9 +190,9 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     stack = [(joint, -1, np.eye(4)) for joint in reversed(children[roots[0]])]
     while stack:
         joint, parent, prefix = stack.pop()
-        placement = prefix @ _origin(joint)
+        placement = prefix @ _origin(joint, f"{path.name}: joint '{joint.name}' ({joint.type})")
         if joint.type == "fixed":
-            child_body = _body(links[joint.child], strict).transformed(placement)
+            child_body = _body(path.name, links[joint.child], strict).transformed(placement)
             if parent >= 0:
                 owner = built[parent]
                 built[parent] = _with_inertial(owner, owner.inertial + child_body)
@@ -137,14 +200,65 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
             continue
         if joint.mimic is not None:
             mimics.append(joint.name)
-        built.append(_moving_link(path.name, joint, parent, placement, _body(links[joint.child], strict)))
+        built.append(_moving_link(path.name, joint, parent, placement, _body(path.name, links[joint.child], strict)))
         index = len(built) - 1
         stack.extend((child, index, np.eye(4)) for child in reversed(children[joint.child]))
     if mimics:
         warnings.warn(f"{path.name}: mimic joints {mimics} are loaded as independent joints", stacklevel=2)
     if not built:
         raise ModelError(f"{path.name}: the file has no revolute, continuous or prismatic joint")
-    return Robot(built, name=robot.name, gravity=gravity, description=f"URDF {path.name}")
+    arm = Robot(built, name=robot.name, gravity=gravity, description=f"URDF {path.name}")
+    massless = _massless_joints(arm)
+    if massless:
+        kinematics_only = "" if arm.has_dynamics else " (no link of the file carries any: a kinematics-only file)"
+        message = (
+            f"{path.name}: joints {massless} move no mass or inertia in any configuration{kinematics_only}, so the "
+            "inertia matrix M(q) is singular for every q and forward dynamics is undefined (the pivots of M for these "
+            f"joints vanish at {_SAMPLES} random configurations within the joint limits)"
+        )
+        if strict:
+            raise ModelError(
+                message + "; give the links these joints move mass and inertia off their axes (or make the joints "
+                "fixed), or pass strict=False to load the arm anyway with a warning"
+            )
+        warnings.warn(message + "; loaded as given (strict=False)", stacklevel=2)
+    return arm
+
+
+def _massless_joints(arm: Robot) -> list[str]:
+    """The joints whose pivot of M(q) is zero at every one of a few random configurations.
+
+    M(q) = L D L^T with unit lower-triangular L, parents first (the joint order). The pivot
+    D_jj is twice the least kinetic energy of moving joint j at unit speed while the joints
+    before it move to cancel what they can: zero when joint j moves no mass (M_jj = 0,
+    then its whole row is zero) or when its motion repeats that of joints before it (two
+    coincident revolute axes with a massless link between them). A structural singularity holds at
+    every configuration, a configuration-dependent one only on a set of measure zero, so a
+    joint whose pivot vanishes at every sample is named. Exact zeros survive rounding only
+    approximately, hence the relative thresholds ``_PIVOT_RELATIVE`` and ``_DIAGONAL_RELATIVE``.
+    This covers what a rule on the subtree's mass alone would miss (a point mass on the
+    joint's own axis, repeated axes) and uses M as the dynamics compute it.
+    """
+    lower, upper = arm.qlim
+    # A range wider than 2 span (unlimited, or 1e16 as some files write) is sampled on 2 span inside it, nearest
+    # 0: for a revolute joint the whole circle, M being periodic; for a prismatic one 2 m
+    span = np.where(np.array(arm.kinds) == "revolute", np.pi, 1.0)
+    wide = upper - lower > 2 * span
+    middle = np.clip(0.0, np.where(wide, lower + span, 0.0), np.where(wide, upper - span, 0.0))
+    lower, upper = np.where(wide, middle - span, lower), np.where(wide, middle + span, upper)
+    q = np.random.default_rng(_SEED).uniform(lower, upper, (_SAMPLES, arm.n))
+    work = np.array(arm.inertia_matrix(q))  # (samples, n, n), overwritten below
+    diagonal = np.diagonal(work, axis1=1, axis2=2).copy()
+    largest = diagonal.max(axis=1)
+    zero = np.zeros((_SAMPLES, arm.n), dtype=bool)
+    for j in range(arm.n):
+        pivot = work[:, j, j]
+        zero[:, j] = (pivot <= _PIVOT_RELATIVE * diagonal[:, j]) | (diagonal[:, j] <= _DIAGONAL_RELATIVE * largest)
+        # eliminate joint j from the joints after it; a zero pivot of a semi-definite matrix has a zero column
+        column = work[:, j + 1 :, j]
+        scale = np.where(zero[:, j], 0.0, 1.0 / np.where(zero[:, j], 1.0, pivot))
+        work[:, j + 1 :, j + 1 :] -= scale[:, None, None] * column[:, :, None] * column[:, None, :]
+    return [name for name, always in zip(arm.joint_names, zero.all(axis=0), strict=True) if always]
 
 
 def _with_inertial(link: Link, inertial: Inertial) -> Link:
@@ -156,19 +270,24 @@ def _with_inertial(link: Link, inertial: Inertial) -> Link:
 def _moving_link(file: str, joint: object, parent: int, placement: np.ndarray, body: Inertial) -> Link:
     where = f"{file}: joint '{joint.name}'"
     axis = np.array([1.0, 0.0, 0.0] if joint.axis is None else joint.axis, dtype=float)
+    if not np.all(np.isfinite(axis)):
+        raise ModelError(f"{where}: <axis> xyz {axis} holds NaN or infinite values; write a finite direction")
     norm = np.linalg.norm(axis)
-    if not np.isfinite(norm) or norm == 0:
-        raise ModelError(f"{where}: axis {axis} has no direction")
+    if norm == 0:
+        raise ModelError(f"{where}: axis {axis} has no direction; write a non-zero <axis> xyz")
     if abs(norm - 1.0) > 1e-6:
         warnings.warn(f"{where}: axis {axis} is not a unit vector; using its direction", stacklevel=3)
     kind = "prismatic" if joint.type == "prismatic" else "revolute"
     limits = (-np.inf, np.inf)
-    if joint.type != "continuous" and joint.limit is not None and joint.limit.lower is not None:
-        limits = (float(joint.limit.lower), float(joint.limit.upper))
+    if joint.type != "continuous" and joint.limit is not None:  # the specification: lower and upper default to 0
+        limits = tuple(
+            0.0 if value is None else _finite(value, where, f"<limit> {bound}")
+            for bound, value in (("lower", joint.limit.lower), ("upper", joint.limit.upper))
+        )
     damping = friction = 0.0
     if joint.dynamics is not None:
-        damping = float(joint.dynamics.damping or 0.0)
-        friction = float(joint.dynamics.friction or 0.0)
+        damping = _finite(joint.dynamics.damping or 0.0, where, "<dynamics> damping")
+        friction = _finite(joint.dynamics.friction or 0.0, where, "<dynamics> friction")
     try:
         return Link(
             joint.name,

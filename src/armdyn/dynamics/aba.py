@@ -19,6 +19,7 @@ from armdyn.dynamics.packed import (
     MASS,
     N_JOINTS,
     PARENT,
+    PIVOT_FLOOR,
     STRIDE,
     workspace_size,
 )
@@ -37,11 +38,13 @@ from armdyn.dynamics.spatial import (
     world_pose,
 )
 
+SINGULAR_STATUS = 50  # aba_one: M(q) is singular
+
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def aba_core(
     model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray
-) -> None:
+) -> int:
     """qdd = M^-1 (tau - Vm qd - F - G) by the articulated-body algorithm (Featherstone 7.3), in the
     world frame, where articulated inertias add up the tree without transforms.
 
@@ -49,6 +52,9 @@ def aba_core(
     Pass 2 (leaves first): U = I^A S, D = S^T U + G^2 Jm, u = tau - F - S^T p^A;
     I^A_p += I^A - U U^T / D, p^A_p += p^A + (I^A - U U^T / D) c + U u / D.
     Pass 3: a = a_p + c (a_0 = -g), qdd = (u - U^T a) / D, a += S qdd.
+
+    Returns -1, or the first joint (leaves first) whose pivot D is not above the model's
+    PIVOT_FLOOR: M(q) is singular there and qdd is not computed.
     """
     n = int(model[N_JOINTS])
     local, pose, S, vel, bias = 0, 12 * n, 24 * n, 30 * n, 36 * n
@@ -121,6 +127,8 @@ def aba_core(
                 total += work[ia + 6 * r + k] * work[s + k]
             work[u + r] = total
         D = dot6(work, s, u) + model[b + ARMATURE]
+        if not model[PIVOT_FLOOR] < D:
+            return i
         value = tau[i] - joint_friction(model, i, qd[i]) - dot6(work, s, p)
         work[Du + 2 * i] = D
         work[Du + 2 * i + 1] = value
@@ -150,25 +158,30 @@ def aba_core(
         qdd[i] = result
         for k in range(6):
             work[a + k] += work[s + k] * result
+    return -1
 
 
 @njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
 def aba_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> int:
-    """qdd for one state; the status of states_status, or 4 when qdd has the wrong length."""
+    """qdd for one state; the status of states_status, 4 when qdd has the wrong length, or
+    SINGULAR_STATUS when M(q) is singular."""
     status = states_status(model, q, qd, tau, 3)
     if status == 0 and qdd.shape[0] != int(model[N_JOINTS]):
         status = 4
-    if status == 0:
-        aba_core(model, np.empty(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd)
+    if status == 0 and aba_core(model, np.empty(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd) >= 0:
+        status = SINGULAR_STATUS
     return status
 
 
 @njit(parallel=True, **NUMBA_OPTIONS)
-def aba_batch(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> None:
-    """qdd for each row of (q, qd, tau), in parallel chunks."""
+def aba_batch(
+    model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray, singular: np.ndarray
+) -> None:
+    """qdd for each row of (q, qd, tau), in parallel chunks; singular[s] is aba_core's joint
+    where M is singular at state s (-1 where it is not)."""
     count = q.shape[0]
     chunks = min(count, BATCH_CHUNKS)
     for chunk in prange(chunks):
         work = np.empty(workspace_size(int(model[N_JOINTS])))
         for s in range(chunk * count // chunks, (chunk + 1) * count // chunks):
-            aba_core(model, work, q[s], qd[s], tau[s], qdd[s])
+            singular[s] = aba_core(model, work, q[s], qd[s], tau[s], qdd[s])

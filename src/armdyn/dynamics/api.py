@@ -355,7 +355,9 @@ def forward_dynamics(
     Raises
     ------
     ModelError
-        When a state or ``out`` is invalid (see inverse_dynamics).
+        When a state or ``out`` is invalid (see inverse_dynamics), or when M(q) is singular at a
+        state (a joint about which nothing with mass or inertia moves): the message names the
+        state and the joint.
     """
     qdd = _empty(arm.n) if out is None else out
     try:
@@ -363,7 +365,27 @@ def forward_dynamics(
             return qdd
     except TypeError:
         pass
-    return _batch(arm, aba_batch, ("q", "qd", "tau"), (q, qd, tau), out, (arm.n,))
+    model = _model(arm)
+    batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), arm.n, _where(arm))
+    result = inputs.result(out, (*batch, arm.n))
+    singular = np.full(flat[0].shape[0], -1)
+    if singular.size:
+        aba_batch(model, *flat, result.reshape(-1, arm.n), singular)
+    if singular.max(initial=-1) >= 0:
+        raise _singular(arm, flat[0], singular, batch)
+    return result
+
+
+def _singular(arm: Robot, q: np.ndarray, singular: np.ndarray, batch: tuple[int, ...]) -> ModelError:
+    """The error for a state whose inertia matrix is singular, naming the state and the joint."""
+    index = int(np.flatnonzero(singular >= 0)[0])
+    joint = arm.joint_names[singular[index]]
+    where = f"at state {tuple(int(k) for k in np.unravel_index(index, batch))} " if batch else ""
+    return ModelError(
+        f"M(q) of '{arm.name}' is singular {where}(q = {np.array2string(q[index], precision=4)}): nothing with "
+        f"mass or inertia moves about joint '{joint}' there (its articulated inertia vanishes). Give the links "
+        "beyond it mass and inertia, or lock the joint"
+    )
 
 
 def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:

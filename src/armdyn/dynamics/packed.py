@@ -26,7 +26,8 @@ from armdyn.errors import ModelError
 from armdyn.model import ArmModel, Inertial
 
 # header
-N_JOINTS, GRAVITY, TOOL_LINK, TOOL_ROTATION, TOOL_POSITION, HEADER = 0, 1, 4, 5, 14, 20
+N_JOINTS, GRAVITY, TOOL_LINK, TOOL_ROTATION, TOOL_POSITION, PIVOT_FLOOR, HEADER = 0, 1, 4, 5, 14, 17, 20
+PIVOT_RELATIVE = 1e-12  # an articulated inertia below this times the arm's inertia scale is zero
 # one joint record, relative to its start
 PARENT, KIND, ROTATION, POSITION = 0, 1, 2, 11
 MASS, FIRST_MOMENT, INERTIA = 14, 15, 18  # INERTIA: Ixx Ixy Ixz Iyy Iyz Izz about the body origin
@@ -110,4 +111,18 @@ def pack(robot: ArmModel) -> np.ndarray:
         record[ARMATURE] = armature[i]
         record[VISCOUS] = viscous[i]
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
+    buffer[PIVOT_FLOOR] = PIVOT_RELATIVE * inertia_scale(robot)
     return buffer
+
+
+def inertia_scale(robot: ArmModel) -> float:
+    """A size of the arm's inertia, kg m^2: each link's inertia about its centre of mass, its
+    mass at the arm's reach, and the reflected motor inertias, summed (1 for a massless arm).
+    Forward dynamics calls an articulated inertia below PIVOT_RELATIVE times this zero."""
+    reach = sum(np.linalg.norm(link.joint.placement[:3, 3]) + np.linalg.norm(link.joint.frame_offset[:3, 3])
+                for link in robot.links)  # fmt: skip
+    total = float(np.sum(robot.reflected_inertia))
+    for link in robot.links:
+        body = link.inertial
+        total += float(np.trace(body.inertia)) + body.mass * (reach + np.linalg.norm(body.com)) ** 2
+    return total if total > 0 else 1.0

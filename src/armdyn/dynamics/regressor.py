@@ -11,20 +11,82 @@ phi, per link in link order: [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]
 inertia about the link-frame origin in link-frame axes (Pinocchio's dynamic parameters);
 then per joint [Fv, Fc+, Fc-, Ia]: the joint-side viscous and Coulomb friction and the
 reflected motor inertia G^2 Jm.
+
+A batch is computed a block of states at a time (about CHUNK_BYTES of W per block), so the
+peak memory of a large batch is the result's own size plus a few times CHUNK_BYTES; a
+result larger than MEMORY_LIMIT is refused beforehand with a ModelError saying how much it
+needs (pass ``out=``, for example a numpy.memmap, to write it elsewhere).
+
+Identification (``identify``) refuses samples that do not excite the base parameters: a
+stacked base regressor of numerical rank below the number r of base parameters, or with a
+condition number above MAX_CONDITION, is a ModelError; a full-rank one whose condition
+number exceeds POOR_CONDITION gives a PoorExcitationWarning and the estimates.
 """
 
 from __future__ import annotations
 
+import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.errors import ModelError
-from armdyn.kinematics import as_state, joint_axes, joint_frames
+from armdyn.kinematics import joint_axes, joint_frames
 from armdyn.model import ArmModel
 
 BODY_PARAMETERS = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 JOINT_PARAMETERS = ("Fv", "Fc+", "Fc-", "Ia")
+
+CHUNK_BYTES = 4 * 2**20
+"""Bytes of W computed at a time: the temporaries of one block are a few times this."""
+MEMORY_LIMIT: int | None = None
+"""The largest result ``regressor`` allocates, in bytes; None (default) is half the machine's
+physical memory (16 GiB where that cannot be read)."""
+MAX_CONDITION = 1e10
+"""``identify`` refuses a stacked base regressor with a larger condition number: the samples
+do not excite the base parameters (the estimates would be ruled by rounding and noise)."""
+POOR_CONDITION = 1e5
+"""``identify`` warns (PoorExcitationWarning) above this condition number; well-excited
+trajectories give tens to a few thousand."""
+
+
+class PoorExcitationWarning(UserWarning):
+    """The samples excite the base parameters poorly: the estimates are sensitive to noise."""
+
+
+def _check_arm(robot: object) -> None:
+    if not isinstance(robot, ArmModel):
+        raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
+
+
+def _integer(value: object, name: str, minimum: int) -> int:
+    """An int (or NumPy integer, not a bool) of at least ``minimum``, or an error naming it."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+    if value < minimum:
+        raise ModelError(f"{name} must be at least {minimum}, got {value}")
+    return int(value)
+
+
+def _flag(value: object, name: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {value!r} ({type(value).__name__})")
+    return bool(value)
+
+
+def _memory_limit() -> int:
+    if MEMORY_LIMIT is not None:
+        return int(MEMORY_LIMIT)
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2
+    except (AttributeError, ValueError, OSError):
+        return 16 * 2**30
+
+
+def _size(size: float) -> str:
+    return f"{size / 2**30:.3g} GiB" if size >= 2**30 else f"{size / 2**20:.3g} MiB"
 
 
 def parameter_names(robot: ArmModel) -> list[str]:
@@ -39,7 +101,13 @@ def parameter_names(robot: ArmModel) -> list[str]:
     -------
     list of str
         14 n names, in the order of ``parameters``.
+
+    Raises
+    ------
+    TypeError
+        When ``robot`` is not an arm (an ArmModel).
     """
+    _check_arm(robot)
     bodies = [f"{name}{i + 1}" for i in range(robot.n) for name in BODY_PARAMETERS]
     return bodies + [f"{name}{i + 1}" for i in range(robot.n) for name in JOINT_PARAMETERS]
 
@@ -65,8 +133,10 @@ def parameters(robot: ArmModel) -> np.ndarray:
     Raises
     ------
     TypeError
-        When the arm has symbolic (SymPy) parameters; ClosedForm.phi gives them symbolically.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy)
+        parameters; ClosedForm.phi gives them symbolically.
     """
+    _check_arm(robot)
     values = []
     for link in robot.links:
         body = link.inertial
@@ -100,7 +170,19 @@ def body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarra
     -------
     numpy.ndarray
         Y, shape (..., 6, 10), columns in the order of one link's block of ``parameters``.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When an argument is not real numbers of shape (..., 3), holds NaN or infinity, or
+        when their batch shapes do not broadcast together.
     """
+    names = ("w", "v", "alpha", "a")
+    batch, flat = inputs.batch_states(names, (w, v, alpha, a), 3)
+    return _body_regressor(*flat).reshape(*batch, 6, 10)
+
+
+def _body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarray) -> np.ndarray:
     Y = np.zeros((*w.shape[:-1], 6, 10))
     lin = a + _cross(w, v)  # the acceleration of the frame origin
     Y[..., 3:, 0] = lin  # mass: force m lin
@@ -131,12 +213,13 @@ def body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarra
     return Y
 
 
-def regressor(robot: ArmModel, q: object, qd: object, qdd: object) -> np.ndarray:
+def regressor(robot: ArmModel, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
     """W(q, qd, qdd), shape (..., n, 14 n), with W phi = tau (Table 3.3.1, property 9).
 
     Friction and motors included: W ``parameters(robot)`` equals the inverse dynamics.
     Computed recursively, O(n d) for depth d (Atkeson, An and Hollerbach 1986), batched
-    over any leading shape.
+    over any leading shape, a block of states at a time (see the module docstring): the
+    peak memory is W's own size plus a few times CHUNK_BYTES.
 
     Parameters
     ----------
@@ -145,6 +228,9 @@ def regressor(robot: ArmModel, q: object, qd: object, qdd: object) -> np.ndarray
     q, qd, qdd : array_like
         Joint positions, velocities and accelerations, (n,) or a batch (..., n); the batch
         shapes broadcast together.
+    out : numpy.ndarray, optional
+        A writable C-contiguous float64 array of W's shape to fill (a numpy.memmap for a W
+        larger than memory); default None, a new array.
 
     Returns
     -------
@@ -154,13 +240,52 @@ def regressor(robot: ArmModel, q: object, qd: object, qdd: object) -> np.ndarray
     Raises
     ------
     armdyn.ModelError
-        When a state is not numbers of shape (..., n) or holds NaN or infinity.
+        When a state is not real numbers of shape (..., n) or holds NaN or infinity, when the
+        batch shapes do not broadcast together, when ``out`` is not a writable C-contiguous
+        float64 array of W's shape, or when ``out`` is None and W would need more than
+        MEMORY_LIMIT bytes (the message says how much).
     TypeError
-        When the arm has symbolic (SymPy) parameters; ClosedForm.W gives W symbolically.
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy)
+        parameters; ClosedForm.W gives W symbolically.
     """
-    q, qd, qdd = (as_state(robot, x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
-    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1])
-    q, qd, qdd = (np.broadcast_to(x, (*batch, robot.n)) for x in (q, qd, qdd))
+    return _stacked(robot, q, qd, qdd, None, out)
+
+
+def _stacked(
+    robot: ArmModel, q: object, qd: object, qdd: object, columns: np.ndarray | None, out: object
+) -> np.ndarray:
+    """W[..., columns] (all columns for None), a block of states at a time into one result."""
+    _check_arm(robot)
+    n = robot.n
+    batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, f" for '{robot.name}'")
+    width = 14 * n if columns is None else len(columns)
+    shape = (*batch, n, width)
+    if out is None:
+        needed = 8 * int(np.prod(shape, dtype=float))
+        if needed > _memory_limit():
+            raise ModelError(
+                f"the regressor of {int(np.prod(batch))} states of '{robot.name}' needs {_size(needed)} for its "
+                f"result of shape {shape} (float64), more than the limit of {_size(_memory_limit())} "
+                "(armdyn.dynamics.regressor.MEMORY_LIMIT, default half the machine's memory): compute it over "
+                "fewer states at a time, or pass out= (a numpy.memmap, for instance)"
+            )
+    result = inputs.result(out, shape)
+    if not batch:  # one state: the block without a batch axis (faster for NumPy's small arrays)
+        W = _regressor_block(robot, flat[0][0], flat[1][0], flat[2][0])
+        result[...] = W if columns is None else W[..., columns]
+        return result
+    target = result.reshape(-1, n, width)
+    step = max(1, CHUNK_BYTES // (8 * n * 14 * n))
+    for start in range(0, target.shape[0], step):
+        block = slice(start, start + step)
+        W = _regressor_block(robot, flat[0][block], flat[1][block], flat[2][block])
+        target[block] = W if columns is None else W[..., columns]
+    return result
+
+
+def _regressor_block(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """W of a block of states, each (B, n) (or one state (n,)) float64, as (B, n, 14 n) (or (n, 14 n))."""
+    batch = q.shape[:-1]
     n = robot.n
     links, joints = joint_frames(robot, q)
     z, o = joint_axes(robot, joints)
@@ -181,7 +306,7 @@ def regressor(robot: ArmModel, q: object, qd: object, qdd: object) -> np.ndarray
     v_L = np.einsum("...ab,...b->...a", Rt, v[..., 3:] + _cross(v[..., :3], p))
     alpha_L = np.einsum("...ab,...b->...a", Rt, a[..., :3])
     a_L = np.einsum("...ab,...b->...a", Rt, a[..., 3:] + _cross(a[..., :3], p))
-    Y = body_regressor(w_L, v_L, alpha_L, a_L)  # (..., n, 6, 10), link frames
+    Y = _body_regressor(w_L, v_L, alpha_L, a_L)  # (..., n, 6, 10), link frames
     # back to the world (force at the world origin): f_w = R f, n_w = R n + p x (R f)
     force = np.einsum("...ab,...bk->...ak", R, Y[..., 3:, :])
     moment = np.einsum("...ab,...bk->...ak", R, Y[..., :3, :]) + np.cross(p[..., :, None], force, axis=-2)
@@ -239,9 +364,11 @@ class BaseParameters:
         Raises
         ------
         armdyn.ModelError
-            When a state is not numbers of shape (..., n) or holds NaN or infinity.
+            When a state is not real numbers of shape (..., n) or holds NaN or infinity, when
+            the batch shapes do not broadcast together, or when W_base would need more than
+            MEMORY_LIMIT bytes.
         """
-        return regressor(self.robot, q, qd, qdd)[..., self.columns]
+        return _stacked(self.robot, q, qd, qdd, self.columns, None)
 
     def __len__(self) -> int:
         return len(self.columns)
@@ -288,14 +415,22 @@ def base_parameters(
     Raises
     ------
     armdyn.ModelError
-        When ``samples`` is below 1.
+        When ``samples`` is below 1, ``seed`` is negative, or ``tolerance`` is not a number
+        in (0, 1).
     TypeError
-        When the arm has symbolic (SymPy) parameters.
+        When ``robot`` is not an arm (an ArmModel) or has symbolic (SymPy) parameters, when
+        ``samples`` or ``seed`` is not an integer, or when ``drives`` is not a bool.
     """
     from scipy.linalg import qr
 
-    if samples < 1:
-        raise ModelError(f"samples must be at least 1, got {samples}")
+    _check_arm(robot)
+    samples = _integer(samples, "samples", 1)
+    seed = _integer(seed, "seed", 0)
+    drives = _flag(drives, "drives")
+    tolerance = inputs.vector(tolerance, "tolerance")
+    if tolerance.shape != (1,) or not 0 < tolerance[0] < 1:
+        raise ModelError(f"tolerance must be one number in (0, 1), got {tolerance.tolist()}")
+    tolerance = float(tolerance[0])
     rng = np.random.default_rng(seed)
     lower, upper = robot.qlim
     low = np.where(np.isfinite(lower), lower, -np.pi)
@@ -380,9 +515,13 @@ def identify(robot: ArmModel, q: object, qd: object, qdd: object, tau: object, d
     """Estimate the base parameters from samples (q, qd, qdd, tau), each (N, n), by least squares.
 
     tau = W_base(q, qd, qdd) phi_base (Table 3.3.1, property 9) stacked over the samples
-    and solved for phi_base. Standard errors: sigma sqrt(diag((W^T W)^-1)) with sigma^2
-    the residual variance (N n - r degrees of freedom); the condition number of the stacked
-    base regressor says how well the trajectory excites the parameters.
+    and solved for phi_base (by QR of [W_base tau]). Standard errors: sigma
+    sqrt(diag((W^T W)^-1)) with sigma^2 the residual variance (N n - r degrees of freedom).
+    The condition number of the stacked base regressor says how well the samples excite
+    the parameters: samples that leave some base parameter unexcited (numerical rank of
+    W_base below r, NumPy's matrix_rank rule, or a condition number above MAX_CONDITION =
+    1e10) are refused, and a condition number above POOR_CONDITION = 1e5 gives a
+    PoorExcitationWarning.
 
     Parameters
     ----------
@@ -402,27 +541,62 @@ def identify(robot: ArmModel, q: object, qd: object, qdd: object, tau: object, d
     Identification
         The estimate, its standard errors, the condition number and the residual.
 
+    Warns
+    -----
+    PoorExcitationWarning
+        When the condition number of the stacked base regressor is above POOR_CONDITION.
+
     Raises
     ------
     armdyn.ModelError
-        When a sample array is not numbers of shape (..., n) or holds NaN or infinity, when
-        q, qd, qdd and tau hold different numbers of samples, or when there are too few
-        samples (N n must exceed the number r of base parameters).
+        When a sample array is not real numbers of shape (..., n) or holds NaN or infinity,
+        when q, qd, qdd and tau do not all have the same shape, when there are too few
+        samples (N n must exceed the number r of base parameters), or when the samples do not
+        excite the base parameters (rank of the stacked base regressor below r, or condition
+        number above MAX_CONDITION); the message gives the rank and condition number.
+    TypeError
+        When ``robot`` is not an arm (an ArmModel) or has symbolic (SymPy) parameters, or
+        when ``drives`` is not a bool.
     """
-    tau = as_state(robot, tau, "tau").reshape(-1, robot.n)
-    base = base_parameters(robot, drives=drives)
-    W = base.regressor(q, qd, qdd).reshape(-1, len(base))
-    y = tau.reshape(-1)
-    if W.shape[0] != y.shape[0]:
-        raise ModelError(f"q, qd, qdd give {W.shape[0] // robot.n} samples but tau has {tau.shape[0]}")
-    if W.shape[0] <= len(base):
-        raise ModelError(f"identification needs more than {len(base) // robot.n + 1} samples, got {tau.shape[0]}")
-    phi, *_ = np.linalg.lstsq(W, y, rcond=None)
-    residual = y - W @ phi
-    dof = W.shape[0] - len(base)
-    variance = float(residual @ residual) / dof
-    covariance = variance * np.linalg.pinv(W.T @ W)
+    from scipy.linalg import solve_triangular
+
+    _check_arm(robot)
+    where = f" for '{robot.name}'"
+    names = ("q", "qd", "qdd", "tau")
+    arrays = [inputs.state(value, robot.n, name, where) for name, value in zip(names, (q, qd, qdd, tau), strict=True)]
+    if len({a.shape for a in arrays}) > 1:
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
+        raise ModelError(f"q, qd, qdd and tau must hold the same samples, each (N, {robot.n}); got {shapes}")
+    base = base_parameters(robot, drives=_flag(drives, "drives"))
+    r = len(base)
+    samples = int(np.prod(arrays[0].shape[:-1]))
+    if samples * robot.n <= r:
+        raise ModelError(f"identification needs more than {r // robot.n + 1} samples, got {samples}")
+    W = base.regressor(*arrays[:3]).reshape(-1, r)
+    y = arrays[3].reshape(-1)
+    R = np.linalg.qr(np.column_stack([W, y]), mode="r")  # [W y] = Q R: R[:r, :r] has W's singular values
+    singular = np.linalg.svd(R[:r, :r], compute_uv=False)
+    condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+    rank = int(np.sum(singular > singular[0] * max(W.shape) * np.finfo(float).eps)) if singular[0] > 0 else 0
+    if rank < r or condition > MAX_CONDITION:
+        raise ModelError(
+            f"the samples do not excite the {r} base parameters of '{robot.name}': the stacked base regressor "
+            f"has rank {rank} of {r} and condition number {condition:.3g} (the limit is {MAX_CONDITION:.0e}); "
+            "move every joint over a wide range with varied velocities and accelerations"
+        )
+    if condition > POOR_CONDITION:
+        warnings.warn(
+            f"the samples excite the base parameters of '{robot.name}' poorly: the stacked base regressor has "
+            f"condition number {condition:.3g} (above {POOR_CONDITION:.0e}); the estimates are sensitive to "
+            "noise (see their standard errors)",
+            PoorExcitationWarning,
+            stacklevel=2,
+        )
+    phi = solve_triangular(R[:r, :r], R[:r, r])
+    residual_norm = abs(float(R[r, r]))
+    variance = residual_norm**2 / (W.shape[0] - r)
+    inverse = solve_triangular(R[:r, :r], np.eye(r))  # (W^T W)^-1 = R^-1 R^-T
+    standard_errors = np.sqrt(variance * np.einsum("ij,ij->i", inverse, inverse))
     return Identification(
-        base, phi, np.sqrt(np.abs(np.diag(covariance))), float(np.linalg.cond(W)),
-        float(np.sqrt(np.mean(residual**2))), tau.shape[0],
+        base, phi, standard_errors, condition, residual_norm / np.sqrt(W.shape[0]), samples,
     )  # fmt: skip

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit, types
 
 from armdyn.dynamics.packed import FIRST_MOMENT, HEADER, INERTIA, KIND, MASS, N_JOINTS, POSITION, ROTATION, STRIDE
+from armdyn.inputs import LARGEST_STATE
 
 NUMBA_OPTIONS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
 
@@ -57,11 +58,12 @@ def sin_cos(x: float) -> tuple[float, float]:
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def vector_status(x: np.ndarray, n: int, code: int) -> int:
-    """0, or ``code`` when x has the wrong length, or code + 10 when it holds NaN or infinity."""
+    """0, or ``code`` when x has the wrong length, or code + 10 when it holds NaN, infinity or a value
+    of LARGEST_STATE or more in magnitude (the general path then names the rule broken)."""
     if x.shape[0] != n:
         return code
     for k in range(n):
-        if x[k] - x[k] != 0.0:  # NaN and infinity fail x - x == 0
+        if not abs(x[k]) < LARGEST_STATE:  # NaN fails every comparison
             return code + 10
     return 0
 

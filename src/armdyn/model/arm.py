@@ -15,7 +15,7 @@ import numpy as np
 
 from armdyn.errors import ModelError
 from armdyn.model.inertial import Inertial, inertia_from_vector
-from armdyn.model.joint import Joint, dh_joint
+from armdyn.model.joint import Joint, check_rigid, dh_joint
 
 _NO_LIMITS = (-np.inf, np.inf)
 
@@ -523,6 +523,7 @@ def _transform(value: np.ndarray | None, where: str) -> np.ndarray:
     array = np.array(value, dtype=float)
     if array.shape != (4, 4) or not np.all(np.isfinite(array)):
         raise ModelError(f"{where} must be a finite 4x4 homogeneous transform, got shape {array.shape}")
+    check_rigid(array, where)
     return array
 
 

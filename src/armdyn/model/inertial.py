@@ -14,6 +14,7 @@ import numpy as np
 from armdyn.errors import ModelError
 
 _RELATIVE_TOLERANCE = 1e-9
+_SMALLEST_LENGTH = 0.01  # m: the least size a link is taken to have when setting the tolerance
 
 
 def _is_symbolic(*values: object) -> bool:
@@ -88,6 +89,17 @@ class Inertial:
         accepts them with a warning, as CAD-exported URDFs sometimes carry. Negative mass,
         non-symmetric or indefinite tensors are always refused.
 
+    Notes
+    -----
+    The symmetry, semi-definiteness and triangle-inequality tests allow rounding noise of
+    ``tol = 1e-9 * max(max |I_ij|, m l^2)``, where ``l`` is the link's size: the distance
+    from the link-frame origin to the centre of mass, taken as at least 1 cm. The floor
+    ``m l^2`` lets a tensor that is zero up to noise pass (for instance zero moments with
+    a product of inertia of 1e-20 kg m^2, as CAD exports write), while a genuinely
+    indefinite tensor is refused: on a 1 kg link a principal moment of -1e-3 kg m^2 is far
+    below the tolerance (1e-13 kg m^2 with the centre of mass at the origin, 1e-9 kg m^2
+    with it 1 m away).
+
     Raises
     ------
     armdyn.ModelError
@@ -137,16 +149,18 @@ class Inertial:
             raise ModelError(f"link '{name}': centre of mass must be finite, got {self.com}")
         if not np.all(np.isfinite(inertia)):
             raise ModelError(f"link '{name}': inertia must be finite")
-        scale = max(float(np.max(np.abs(inertia))), 1e-300)
-        if np.max(np.abs(inertia - inertia.T)) > _RELATIVE_TOLERANCE * scale:
+        tolerance = self._tolerance()
+        if np.max(np.abs(inertia - inertia.T)) > tolerance:
             raise ModelError(f"link '{name}': inertia tensor is not symmetric:\n{inertia}")
         moments = np.linalg.eigvalsh(inertia)
-        if moments[0] < -_RELATIVE_TOLERANCE * scale:
+        if moments[0] < -tolerance:
             raise ModelError(
-                f"link '{name}': inertia tensor is not positive semi-definite (principal moments {moments})"
+                f"link '{name}': inertia tensor is not positive semi-definite (principal moments {moments}, "
+                f"the smallest below -{tolerance:.3g} kg m^2, more than rounding noise): no rigid body has a "
+                "negative moment of inertia; correct the tensor"
             )
         largest, others = moments[2], moments[0] + moments[1]
-        if largest > others + _RELATIVE_TOLERANCE * scale:
+        if largest > others + tolerance:
             message = (
                 f"link '{name}': principal moments {moments} break the triangle inequality "
                 f"({moments[0]:.6g} + {moments[1]:.6g} < {largest:.6g}), which no rigid body can have"
@@ -154,6 +168,16 @@ class Inertial:
             if self.strict:
                 raise ModelError(message + "; pass strict=False to load it anyway")
             warnings.warn(message + "; using the values as given", stacklevel=3)
+
+    def _tolerance(self) -> float:
+        """The rounding noise the validity tests allow (kg m^2): 1e-9 max(max |I_ij|, m l^2).
+
+        ``l`` is the distance from the link-frame origin to the centre of mass, at least 1 cm
+        (see the class Notes).
+        """
+        size = max(float(np.linalg.norm(self.com)), _SMALLEST_LENGTH)
+        scale = max(float(np.max(np.abs(self.inertia))), self.mass * size**2)
+        return _RELATIVE_TOLERANCE * max(scale, 1e-300)
 
     @property
     def first_moment(self) -> np.ndarray:

@@ -159,7 +159,7 @@ class Joint:
                 value = np.array(value, dtype=float)
                 if not np.all(np.isfinite(value)):
                     raise ModelError(f"joint '{self.name}': {key} must be finite")
-                _check_rigid(value, f"joint '{self.name}': {key}")
+                check_rigid(value, f"joint '{self.name}': {key}")
                 value.setflags(write=False)
             object.__setattr__(self, key, value)
         axis = np.array(self.axis, dtype=float).reshape(-1)
@@ -174,10 +174,14 @@ class Joint:
         return self.kind == REVOLUTE
 
 
-def _check_rigid(transform: np.ndarray, where: str) -> None:
+def check_rigid(transform: np.ndarray, where: str) -> None:
+    """Refuse a 4x4 that is not a pose: an orthonormal rotation of determinant +1, last row [0 0 0 1]."""
     rotation = transform[:3, :3]
     if np.max(np.abs(rotation @ rotation.T - np.eye(3))) > 1e-9 or np.linalg.det(rotation) < 0:
-        raise ModelError(f"{where} is not a rigid transform (its rotation is not orthonormal)")
+        raise ModelError(
+            f"{where} is not a rigid transform (its rotation is not orthonormal with determinant +1): "
+            "a pose cannot scale, shear or mirror; give lengths in the link geometry instead"
+        )
     if np.max(np.abs(transform[3] - [0, 0, 0, 1])) > 0:
         raise ModelError(f"{where} is not a homogeneous transform (last row must be [0 0 0 1])")
 

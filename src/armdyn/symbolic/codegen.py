@@ -158,12 +158,11 @@ class CompiledClosedForm:
         one_state = all(s.__class__ is np.ndarray and s.shape == (n,) for s in states)
         if one_state and (out is None or (out.__class__ is np.ndarray and out.shape == trailing)):
             result = np.empty(trailing) if out is None else out
-            try:  # the generated function's signature takes C-contiguous float64 arrays only
-                self._one[name](*states, result)
+            try:  # the checked entry's signature takes C-contiguous float64 arrays only
+                if self._one[name](*states, result) == 0:
+                    return result
             except TypeError:
                 pass
-            else:
-                return result
         batch, flat = inputs.batch_states(FUNCTIONS[name][0], states, n)
         result = inputs.result(out, (*batch, *trailing))
         self._batch[name](*flat, result.reshape(-1, *trailing))
@@ -212,9 +211,26 @@ def compile_closed_form(raw: Derivation, values: dict[str, float]) -> CompiledCl
     exec(compile(python_source(substituted, [], returns=False), "<armdyn closed form>", "exec"), namespace)
     vector, matrix = "float64[::1]", "float64[:, ::1]"
     one, batch = {}, {}
+    n = len(raw.q)
     for name, (args, kind) in FUNCTIONS.items():
         result = matrix if kind == "matrix" else vector
-        signature = f"void({', '.join([vector] * len(args))}, {result})"
-        one[name] = numba.njit(signature, fastmath={"contract"}, error_model="numpy")(namespace[name])
-        batch[name] = _batch_loop(one[name], len(args))
-    return CompiledClosedForm(len(raw.q), one, batch)
+        signature = f"({', '.join([vector] * len(args))}, {result})"
+        inner = numba.njit("void" + signature, fastmath={"contract"}, error_model="numpy")(namespace[name])
+        batch[name] = _batch_loop(inner, len(args))
+        checked = _checked_source(name, args, kind, n)
+        scope = {"inner": inner, "LARGEST": inputs.LARGEST_STATE}
+        exec(compile(checked, f"<armdyn closed form {name}, checked>", "exec"), scope)
+        one[name] = numba.njit("int64" + signature, error_model="numpy")(scope["checked"])
+    return CompiledClosedForm(n, one, batch)
+
+
+def _checked_source(name: str, args: tuple[str, ...], kind: str, n: int) -> str:
+    """A one-state entry that checks lengths, finiteness and magnitude before it calls the
+    generated function, and returns a status (0 when computed), as the kernels' entries do."""
+    shape = f"out.shape[0] != {n} or out.shape[1] != {n}" if kind == "matrix" else f"out.shape[0] != {n}"
+    lines = [f"def checked({', '.join(args)}, out):", f"    if {shape}:", "        return 4"]
+    for code, arg in enumerate(args, 1):
+        lines += [f"    if {arg}.shape[0] != {n}:", f"        return {code}", f"    for k in range({n}):",
+                  f"        if not abs({arg}[k]) < LARGEST:", f"            return {code + 10}"]  # fmt: skip
+    lines += [f"    inner({', '.join(args)}, out)", "    return 0"]
+    return "\n".join(lines) + "\n"
