@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 
 import armdyn as ad
 from armdyn.cli import app
-from armdyn.properties import check, inertia_bounds
+from armdyn.properties import check, inertia_bounds, joint_ranges
 from tests.strategies import random_robot
 
 BOOK_RANGE = [(-np.pi / 2, np.pi / 2)] * 2  # Example 3.3-1: |theta_i| <= pi/2
@@ -114,3 +114,51 @@ def test_identify_command(tmp_path: object) -> None:
     result = CliRunner().invoke(app, ["identify", "puma560", str(path)])
     assert result.exit_code == 0, result.output
     assert "Identified base parameters" in result.output
+
+
+# ----- arguments --------------------------------------------------------------------------
+def test_check_only_unknown_name_is_an_error_and_a_bare_string_is_one_name() -> None:
+    arm = ad.models.two_link_planar()
+    with pytest.raises(ad.ModelError, match=r"unknown groups \['intertia'\].*'inertia', 'coriolis', 'skew'"):
+        check(arm, samples=10, only=["intertia"])
+    with pytest.raises(ad.ModelError, match="unknown groups"):
+        check(arm, samples=10, only="intertia")
+    with pytest.raises(ad.ModelError, match="at least one group"):
+        check(arm, samples=10, only=[])
+    one = check(arm, samples=10, only="inertia")  # one name, not the letters i, n, e, r, t, i, a
+    assert [row.name for row in one.rows] == ["symmetry", "positive definite", "inertia bounds", "norm bounds"]
+    assert set(one.bounds) == {"mu1", "mu2", "m1", "m2"}
+    two = check(arm, samples=10, only=("gravity", "skew"))
+    assert {row.name for row in two.rows} == {"gravity bound", "skew symmetry"}
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda arm: check("puma560"), TypeError, "robot must be an armdyn Robot"),
+        (lambda arm: check(None), TypeError, "robot must be an armdyn Robot"),
+        (lambda arm: check(arm, samples="300"), TypeError, "samples must be an integer"),
+        (lambda arm: check(arm, samples=30.5), TypeError, "samples must be an integer"),
+        (lambda arm: check(arm, samples=None), TypeError, "samples must be an integer"),
+        (lambda arm: check(arm, samples=2), ad.ModelError, "samples must be at least 4"),
+        (lambda arm: check(arm, seed="a"), TypeError, "seed must be an integer"),
+        (lambda arm: check(arm, seed=-1), ad.ModelError, "seed must be at least 0"),
+        (lambda arm: check(arm, only=3), TypeError, "only must be a group name"),
+        (lambda arm: check(arm, only={"inertia": True}), TypeError, "only must be a group name"),
+        (lambda arm: check(arm, only=[None]), ad.ModelError, "unknown groups"),
+        (lambda arm: check(arm, limits="ab"), ad.ModelError, "limits must be"),
+        (lambda arm: check(arm, limits={"a": 1}), ad.ModelError, "limits must be"),
+        (lambda arm: check(arm, limits=5), ad.ModelError, "limits must"),
+        (lambda arm: check(arm, limits=[(0, 1)]), ad.ModelError, r"limits must be 2 finite \(lower, upper\) pairs"),
+        (lambda arm: check(arm, limits=[(1, 0), (0, 1)]), ad.ModelError, "lower <= upper"),
+        (lambda arm: check(arm, limits=[(0, np.nan), (0, 1)]), ad.ModelError, "limits must be finite"),
+        (lambda arm: inertia_bounds(arm, samples="many"), TypeError, "samples must be an integer"),
+        (lambda arm: inertia_bounds([1, 2]), TypeError, "robot must be an armdyn Robot"),
+        (lambda arm: joint_ranges(arm, prismatic_span="x"), ad.ModelError, "prismatic_span must be"),
+        (lambda arm: joint_ranges(arm, prismatic_span=0), ad.ModelError, "prismatic_span must be one positive"),
+        (lambda arm: joint_ranges({}, None), TypeError, "robot must be an armdyn Robot"),
+    ],
+)
+def test_properties_wrong_types_name_the_argument(call: object, error: type, message: str) -> None:
+    with pytest.raises(error, match=message):
+        call(ad.models.two_link_planar())

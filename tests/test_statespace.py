@@ -97,3 +97,84 @@ def test_linearization_of_a_friction_arm_and_its_state_space() -> None:
     assert_allclose(lin.A, central, atol=1e-6 * np.abs(central).max())
     system = lin.to_control()
     assert system.nstates == 12 and system.ninputs == 6
+
+
+# ----- batches and arguments --------------------------------------------------------------
+@pytest.mark.parametrize("batch", [(2,), (3,), (2, 4)], ids=["n states", "3 states", "2x4"])
+def test_linearizing_torque_of_a_batch_has_the_batch_shape(batch: tuple[int, ...]) -> None:
+    arm = ad.models.two_link_planar()  # n = 2: a batch of n states once gave (n, n, n)
+    rng = np.random.default_rng(1)
+    q, qd, u = rng.uniform(-1, 1, (3, *batch, 2))
+
+    def jacobian(q: np.ndarray) -> np.ndarray:
+        return arm.jacobian(q)[..., :2, :]
+
+    def jdot_qd(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        return np.einsum("...ij,...j->...i", arm.jacobian_dot(q, qd)[..., :2, :], qd)
+
+    for output in ((), (jacobian, jdot_qd)):
+        tau = ss.linearizing_torque(arm, q, qd, u, *output)
+        assert tau.shape == (*batch, 2)
+        for index in np.ndindex(batch):
+            assert_allclose(tau[index], ss.linearizing_torque(arm, q[index], qd[index], u[index], *output), atol=1e-12)
+    tau = ss.linearizing_torque(arm, q, qd, np.array([1.0, -2.0]))  # one u for every state
+    assert_allclose(arm.forward_dynamics(q, qd, tau), np.broadcast_to([1.0, -2.0], (*batch, 2)), atol=1e-9)
+
+
+def test_hamiltonian_forms_take_batches() -> None:
+    arm = random_robot(3, 3, chain=True)
+    rng = np.random.default_rng(2)
+    q, p, tau = rng.uniform(-1, 1, (3, 4, 3))
+    H = ss.hamiltonian(arm, q, p)
+    qdot, pdot = ss.hamiltonian_rates(arm, q, p, tau)
+    assert H.shape == (4,) and qdot.shape == pdot.shape == (4, 3)
+    for i in range(4):
+        assert_allclose(H[i], ss.hamiltonian(arm, q[i], p[i]), rtol=1e-12)
+        assert_allclose(pdot[i], ss.hamiltonian_rates(arm, q[i], p[i], tau[i])[1], atol=1e-12)
+    assert isinstance(ss.hamiltonian(arm, q[0], p[0]), float)
+    x = np.concatenate([q, p], -1)
+    assert ss.state_derivative(arm, x[0], tau).shape == (4, 6)  # one state, a batch of torques
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda arm: ss.state_derivative(arm, "x", [0, 0]), ad.ModelError, r"x must be an array of numbers"),
+        (lambda arm: ss.state_derivative(arm, None, [0, 0]), ad.ModelError, r"x must be an array of numbers"),
+        (lambda arm: ss.state_derivative(arm, [0, 0, 0], [0, 0]), ad.ModelError, r"x must have shape \(4,\)"),
+        (lambda arm: ss.state_derivative(arm, [0] * 4, {"tau": 1}), ad.ModelError, "tau must be"),
+        (lambda arm: ss.state_derivative("arm", [0] * 4, [0, 0]), TypeError, "arm must be an armdyn Robot"),
+        (lambda arm: ss.drift_and_input(arm, {"x": 1}), ad.ModelError, "x must be an array of numbers"),
+        (lambda arm: ss.drift_and_input(None, [0] * 4), TypeError, "arm must be an armdyn Robot"),
+        (lambda arm: ss.brunovsky("3"), TypeError, "n must be an integer"),
+        (lambda arm: ss.brunovsky(2.5), TypeError, "n must be an integer"),
+        (lambda arm: ss.brunovsky(True), TypeError, "n must be an integer"),
+        (lambda arm: ss.brunovsky(0), ad.ModelError, "n must be at least 1"),
+        (lambda arm: ss.linearizing_torque(arm, "q", [0, 0], [0, 0]), ad.ModelError, "q must be an array"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], None, [0, 0]), ad.ModelError, "qd must be an array"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], {"u": 1}), ad.ModelError, "u must be an array"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], [0, 0, 0]), ad.ModelError, r"u must have shape"),
+        (lambda arm: ss.linearizing_torque(arm, np.zeros((3, 2)), [0, 0], np.zeros((4, 2))), ad.ModelError,
+         r"batch shapes of q \(3, 2\), qd \(2,\), u \(4, 2\)"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], [0, 0], "J"), TypeError,
+         "output_jacobian must be a callable"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], [0, 0], lambda q: np.ones(2)), ad.ModelError,
+         r"output_jacobian\(q\) must return an \(m, 2\) matrix"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], [0], lambda q: np.ones((1, 2)), lambda q, qd: "a"),
+         ad.ModelError, r"output_jacobian_dot_qd\(q, qd\) must be"),
+        (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], [0, 0], None, lambda q, qd: 0), ad.ModelError,
+         "output_jacobian_dot_qd needs output_jacobian"),
+        (lambda arm: ss.hamiltonian(arm, [0, 0], "p"), ad.ModelError, "p must be an array of numbers"),
+        (lambda arm: ss.hamiltonian(arm, None, [0, 0]), ad.ModelError, "q must be an array of numbers"),
+        (lambda arm: ss.hamiltonian_rates(arm, [0, 0], [0, 0], None), ad.ModelError, "tau must be an array"),
+        (lambda arm: ss.hamiltonian_rates(arm, [0, 0], {"p": 0}, [0, 0]), ad.ModelError, "p must be an array"),
+        (lambda arm: ss.linearize(arm, "q", [1, 1], [0, 0]), ad.ModelError, "q0 must be an array of numbers"),
+        (lambda arm: ss.linearize(arm, [0, 0], None, [0, 0]), ad.ModelError, "qd0 must be an array of numbers"),
+        (lambda arm: ss.linearize(arm, np.zeros((2, 2)), [1, 1], [0, 0]), ad.ModelError, "q0 must be one state"),
+        (lambda arm: ss.linearize(arm, [0, 0], [1, 1], [0, None]), ad.ModelError, "tau0 must be finite"),
+        (lambda arm: ss.linearize(3, [0, 0], [1, 1], [0, 0]), TypeError, "arm must be an armdyn Robot"),
+    ],
+)  # fmt: skip
+def test_statespace_wrong_types_name_the_argument(call: object, error: type, message: str) -> None:
+    with pytest.raises(error, match=message):
+        call(ad.models.two_link_planar())

@@ -269,12 +269,11 @@ def test_missing_package_mesh_is_ignored(tmp_path: Path) -> None:
 
 
 def test_link_without_inertial_is_massless(tmp_path: Path) -> None:
-    """A kinematics-only file: M(q) = 0, refused by default (a singular M), loaded with strict=False and a warning."""
+    """A kinematics-only file: M(q) = 0, loaded (strict or not) with a warning that names the joints."""
     path = _write(tmp_path, _robot("<link name='a'/>", "<link name='b'/>", _joint("j", "a", "b")))
-    with pytest.raises(ModelError, match=r"\['j'\] move no mass.*kinematics-only.*strict=False"):
-        load_urdf(path)
-    with pytest.warns(UserWarning, match=r"\['j'\] move no mass.*kinematics-only"):
-        arm = load_urdf(path, strict=False)
+    for strict in (True, False):
+        with pytest.warns(UserWarning, match=r"\['j'\] move no mass.*kinematics-only"):
+            arm = load_urdf(path, strict=strict)
     assert arm.links[0].inertial.mass == 0.0
     assert_array_equal(arm.links[0].inertial.inertia, np.zeros((3, 3)))
     assert not arm.has_dynamics

@@ -1,18 +1,130 @@
-"""The `armdyn` command: the built-in arms, their tables, and (later) the chapter's jobs."""
+"""The `armdyn` command: the built-in arms, their tables, and the chapter's jobs.
+
+Errors are handled once, for every command, by the app's command group (``_Group``): a
+failure prints one line, ``error: ...``, on stderr and exits with a non-zero code — 2 for
+bad input (an unknown arm, a bad number or option, an unreadable or malformed file, an
+output path in a missing folder: armdyn's ModelError, ValueError, OSError, and typer's own
+usage errors), 1 for an unexpected internal error (and for ``check`` when a property
+fails). ``armdyn --debug COMMAND ...`` shows the full traceback instead. Warnings from the
+library print as one line each, ``warning: ...``, on stderr.
+"""
 
 from __future__ import annotations
+
+import csv as csv_files
+import sys
+import warnings
+from pathlib import Path
+from typing import Any, NoReturn
 
 import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
+from typer.core import TyperGroup
 
 from armdyn import models as catalog
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
-app = typer.Typer(help="armdyn: the dynamics of robot manipulators.", no_args_is_help=True, add_completion=False)
+INPUT_ERROR = 2
+INTERNAL_ERROR = 1
+
+
+def _error_line(text: str) -> None:
+    """One line on stderr (the message's own line breaks and runs of spaces are collapsed)."""
+    print("error: " + " ".join(text.split()), file=sys.stderr)
+
+
+def _describe(error: BaseException) -> tuple[str, int]:
+    """The message and exit code for an exception a command raised."""
+    if isinstance(error, OSError) and error.filename is not None:
+        return f"{error.filename}: {error.strerror or error}", INPUT_ERROR
+    if isinstance(error, (ModelError, ValueError, OSError)):
+        return str(error) or type(error).__name__, INPUT_ERROR
+    return (
+        f"internal error ({type(error).__name__}: {error}); run 'armdyn --debug ...' for the traceback",
+        INTERNAL_ERROR,
+    )
+
+
+def _show_warning(message: Warning | str, *args: object, **kwargs: object) -> None:
+    print("warning: " + " ".join(str(message).split()), file=sys.stderr)
+
+
+class _Group(TyperGroup):
+    """The app's command group: the one place where a command's failure becomes one line on
+    stderr and an exit code (see the module docstring), unless ``--debug`` is given."""
+
+    def invoke(self, ctx: typer.Context) -> Any:
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            try:
+                return super().invoke(ctx)
+            except (typer.Exit, typer.Abort, typer.TyperException):
+                raise  # typer's own: exits, and usage errors (handled in main)
+            except Exception as error:
+                if ctx.params.get("debug"):
+                    raise
+                message, code = _describe(error)
+                _error_line(message)
+                raise typer.Exit(code) from None
+
+    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        if not standalone_mode:
+            return super().main(*args, standalone_mode=False, **kwargs)
+        try:
+            code = super().main(*args, standalone_mode=False, **kwargs)
+        except typer.TyperException as error:  # a usage error: a bad option, a missing argument...
+            if type(error).__name__ != "NoArgsIsHelpError":  # that one has printed the help already
+                where = getattr(getattr(error, "ctx", None), "command_path", None)
+                hint = f" (see '{where} --help')" if where and getattr(error, "ctx", None) else ""
+                _error_line(error.format_message() + hint)
+            sys.exit(error.exit_code)
+        except typer.Abort:
+            _error_line("aborted")
+            sys.exit(INTERNAL_ERROR)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+app = typer.Typer(
+    cls=_Group, help="armdyn: the dynamics of robot manipulators.", no_args_is_help=True, add_completion=False
+)
 console = Console(width=None if Console().is_terminal else 140)
+
+
+@app.callback()
+def options(
+    debug: bool = typer.Option(False, "--debug", help="On an error, show the full traceback instead of one line."),
+) -> None:
+    """armdyn: the dynamics of robot manipulators."""
+
+
+def _fail(message: str) -> NoReturn:
+    raise ModelError(message)
+
+
+def _output_file(path: str, option: str) -> Path:
+    """An output file whose folder exists, checked before any work is done (nothing is created)."""
+    target = Path(path)
+    folder = target.parent
+    if not folder.exists():
+        _fail(f"{option} {path}: the folder {folder} does not exist")
+    if not folder.is_dir():
+        _fail(f"{option} {path}: {folder} is not a folder")
+    if target.is_dir():
+        _fail(f"{option} {path} is a folder; give a file name")
+    return target
+
+
+def _output_folder(path: str, option: str) -> Path:
+    """An output folder that exists or can be made in an existing folder (made later, by the caller)."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        _fail(f"{option} {path} is a file, not a folder")
+    if not folder.exists() and not folder.absolute().parent.is_dir():
+        _fail(f"{option} {path}: the folder {folder.absolute().parent} does not exist")
+    return folder
 
 
 def _number(value: object, digits: int = 4) -> str:
@@ -29,11 +141,7 @@ def _vector(values: object, digits: int = 4) -> str:
 
 
 def _arm(name: str) -> Robot:
-    try:
-        return catalog.load(name)
-    except ModelError as error:
-        console.print(f"[red]error:[/red] {error}")
-        raise typer.Exit(2) from None
+    return catalog.load(name)  # a ModelError naming the known arms for an unknown name
 
 
 @app.command()
@@ -143,23 +251,18 @@ def derive(
     """Derive an arm's robot equation in closed form: M, Vm, V, G (and F), as text, LaTeX or code."""
     from armdyn.symbolic import derive as derive_closed_form
 
+    if code is not None and code not in ("python", "c"):
+        _fail(f"--code must be 'python' or 'c', got '{code}'")
+    target = _output_file(output, "--output") if output else None
     book = {"two_link_planar", "polar_rp", "cylindrical"}
     arm = getattr(catalog, name)(symbolic=True) if symbolic and name in book else _arm(name)
-    try:
-        form = derive_closed_form(arm, method=method)
-    except ModelError as error:
-        console.print(f"[red]error:[/red] {error}")
-        raise typer.Exit(2) from None
+    form = derive_closed_form(arm, method=method)
     if code is not None:
-        if code not in ("python", "c"):
-            console.print("[red]error:[/red] --code must be 'python' or 'c'")
-            raise typer.Exit(2)
         text = form.to_python() if code == "python" else form.to_c()
     else:
         text = form.latex() if latex else form.pretty()
-    if output:
-        with open(output, "w", encoding="utf-8") as handle:
-            handle.write(text)
+    if target is not None:
+        target.write_text(text, encoding="utf-8")
         console.print(f"wrote {output}")
     else:
         print(text)
@@ -188,25 +291,62 @@ def check(
 def identify(
     name: str,
     csv: str = typer.Argument(..., help="CSV with columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun (a header row)."),
+    output: str | None = typer.Option(
+        None, "--output", "-o", help="Also write the estimates to this CSV file (name, estimate, std. error, model)."
+    ),
 ) -> None:
     """Identify an arm's base parameters by least squares from measured samples in a CSV file."""
     from armdyn.dynamics.regressor import identify as identify_parameters
 
     arm = _arm(name)
-    try:
-        data = np.genfromtxt(csv, delimiter=",", names=True)
-    except OSError as error:
-        console.print(f"[red]error:[/red] {error}")
-        raise typer.Exit(2) from None
-    columns = {prefix: [f"{prefix}{i + 1}" for i in range(arm.n)] for prefix in ("q", "qd", "qdd", "tau")}
-    missing = [c for group in columns.values() for c in group if c not in (data.dtype.names or ())]
-    if missing:
-        console.print(f"[red]error:[/red] {csv} lacks the columns {missing}")
-        raise typer.Exit(2)
-    arrays = {key: np.column_stack([data[c] for c in group]) for key, group in columns.items()}
+    target = _output_file(output, "--output") if output else None
+    arrays = _read_samples(csv, arm.n)
     result = identify_parameters(arm, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"])
     console.print(result.table())
     console.print(f"residual rms {result.residual_rms:.3g} N m over {result.samples} samples")
+    if target is not None:
+        with target.open("w", newline="", encoding="utf-8") as handle:
+            writer = csv_files.writer(handle)
+            writer.writerow(["base parameter", "estimate", "standard error", "model value"])
+            for row in zip(result.names, result.phi, result.standard_errors, result.base.phi, strict=True):
+                writer.writerow([row[0], *(repr(float(value)) for value in row[1:])])
+        console.print(f"wrote {output}")
+
+
+def _read_samples(path: str, n: int) -> dict[str, np.ndarray]:
+    """q, qd, qdd, tau (each (N, n)) from a CSV file with a header row; a ModelError naming the file,
+    line and column for anything else (binary data, ragged rows, text where a number belongs)."""
+    data = Path(path).read_bytes()  # an OSError names the file
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        _fail(f"{path} is not a text CSV file (it is not UTF-8 text)")
+    if "\0" in text:
+        _fail(f"{path} is not a text CSV file (it holds NUL bytes)")
+    rows = [(number, row) for number, row in enumerate(csv_files.reader(text.splitlines()), 1) if any(row)]
+    groups = {prefix: [f"{prefix}{i + 1}" for i in range(n)] for prefix in ("q", "qd", "qdd", "tau")}
+    wanted = [column for group in groups.values() for column in group]
+    if not rows:
+        _fail(f"{path} is empty: it needs a header row ({', '.join(wanted)}) and samples")
+    header = [cell.strip() for cell in rows[0][1]]
+    missing = [column for column in wanted if column not in header]
+    if missing:
+        _fail(f"{path} lacks the columns {', '.join(missing)} (its header row is: {', '.join(header)})")
+    if not rows[1:]:
+        _fail(f"{path} has a header row but no samples")
+    values = np.empty((len(rows) - 1, len(header)))
+    for index, (number, row) in enumerate(rows[1:]):
+        if len(row) != len(header):
+            _fail(f"{path}, line {number}: {len(row)} values, but the header row has {len(header)} columns")
+        for column, cell in enumerate(row):
+            try:
+                values[index, column] = float(cell)
+            except ValueError:
+                _fail(f"{path}, line {number}, column {header[column]}: {cell.strip()!r} is not a number")
+            if not np.isfinite(values[index, column]):
+                _fail(f"{path}, line {number}, column {header[column]}: {cell.strip()} is not finite")
+    where = {column: header.index(column) for column in wanted}
+    return {key: values[:, [where[c] for c in group]] for key, group in groups.items()}
 
 
 def _controller(kind: str, kp: float, kv: float, ki: float, period: float, limit: float) -> object:
@@ -219,12 +359,13 @@ def _controller(kind: str, kp: float, kv: float, ki: float, period: float, limit
         "none": lambda: None,
     }
     if kind not in kinds:
-        console.print(f"[red]error:[/red] --controller must be one of {', '.join(kinds)}")
-        raise typer.Exit(2)
+        _fail(f"--controller must be one of {', '.join(kinds)}, got '{kind}'")
     controller = kinds[kind]()
-    if controller is not None and np.isfinite(limit):
+    if controller is None and (period != 0 or limit != np.inf):
+        _fail("--period and --torque-limit need a controller (--controller none applies no torque)")
+    if limit != np.inf:  # Saturated refuses NaN and limits <= 0
         controller = control.Saturated(controller, limit)
-    if controller is not None and period > 0:
+    if period != 0:  # Digital refuses a negative or non-finite period
         controller = control.Digital(controller, period)
     return controller
 
@@ -237,11 +378,12 @@ def _trajectory(kind: str, arm: Robot, amplitude: float, frequency: float) -> ob
         phase = [0.0 if i % 2 == 0 else np.pi / 2 for i in range(arm.n)]
         return trajectories.Sinusoid(amplitude, frequency, phase, offset)
     if kind == "quintic":
-        return trajectories.Quintic(offset, offset + amplitude, 0.0, 1.0 / max(frequency, 1e-9))
+        if not (np.isfinite(frequency) and frequency > 0):
+            _fail(f"--frequency must be positive and finite for a quintic (it lasts 1/frequency s), got {frequency}")
+        return trajectories.Quintic(offset, offset + amplitude, 0.0, 1.0 / frequency)
     if kind == "none":
         return None
-    console.print("[red]error:[/red] --trajectory must be sine, quintic or none")
-    raise typer.Exit(2)
+    _fail(f"--trajectory must be sine, quintic or none, got '{kind}'")
 
 
 @app.command()
@@ -269,25 +411,34 @@ def simulate(
     from armdyn.simulation import simulate as run
 
     arm = _arm(name)
+    plot_file = _output_file(plot, "--plot") if plot else None
+    csv_file = _output_file(csv, "--csv") if csv else None
     law = _controller(controller, kp, kv, ki, period, torque_limit)
     desired = _trajectory(trajectory, arm, amplitude, frequency)
     start = desired(0.0, arm.n)[0] if desired is not None and controller == "none" else None
     with Progress(transient=True, console=console) as bar:
         task = bar.add_task(f"simulating {t_final:g} s of {arm.name}", total=1.0)
-        try:
-            result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start,
-                         disturbance=None if disturbance == 0 else [disturbance] * arm.n,
-                         progress=lambda fraction: bar.update(task, completed=fraction))  # fmt: skip
-        except ModelError as error:
-            console.print(f"[red]error:[/red] {error}")
-            raise typer.Exit(2) from None
+        result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start,
+                     disturbance=None if disturbance == 0 else [disturbance] * arm.n,
+                     progress=lambda fraction: bar.update(task, completed=fraction))  # fmt: skip
+    _check_finite(result)
     _report(result)
-    if plot:
-        result.plot(plot)
+    if plot_file is not None:
+        result.plot(plot_file)
         console.print(f"wrote {plot}")
-    if csv:
-        result.to_csv(csv)
+    if csv_file is not None:
+        result.to_csv(csv_file)
         console.print(f"wrote {csv}")
+
+
+def _check_finite(result: object) -> None:
+    """A ModelError when a run diverged (its state became NaN or infinite)."""
+    finite = np.isfinite(result.q).all(axis=-1) & np.isfinite(result.qd).all(axis=-1)
+    if not finite.all():
+        t = result.t[int(np.argmin(finite))]
+        _fail(
+            f"the simulation diverged: the state is not finite from t = {t:.6g} s (try a smaller --dt or lower gains)"
+        )
 
 
 def _report(result: object) -> None:
@@ -310,15 +461,18 @@ def _report(result: object) -> None:
 
 
 @app.command()
-def demo(output: str = typer.Option("out", help="Folder for demo.png and demo.csv.")) -> None:
+def demo(
+    output: str = typer.Option(
+        "out", help="Folder for demo.png and demo.csv (made if missing; its parent must exist)."
+    ),
+) -> None:
     """The chapter end to end on the RR arm of Example 3.2-2: closed form, properties, and Example 4.4-1."""
-    from pathlib import Path
-
     from armdyn import control, trajectories
     from armdyn.properties import check as check_properties
     from armdyn.simulation import simulate as run
     from armdyn.symbolic import derive as derive_closed_form
 
+    folder = _output_folder(output, "--output")
     console.rule("[bold]armdyn: Chapter 3 on the two-link planar elbow arm (Example 3.2-2)")
     form = derive_closed_form(catalog.two_link_planar(symbolic=True))
     console.print(
@@ -334,8 +488,7 @@ def demo(output: str = typer.Option("out", help="Folder for demo.png and demo.cs
     desired = trajectories.Sinusoid([0.1, 0.1], [0.5, 0.5], phase=[0.0, np.pi / 2])
     result = run(arm, control.ComputedTorque(100.0, 20.0), desired, t_final=5.0, dt=1e-3)
     _report(result)
-    folder = Path(output)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder.mkdir(exist_ok=True)
     result.plot(folder / "demo.png", title="Example 4.4-1: PD computed-torque control of the two-link arm")
     result.to_csv(folder / "demo.csv")
     console.print(f"wrote {folder / 'demo.png'} and {folder / 'demo.csv'}")
@@ -344,6 +497,7 @@ def demo(output: str = typer.Option("out", help="Folder for demo.png and demo.cs
 
 
 def main() -> None:
+    """Run the command line (the ``armdyn`` script): errors are one line on stderr (see the module docstring)."""
     app()
 
 

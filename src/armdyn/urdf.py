@@ -114,7 +114,8 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     configurations within the joint limits (a range wider than a turn, or 2 m, is sampled
     on a turn, or 2 m, inside it): joint j counts when its pivot is zero at every one
     (below 1e-9 M_jj, or M_jj below 1e-13 of M's largest diagonal entry). A file whose
-    links carry no mass at all (a kinematics-only file) is such an arm, every joint named.
+    links carry no mass at all (a kinematics-only file) is such an arm, every joint named; it
+    loads with that warning whatever ``strict`` says, for its kinematics.
 
     Parameters
     ----------
@@ -123,9 +124,10 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     strict : bool, optional
         True (default) refuses inertias whose principal moments break the triangle
         inequality, and arms whose M(q) is singular in every configuration (joints that move
-        no mass, above). False loads both with a UserWarning naming the links or joints: CAD
-        exports sometimes carry such inertias, and a kinematics-only file carries no mass;
-        M, G and inverse dynamics are then defined, forward dynamics is not.
+        no mass, above) unless no link has mass at all. False loads both with a UserWarning
+        naming the links or joints (CAD exports sometimes carry such inertias); M, G and
+        inverse dynamics are then defined, forward dynamics raises a ModelError naming the
+        joint.
     gravity : array_like, optional
         Acceleration of gravity in the world frame, 3 values (default [0, 0, -9.81]).
 
@@ -216,12 +218,12 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
             "inertia matrix M(q) is singular for every q and forward dynamics is undefined (the pivots of M for these "
             f"joints vanish at {_SAMPLES} random configurations within the joint limits)"
         )
-        if strict:
+        if strict and arm.has_dynamics:  # a file with no mass at all is for kinematics: it loads, with the warning
             raise ModelError(
                 message + "; give the links these joints move mass and inertia off their axes (or make the joints "
                 "fixed), or pass strict=False to load the arm anyway with a warning"
             )
-        warnings.warn(message + "; loaded as given (strict=False)", stacklevel=2)
+        warnings.warn(message + "; loaded as given", stacklevel=2)
     return arm
 
 
