@@ -449,3 +449,66 @@ def test_link_index_out_of_range(link: int) -> None:
         arm.jacobian(np.zeros(6), link=link)
     with pytest.raises(ModelError, match=message):
         arm.jacobian_dot(np.zeros(6), np.zeros(6), link=link)
+
+
+@pytest.mark.parametrize("link", [2.7, 2.0, np.float64(1.0), True, np.bool_(False), "2", [2]], ids=repr)
+def test_non_integer_link_index_is_an_error(link: object) -> None:
+    arm = ad.models.puma560()
+    with pytest.raises(ModelError, match=r"link must be an integer link index \(0\.\.5\) or None, got"):
+        arm.jacobian(np.zeros(6), link=link)
+    with pytest.raises(ModelError, match=r"link must be an integer link index"):
+        arm.jacobian_dot(np.zeros(6), np.zeros(6), link=link)
+
+
+def test_numpy_integer_link_index_is_a_link_index() -> None:
+    arm = ad.models.puma560()
+    q = arm.qn
+    for link in (np.int64(2), np.int32(2), np.uint8(2)):
+        assert_array_equal(arm.jacobian(q, link=link), arm.jacobian(q, link=2))
+        assert_array_equal(arm.jacobian_dot(q, q, link=link), arm.jacobian_dot(q, q, link=2))
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda arm: arm.jacobian("q"), ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.jacobian(None), ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.jacobian({"q": 1}), ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.link_transforms("abc"), ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.tool_pose(None), ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.link_transform_derivatives({}), ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.jacobian_dot(np.zeros(6), "qd"), ModelError, "qd must be an array of numbers"),
+        (lambda arm: arm.jacobian(np.zeros(6), frame=None), ModelError, "frame must be 'base' or 'tool', got None"),
+        (lambda arm: arm.jacobian(np.zeros(6), frame=["base"]), ModelError, "frame must be 'base' or 'tool'"),
+        (lambda arm: arm.jacobian_dot(np.zeros(6), np.zeros(6), frame=np.array(["base", "tool"])), ModelError,
+         "frame must be 'base' or 'tool'"),
+        (lambda arm: ad.kinematics.jacobian("puma560", np.zeros(6)), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: ad.kinematics.link_transforms(None, np.zeros(6)), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: ad.kinematics.as_state({}, np.zeros(6)), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: ad.kinematics.twist_generators(arm, "q"), ModelError, "q must be an array of numbers"),
+        (lambda arm: ad.kinematics.skew("v"), ModelError, "v must be an array of numbers"),
+        (lambda arm: ad.kinematics.skew([1.0, 2.0]), ModelError, r"v must have shape \(3,\)"),
+        (lambda arm: ad.kinematics.joint_motion("yes", [0, 0, 1], 0.1), ModelError, "revolute must be True or False"),
+        (lambda arm: ad.kinematics.joint_motion(True, "z", 0.1), ModelError, "axis must be an array of numbers"),
+        (lambda arm: ad.kinematics.joint_motion(True, [0, 0, 2], 0.1), ModelError, "axis must be a unit 3-vector"),
+        (lambda arm: ad.kinematics.joint_motion(True, [0, 0, 1], "0.1"), ModelError, "q must be a number or an array"),
+        (lambda arm: ad.kinematics.joint_motion(True, [0, 0, 1], None), ModelError, "q must be a number or an array"),
+        (lambda arm: ad.kinematics.joint_axes(arm, "joints"), ModelError, "joints must be a number or an array"),
+        (lambda arm: ad.kinematics.joint_axes(arm, np.zeros((5, 4, 4))), ModelError,
+         r"joints must have shape \(\.\.\., 6, 4, 4\)"),
+    ],
+)  # fmt: skip
+def test_kinematics_wrong_types_name_the_argument(call: object, error: type, message: str) -> None:
+    with pytest.raises(error, match=message):
+        call(ad.models.puma560())
+
+
+def test_public_helpers_still_compute() -> None:
+    assert_allclose(ad.kinematics.skew([1.0, 2.0, 3.0]) @ [4.0, 5.0, 6.0], np.cross([1, 2, 3], [4, 5, 6]))
+    motion = ad.kinematics.joint_motion(True, [0, 0, 1], np.array([0.0, np.pi / 2]))
+    assert motion.shape == (2, 4, 4)
+    assert_allclose(motion[1, :3, :3], rot_z(np.pi / 2)[:3, :3], atol=1e-15)
+    arm = ad.models.puma560()
+    _, joints = ad.kinematics.joint_frames(arm, arm.qn)
+    z, o = ad.kinematics.joint_axes(arm, joints)
+    assert z.shape == o.shape == (6, 3)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import tracemalloc
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -9,7 +12,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 import armdyn as ad
-from armdyn.dynamics.regressor import parameter_names
+from armdyn.dynamics import regressor as regressor_module
+from armdyn.dynamics.regressor import MAX_CONDITION, POOR_CONDITION, PoorExcitationWarning, parameter_names
 from tests.conftest import pinocchio_pair
 from tests.strategies import random_robot, random_state
 
@@ -119,3 +123,94 @@ def test_identification_checks_its_input() -> None:
         ad.identify(arm, q, q, q, q)
     with pytest.raises(ad.ModelError, match="tau must have shape"):
         ad.identify(arm, q, q, q, np.zeros((5, 4)))
+
+
+# ----- excitation, memory and arguments ---------------------------------------------------
+def test_identify_refuses_data_that_do_not_excite_the_parameters() -> None:
+    arm = ad.models.puma560()
+    zeros = np.zeros((200, 6))
+    with pytest.raises(ad.ModelError, match=r"do not excite the 58 base parameters.*rank 3 of 58"):
+        ad.identify(arm, zeros, zeros, zeros, zeros)  # once: every estimate 0 +- 0
+    q, qd, qdd = exciting(6, 400)
+    tiny = [1e-5 * x for x in (q, qd, qdd)]  # full rank in exact arithmetic, not in floating point
+    with pytest.raises(ad.ModelError, match=r"do not excite .*condition number"):
+        ad.identify(arm, *tiny, arm.inverse_dynamics(*tiny))
+    small = [1e-2 * x for x in (q, qd, qdd)]  # full rank, but a condition number near 1e9: a warning
+    with pytest.warns(PoorExcitationWarning, match=r"poorly: .* condition number 1\.\d+e\+09"):
+        result = ad.identify(arm, *small, arm.inverse_dynamics(*small))
+    assert POOR_CONDITION < result.condition_number < MAX_CONDITION
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PoorExcitationWarning)  # well excited: no warning
+        result = ad.identify(arm, q, qd, qdd, arm.inverse_dynamics(q, qd, qdd))
+    assert result.condition_number < POOR_CONDITION
+    assert np.all(result.standard_errors >= 0) and np.all(np.isfinite(result.standard_errors))
+
+
+def test_regressor_is_computed_in_chunks_with_bounded_memory() -> None:
+    arm = ad.models.puma560()
+    q, qd, qdd = np.random.default_rng(3).uniform(-1, 1, (3, 20_000, 6))
+    arm.regressor(q[:10], qd[:10], qdd[:10])
+    tracemalloc.start()
+    try:
+        W = arm.regressor(q, qd, qdd)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert W.shape == (20_000, 6, 84)
+    assert peak < W.nbytes + 16 * regressor_module.CHUNK_BYTES  # once 5 times W's size
+    for i in (0, 4_999, 19_999):  # block boundaries and the last state
+        assert_allclose(W[i], arm.regressor(q[i], qd[i], qdd[i]), rtol=1e-14, atol=1e-14)
+    assert_allclose(np.einsum("...ij,j->...i", W, arm.parameters()), arm.inverse_dynamics(q, qd, qdd), atol=1e-9)
+
+
+def test_a_regressor_too_large_for_memory_is_refused_beforehand(tmp_path: object, monkeypatch: object) -> None:
+    arm = ad.models.puma560()
+    q = np.random.default_rng(4).uniform(-1, 1, (1_000, 6))
+    monkeypatch.setattr(regressor_module, "MEMORY_LIMIT", 2**20)  # 1 MiB
+    with pytest.raises(ad.ModelError, match=r"1000 states of 'puma560' needs 3\.85 MiB .* limit of 1 MiB"):
+        arm.regressor(q, q, q)
+    out = np.memmap(tmp_path / "W.dat", dtype=np.float64, mode="w+", shape=(1_000, 6, 84))
+    assert arm.regressor(q, q, q, out=out) is out  # out= writes where the caller says, whatever its size
+    assert_allclose(out[500], arm.regressor(q[500], q[500], q[500]), rtol=1e-14, atol=1e-14)
+    with pytest.raises(ad.ModelError, match=r"out must be a writable C-contiguous float64 array of shape"):
+        arm.regressor(q, q, q, out=np.empty((1_000, 6, 83)))
+    monkeypatch.setattr(regressor_module, "MEMORY_LIMIT", None)
+    assert regressor_module._memory_limit() >= 2**30  # half the machine's memory
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda arm: arm.regressor("q", [0] * 6, [0] * 6), ad.ModelError, "q must be an array of numbers"),
+        (lambda arm: arm.regressor([0] * 6, None, [0] * 6), ad.ModelError, "qd must be an array of numbers"),
+        (lambda arm: arm.regressor([0] * 6, [0] * 6, {"a": 1}), ad.ModelError, "qdd must be an array of numbers"),
+        (lambda arm: arm.regressor([0j] * 6, [0] * 6, [0] * 6), ad.ModelError, "q must be real"),
+        (lambda arm: arm.regressor(np.zeros((3, 6)), np.zeros((4, 6)), [0] * 6), ad.ModelError,
+         r"batch shapes of q \(3, 6\), qd \(4, 6\)"),
+        (lambda arm: regressor_module.regressor("puma560", [0] * 6, [0] * 6, [0] * 6), TypeError,
+         "robot must be an armdyn arm"),
+        (lambda arm: regressor_module.parameters(None), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: parameter_names({}), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: regressor_module.body_regressor("w", [0] * 3, [0] * 3, [0] * 3), ad.ModelError,
+         "w must be an array of numbers"),
+        (lambda arm: regressor_module.body_regressor([0] * 3, [0] * 3, [0] * 2, [0] * 3), ad.ModelError,
+         r"alpha must have shape \(3,\)"),
+        (lambda arm: ad.base_parameters(arm, samples="200"), TypeError, "samples must be an integer"),
+        (lambda arm: ad.base_parameters(arm, samples=0), ad.ModelError, "samples must be at least 1"),
+        (lambda arm: ad.base_parameters(arm, seed=1.5), TypeError, "seed must be an integer"),
+        (lambda arm: ad.base_parameters(arm, tolerance="small"), ad.ModelError, "tolerance must be"),
+        (lambda arm: ad.base_parameters(arm, tolerance=2.0), ad.ModelError, r"tolerance must be one number in \(0"),
+        (lambda arm: ad.base_parameters(arm, drives="yes"), TypeError, "drives must be True or False"),
+        (lambda arm: ad.base_parameters(None), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: ad.base_parameters(arm).regressor("q", [0] * 6, [0] * 6), ad.ModelError, "q must be an array"),
+        (lambda arm: ad.identify(arm, "q", *[np.zeros((20, 6))] * 3), ad.ModelError, "q must be an array of numbers"),
+        (lambda arm: ad.identify(arm, *[np.zeros((20, 6))] * 3, None), ad.ModelError, "tau must be an array"),
+        (lambda arm: ad.identify(arm, np.zeros((20, 6)), np.zeros(6), np.zeros((20, 6)), np.zeros((20, 6))),
+         ad.ModelError, r"q, qd, qdd and tau must hold the same samples"),
+        (lambda arm: ad.identify(arm, *[np.zeros((20, 6))] * 4, drives=1), TypeError, "drives must be True or False"),
+        (lambda arm: ad.identify("arm", *[np.zeros((20, 6))] * 4), TypeError, "robot must be an armdyn arm"),
+    ],
+)  # fmt: skip
+def test_regressor_wrong_types_name_the_argument(call: object, error: type, message: str) -> None:
+    with pytest.raises(error, match=message):
+        call(ad.models.puma560())

@@ -101,7 +101,7 @@ def test_python_loop_and_adaptive_solver_agree_with_the_compiled_loop() -> None:
              e_int: np.ndarray) -> np.ndarray:  # fmt: skip
         return law(t, q, qd, q_d, qd_d, qdd_d, e_int)
 
-    with pytest.warns(PythonLoopWarning, match="Python loop"):
+    with pytest.warns(PythonLoopWarning, match="of your own in Python"):
         python = simulate(arm, mine, desired, t_final=1.0, dt=1e-3)
     assert python.info["method"] == "rk4 (Python)" and compiled.info["method"] == "rk4 (compiled)"
     assert_allclose(python.q, compiled.q, atol=1e-12)

@@ -7,7 +7,9 @@ A controller is any callable
     tau = controller(t, q, qd, q_d, qd_d, qdd_d, e_int, plant=arm)
 
 with e = q_d - q and e_int the time integral of e (kept by the simulator); a controller that
-takes a ``plant`` keyword is given the arm in force at that time. A user's own controller
+takes a ``plant`` keyword is given the arm in force at that time, and one that takes
+``coulomb_smoothing`` the eps per joint of the smoothed Coulomb law the simulated plant
+follows (so that it can compensate the same law, as the built-in ComputedTorque does). A user's own controller
 runs in simulate's Python loop. The built-in ones also describe themselves to the compiled
 simulation loop (``spec``), which runs their compiled law (below each class), so that a
 whole run is one Numba call. Gains are scalars or per joint.
@@ -22,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from armdyn.dynamics.crba import mass_matrix_and_bias
-from armdyn.dynamics.friction import smooth_coulomb
+from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.rnea import gravity_core
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
@@ -33,13 +35,23 @@ NO_CONTROL, COMPUTED_TORQUE, PD_GRAVITY, PID_JOINT = 0, 1, 2, 3
 KP, KV, KI, LIMIT = 0, 1, 2, 3  # rows of the compiled laws' gain table
 
 
-def accepts_plant(controller: object) -> bool:
-    """True when ``controller`` takes a ``plant`` keyword (or any keyword)."""
+def accepts(controller: object, keyword: str) -> bool:
+    """True when ``controller`` takes the keyword (by name, or any keyword)."""
     try:
         parameters = inspect.signature(controller).parameters.values()
     except (TypeError, ValueError):  # a builtin or extension callable: no keywords known
         return False
-    return any(p.name == "plant" or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
+    return any(p.name == keyword or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
+
+
+def call(controller: object, args: tuple, plant: Robot | None, coulomb_smoothing: object) -> np.ndarray:
+    """controller(*args), with ``plant`` and ``coulomb_smoothing`` for a controller that takes them."""
+    extra = {}
+    if plant is not None and accepts(controller, "plant"):
+        extra["plant"] = plant
+    if coulomb_smoothing is not None and accepts(controller, "coulomb_smoothing"):
+        extra["coulomb_smoothing"] = coulomb_smoothing
+    return controller(*args, **extra)
 
 
 @dataclass
@@ -72,14 +84,22 @@ class ComputedTorque:
         return Spec(COMPUTED_TORQUE, self.kp, self.kv, self.ki, self.model)
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, q_d: np.ndarray, qd_d: np.ndarray,
-                 qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None) -> np.ndarray:  # fmt: skip
+                 qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None,
+                 coulomb_smoothing: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+        """tau for one state. ``coulomb_smoothing`` (eps per joint, given by simulate) compensates the
+        model's Coulomb friction with the smoothed law the simulated plant follows, as the compiled
+        law does; without it the exact sign law."""
         arm = self.model or plant
         if arm is None:
             raise ModelError("ComputedTorque needs a model of the arm (model=...) outside simulate()")
         n = arm.n
         u = qdd_d + _gains(self.kv, "kv", n) * (qd_d - qd) + _gains(self.kp, "kp", n) * (q_d - q)
         u = u + _gains(self.ki, "ki", n) * e_int
-        return arm.inertia_matrix(q) @ u + arm.nonlinear_terms(q, qd)
+        N = arm.nonlinear_terms(q, qd)
+        if coulomb_smoothing is not None:
+            table = arm.coulomb_friction
+            N = N - coulomb_vector(table, qd) + smooth_coulomb_vector(table, coulomb_smoothing, qd)
+        return arm.inertia_matrix(q) @ u + N
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -116,7 +136,8 @@ class PDGravity:
         return Spec(PD_GRAVITY, self.kp, self.kv, 0.0, self.model)
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, q_d: np.ndarray, qd_d: np.ndarray,
-                 qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None) -> np.ndarray:  # fmt: skip
+                 qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None,
+                 coulomb_smoothing: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
         arm = self.model or plant
         if arm is None:
             raise ModelError("PDGravity needs a model of the arm (model=...) outside simulate()")
@@ -147,7 +168,8 @@ class PID:
         return Spec(PID_JOINT, self.kp, self.kv, self.ki)
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, q_d: np.ndarray, qd_d: np.ndarray,
-                 qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None) -> np.ndarray:  # fmt: skip
+                 qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None,
+                 coulomb_smoothing: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
         n = q.shape[-1]
         e, edot = q_d - q, qd_d - qd
         return _gains(self.kp, "kp", n) * e + _gains(self.kv, "kv", n) * edot + _gains(self.ki, "ki", n) * e_int
@@ -185,8 +207,8 @@ class Digital:
         spec.period = self.period
         return spec
 
-    def __call__(self, *args: object, **kwargs: object) -> np.ndarray:
-        return self.controller(*args, **kwargs)
+    def __call__(self, *args: object, plant: Robot | None = None, coulomb_smoothing: object = None) -> np.ndarray:
+        return call(self.controller, args, plant, coulomb_smoothing)
 
 
 @dataclass
@@ -214,8 +236,8 @@ class Saturated:
         spec.limit = self.limit
         return spec
 
-    def __call__(self, *args: object, **kwargs: object) -> np.ndarray:
-        tau = self.controller(*args, **kwargs)
+    def __call__(self, *args: object, plant: Robot | None = None, coulomb_smoothing: object = None) -> np.ndarray:
+        tau = call(self.controller, args, plant, coulomb_smoothing)
         limit = np.asarray(self.limit, dtype=float)
         return np.clip(tau, -limit, limit)
 

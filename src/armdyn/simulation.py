@@ -32,7 +32,7 @@ from armdyn import control, inputs, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
-from armdyn.dynamics.friction import smooth_coulomb
+from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, PIVOT_FLOOR, STRIDE, workspace_size
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
@@ -392,35 +392,38 @@ def simulate(
     arms = [arm] + [e[1] for e in events]
     steps = round(t_final / dt)
     spec, period, controller = _unwrap(controller)
-    if method == "rk4":
-        compiled = (
-            spec is not None
-            and trajectories.packed(trajectory, n) is not None
-            and (disturbance is None or not callable(disturbance))
-            and (spec.model is None or not spec.model.is_symbolic)
+    adaptive = method.lower() in ADAPTIVE if isinstance(method, str) else False
+    if method != "rk4" and not adaptive:
+        raise ModelError(f"method must be 'rk4' or one of {ADAPTIVE}, got {method!r}")
+    if adaptive and period:
+        raise ModelError("a Digital controller needs method='rk4' (the book's fixed-step TRESP)")
+    compiled = (
+        spec is not None
+        and trajectories.packed(trajectory, n) is not None
+        and (disturbance is None or not callable(disturbance))
+        and (spec.model is None or not spec.model.is_symbolic)
+    )
+    setup = _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, coulomb_smoothing) \
+        if compiled else None  # fmt: skip
+    if not compiled and (_users_own(controller) or _users_own(trajectory) or callable(disturbance)):
+        warnings.warn(
+            "simulate runs this controller, trajectory or disturbance of your own in Python, about 45x slower than "
+            "the compiled code that armdyn.control's controllers with a Sinusoid or Quintic trajectory and a "
+            "constant disturbance run in",
+            PythonLoopWarning,
+            stacklevel=2,
         )
-        if compiled:
-            return _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturbance, steps, dt,
-                                 coulomb_smoothing, progress)  # fmt: skip
-        if _users_own(controller) or _users_own(trajectory) or callable(disturbance):
-            warnings.warn(
-                "simulate runs this controller, trajectory or disturbance of your own in its Python loop, about 45x "
-                "slower than the compiled loop of armdyn.control's controllers with a Sinusoid or Quintic "
-                "trajectory and a constant disturbance",
-                PythonLoopWarning,
-                stacklevel=2,
-            )
-        return _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
-                           coulomb_smoothing)  # fmt: skip
-    if method.lower() in ADAPTIVE:
-        if period:
-            raise ModelError("a Digital controller needs method='rk4' (the book's fixed-step TRESP)")
+    if adaptive:
         return _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method,
-                         coulomb_smoothing)  # fmt: skip
-    raise ModelError(f"method must be 'rk4' or one of {ADAPTIVE}, got '{method}'")
+                         coulomb_smoothing, progress, setup)  # fmt: skip
+    if compiled:
+        return _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup)
+    return _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
+                       coulomb_smoothing)  # fmt: skip
 
 
-def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturbance, steps, dt, eps, progress):
+def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):
+    """The plant, controller and trajectory tuples of run_rk4 and continuous_rate."""
     n = arm.n
     plants, coulombs = _plant_buffers(arms)
     switches = np.array([e[0] for e in events], dtype=float)
@@ -437,17 +440,27 @@ def _compiled_rk4(arm, arms, events, spec, period, trajectory, q0, qd0, disturba
         raise ModelError(f"the sample period {period} must be a whole number of steps dt = {dt}")
     trajectory_kind, params = trajectories.packed(trajectory, n)
     tau_d = np.zeros(n) if disturbance is None else np.broadcast_to(np.asarray(disturbance, float), (n,)).copy()
+    smoothing = _smoothing(arm, eps, dt, q0)
+    return (
+        (plants, coulombs, switches, tau_d, smoothing),
+        (spec.kind, model, model_coulomb, gain, hold, spec.model is None),
+        (trajectory_kind, params, q0),
+    )
+
+
+def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup):
+    n = arm.n
+    plant, controller, desired_path = setup
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
     state, tau_held, e_int, outcome = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n), np.array([-1, 0, -1])
-    smoothing = _smoothing(arm, eps, dt, q0)
     chunks = 20 if progress is not None else 1
     bounds = np.linspace(0, steps + 1, chunks + 1).astype(int)
     for a, b in itertools.pairwise(bounds):
         run_rk4(
-            (plants, coulombs, switches, tau_d, smoothing),
-            (spec.kind, model, model_coulomb, gain, hold, spec.model is None),
-            (trajectory_kind, params, q0),
+            plant,
+            controller,
+            desired_path,
             (0.0, dt, int(a), int(b)),
             (state, tau_held, e_int, outcome),
             (times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"]),
@@ -510,13 +523,6 @@ def _smoothing(arm: Robot, eps: object, dt: float, q0: np.ndarray) -> np.ndarray
     return np.full(arm.n, value)
 
 
-def _smooth_coulomb(arm: Robot, qd: np.ndarray, eps: np.ndarray) -> np.ndarray:
-    coulomb = arm.coulomb_friction
-    exact = np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
-    smooth = np.tanh(qd / np.where(eps > 0, eps, 1.0))
-    return np.where(eps > 0, np.where(qd >= 0, smooth * coulomb[:, 0], -smooth * coulomb[:, 1]), exact)
-
-
 def _plant_at(arms: list[Robot], events: list, t: float) -> Robot:
     index = sum(1 for e in events if t >= e[0])
     return arms[index]
@@ -528,7 +534,7 @@ def _dynamics(arms, events, eps):
     def qdd(t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         _check_bounded(q, qd)
         index = sum(1 for e in events if t >= e[0])
-        return bare[index].forward_dynamics(q, qd, tau - _smooth_coulomb(arms[index], qd, eps))
+        return bare[index].forward_dynamics(q, qd, tau - smooth_coulomb_vector(arms[index].coulomb_friction, eps, qd))
 
     return qdd
 
@@ -546,13 +552,10 @@ def _desired_of(trajectory: object, t: float, q0: np.ndarray) -> tuple[np.ndarra
     return np.asarray(q_d, float), np.asarray(qd_d, float), np.asarray(qdd_d, float)
 
 
-def _torque(controller, plant, t, q, qd, desired, e_int):
+def _torque(controller, plant, t, q, qd, desired, e_int, eps):
     if controller is None:
         return np.zeros_like(q)
-    if control.accepts_plant(controller):
-        tau = controller(t, q, qd, *desired, e_int, plant=plant)
-    else:
-        tau = controller(t, q, qd, *desired, e_int)
+    tau = control.call(controller, (t, q, qd, *desired, e_int), plant, eps)
     return _one_state(tau, q.shape[0], f"the controller's torque at t = {t}", allow_scalar=True)
 
 
@@ -567,7 +570,8 @@ def _tau_d(disturbance: object, t: float, q: np.ndarray, qd: np.ndarray) -> np.n
 def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt, eps):
     """The same TRESP scheme in Python, for controllers and trajectories of the user's own."""
     n = arms[0].n
-    qdd_of = _dynamics(arms, events, _smoothing(arms[0], eps, dt, q0))
+    smoothing = _smoothing(arms[0], eps, dt, q0)
+    qdd_of = _dynamics(arms, events, smoothing)
     hold = max(1, round(period / dt)) if period else 1
     out = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
@@ -578,7 +582,7 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
         desired = _desired_of(trajectory, t, q0)
         if k % hold == 0:
             e_int = e_int + (desired[0] - q) * dt * hold
-            tau = _torque(controller, plant, t, q, qd, desired, e_int)
+            tau = _torque(controller, plant, t, q, qd, desired, e_int, smoothing)
         applied = tau - _tau_d(disturbance, t, q, qd)
         k1v = qdd_of(t, q, qd, applied)
         times[k] = t
@@ -619,34 +623,89 @@ def _check_bounded(q: np.ndarray, qd: np.ndarray) -> None:
         raise _DivergedError(int(np.flatnonzero(bad)[0]))
 
 
-def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps):
-    """solve_ivp on x = [q; qd; e_int]; the controller runs at every function evaluation."""
+def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps, progress, setup):
+    """solve_ivp on x = [q; qd; e_int]; the controller runs at every function evaluation, compiled
+    (``continuous_rate``) when the compiled RK4 loop could run it, else in Python."""
     from scipy.integrate import solve_ivp
 
     n = arms[0].n
-    qdd_of = _dynamics(arms, events, _smoothing(arms[0], eps, dt, q0))
+    smoothing = _smoothing(arms[0], eps, dt, q0)
+    qdd_of = _dynamics(arms, events, smoothing)
+    times = np.arange(steps + 1) * dt
+    buffers = np.empty(3 * n), np.empty(n)  # the rate, the torque
 
-    def rate(t: float, x: np.ndarray) -> np.ndarray:
+    def python_rate(t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, qd, e_int = x[:n], x[n : 2 * n], x[2 * n :]
         desired = _desired_of(trajectory, t, q0)
-        tau = _torque(controller, _plant_at(arms, events, t), t, q, qd, desired, e_int)
-        return np.concatenate([qd, qdd_of(t, q, qd, tau - _tau_d(disturbance, t, q, qd)), desired[0] - q])
+        tau = _torque(controller, _plant_at(arms, events, t), t, q, qd, desired, e_int, smoothing)
+        return np.concatenate([qd, qdd_of(t, q, qd, tau - _tau_d(disturbance, t, q, qd)), desired[0] - q]), tau
 
-    times = np.arange(steps + 1) * dt
-    solution = solve_ivp(rate, (0.0, times[-1]), np.concatenate([q0, qd0, np.zeros(n)]), method=method.upper()
-                         if method.lower() != "lsoda" else "LSODA", t_eval=times, rtol=1e-8, atol=1e-10)  # fmt: skip
+    def compiled_rate(t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        singular = continuous_rate(t, x, setup[0], setup[1], setup[2], buffers[0], buffers[1])
+        if singular >= 0:
+            raise _stopped(arms[0], SINGULAR, singular, t, x[:n], Result(times[:0], *[np.empty((0, n))] * 4,
+                                                                          None, arms[0]))  # fmt: skip
+        return buffers[0].copy(), buffers[1].copy()
+
+    rate_and_torque = compiled_rate if setup is not None else python_rate
+    reported = [0.0]
+
+    def rate(t: float, x: np.ndarray) -> np.ndarray:
+        if progress is not None and t >= reported[0] + 0.05 * times[-1]:
+            reported[0] = t
+            progress(t / times[-1])
+        return rate_and_torque(t, x)[0]
+
+    solver = method.upper() if method.lower() != "lsoda" else "LSODA"
+    x0 = np.concatenate([q0, qd0, np.zeros(n)])
+    solution = solve_ivp(rate, (0.0, times[-1]), x0, method=solver, t_eval=times, rtol=1e-8, atol=1e-10)
     if not solution.success or not np.all(np.isfinite(solution.y)):
         raise ModelError(f"the {method} solver failed at t = {solution.t[-1]:.6g} s: {solution.message} (the closed "
                          "loop may diverge: lower the gains)")  # fmt: skip
     x = solution.y.T
-    q, qd, e_int = x[:, :n], x[:, n : 2 * n], x[:, 2 * n :]
+    q, qd = x[:, :n], x[:, n : 2 * n]
     qdd, tau, q_d = np.empty_like(q), np.empty_like(q), np.empty_like(q)
     for k, t in enumerate(times):
-        desired = _desired_of(trajectory, t, q0)
-        plant = _plant_at(arms, events, t)
-        tau[k] = _torque(controller, plant, t, q[k], qd[k], desired, e_int[k])
-        qdd[k] = qdd_of(t, q[k], qd[k], tau[k] - _tau_d(disturbance, t, q[k], qd[k]))
-        q_d[k] = desired[0]
+        slope, tau[k] = rate_and_torque(t, x[k])
+        qdd[k] = slope[n : 2 * n]
+        q_d[k] = _desired_of(trajectory, t, q0)[0]
+    if progress is not None:
+        progress(1.0)
+    route = f"{method} ({'compiled' if setup is not None else 'Python'} right-hand side)"
     return Result(times, q, qd, qdd, tau, q_d if trajectory is not None else None, arms[0],
-                  {"method": method, "dt": dt, "evaluations": solution.nfev},
+                  {"method": route, "dt": dt, "evaluations": solution.nfev},
                   lambda: _energies(arms, events, times, q, qd))  # fmt: skip
+
+
+@njit(**NUMBA_OPTIONS)
+def continuous_rate(
+    t: float, x: np.ndarray, plant: tuple, controller: tuple, trajectory: tuple, rate: np.ndarray, tau: np.ndarray
+) -> int:
+    """d/dt [q; qd; e_int] under continuous control, for the adaptive solvers: the built-in
+    controller's compiled law at every evaluation (the same tuples as run_rk4; hold unused).
+    Writes the rate and the torque; returns -1, or the joint where M is singular."""
+    models, coulombs, switches, disturbance, eps = plant
+    kind, model, model_coulomb, gain = controller[0], controller[1], controller[2], controller[3]
+    trajectory_kind, params, q0 = trajectory
+    n = q0.shape[0]
+    p = 0
+    while p < switches.shape[0] and t >= switches[p]:
+        p += 1
+    q, qd, e_int = x[:n], x[n : 2 * n], x[2 * n :]
+    goal = np.empty((3, n))
+    desired(trajectory_kind, params, t, q0, goal)
+    work = np.empty(workspace_size(n))
+    u, N, applied, qdd = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    M = np.empty((n, n))
+    for i in range(n):
+        tau[i] = 0.0
+    if kind > 0:
+        control_law(kind, model, model_coulomb, eps, work, q, qd, goal, e_int, gain, u, M, N, tau)
+    for i in range(n):
+        applied[i] = tau[i] - disturbance[i]
+    singular = _accelerations(models[p], coulombs[p], eps, work, q, qd, applied, M, N, qdd)
+    for i in range(n):
+        rate[i] = qd[i]
+        rate[n + i] = qdd[i]
+        rate[2 * n + i] = goal[0, i] - q[i]
+    return singular

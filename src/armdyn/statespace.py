@@ -207,8 +207,8 @@ def linearizing_torque(
     armdyn.ModelError
         When ``q``, ``qd`` or ``u`` is not numbers of the shape above or holds NaN or
         infinity, when their batch shapes do not broadcast, when an output callable returns
-        an array of the wrong shape or non-finite values, or when the arm has symbolic
-        parameters.
+        an array of the wrong shape or non-finite values, when ``output_jacobian_dot_qd`` is
+        given without ``output_jacobian``, or when the arm has symbolic parameters.
     TypeError
         When ``arm`` is not a Robot, or an output argument is neither None nor callable.
     """

@@ -65,3 +65,15 @@ def friction_one(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
 def friction_batch(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
     for s in prange(qd.shape[0]):
         friction_core(model, qd[s], out[s])
+
+
+def coulomb_vector(coulomb_table: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """Fd(qd) by the exact sign law, for NumPy arrays qd (..., n); coulomb_table (n, 2): Tc+, Tc-."""
+    return np.where(qd > 0, coulomb_table[:, 0], np.where(qd < 0, coulomb_table[:, 1], 0.0))
+
+
+def smooth_coulomb_vector(coulomb_table: np.ndarray, eps: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """``smooth_coulomb`` for NumPy arrays qd (..., n): the law the simulated plant follows."""
+    smooth = np.tanh(qd / np.where(eps > 0, eps, 1.0))
+    smoothed = np.where(qd >= 0, smooth * coulomb_table[:, 0], -smooth * coulomb_table[:, 1])
+    return np.where(eps > 0, smoothed, coulomb_vector(coulomb_table, qd))
