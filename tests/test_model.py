@@ -206,7 +206,7 @@ def test_friction_and_motors_are_referred_to_the_joint() -> None:
 
 def test_named_configurations() -> None:
     puma = ad.models.puma560()
-    assert_allclose(puma.qn, [0, np.pi / 4, np.pi, 0, np.pi / 4, 0])
+    assert_allclose(puma.qn, [0, np.pi / 4, -np.pi, 0, np.pi / 4, 0])
     assert_allclose(puma.configuration("qr"), [0, np.pi / 2, -np.pi / 2, 0, 0, 0])
     assert set(puma.configurations) == {"qz", "qr", "qs", "qn"}
     with pytest.raises(ModelError, match="no configuration 'qq'"):
@@ -267,7 +267,7 @@ def test_puma560_as_published() -> None:
     assert puma.n == 6 and puma.kinds == ["revolute"] * 6 and puma.dh["convention"] == "standard"
     assert [link.inertial.mass for link in puma.links] == [0, 17.4, 4.8, 0.82, 0.34, 0.09]
     assert_allclose(puma.links[1].inertial.com, [-0.3638, 0.006, 0.2275])
-    assert_allclose(np.rad2deg(puma.qlim[1]), [160, 110, 135, 266, 100, 266])
+    assert_allclose(np.rad2deg(puma.qlim[1]), [160, 225, 45, 170, 100, 266])
 
 
 def test_stanford_has_its_prismatic_third_joint() -> None:
@@ -298,3 +298,14 @@ def test_book_examples_accept_symbols(factory: object, symbols: set) -> None:
         found |= {str(s) for item in link.inertial.inertia.ravel() for s in sympy.sympify(item).free_symbols}
     found |= {str(s) for item in arm.gravity for s in sympy.sympify(item).free_symbols}
     assert found == symbols
+
+
+def test_puma560_configurations_lie_within_its_limits_as_the_toolbox_gives_them() -> None:
+    """Issue: qn (q3 = pi) lay outside q3's limit of +-2.356, and joints 2-4 differed from the Toolbox."""
+    puma = ad.models.puma560()
+    deg = np.pi / 180
+    toolbox = np.array([[-160, 160], [-45, 225], [-225, 45], [-110, 170], [-100, 100], [-266, 266]]) * deg
+    np.testing.assert_allclose(puma.qlim.T, toolbox)
+    np.testing.assert_allclose(puma.qn, [0, np.pi / 4, -np.pi, 0, np.pi / 4, 0])
+    for name, q in puma.configurations.items():
+        assert np.all(puma.qlim[0] <= q) and np.all(q <= puma.qlim[1]), name

@@ -199,7 +199,9 @@ def puma560() -> Robot:
     side) of Corke and Armstrong-Helouvry (1994). As published, the inertias of links 1
     and 3 break the triangle inequality (link 1 is given only its Iyy about the vertical
     axis); they are kept as published so that results match the literature.
-    Configurations: qz (zero), qr (ready, arm up), qs (stretched), qn (nominal).
+    Joint limits and configurations are the Toolbox's (Puma560.py): limits +-160, -45..225,
+    -225..45, -110..170, +-100, +-266 degrees; qz (zero), qr (ready, arm up), qs (stretched),
+    qn = [0, pi/4, -pi, 0, pi/4, 0] (nominal), each within the limits.
 
     Returns
     -------
@@ -211,13 +213,13 @@ def puma560() -> Robot:
         {"d": 26.45 * 0.0254, "alpha": _PI / 2, "mass": 0.0, "com": [0, 0, 0], "inertia": [0, 0.35, 0, 0, 0, 0],
          "Jm": 200e-6, "G": -62.6111, "B": 1.48e-3, "Tc": (0.395, -0.435), "qlim": (-160 * deg, 160 * deg)},
         {"a": 0.4318, "mass": 17.4, "com": [-0.3638, 0.006, 0.2275], "inertia": [0.13, 0.524, 0.539, 0, 0, 0],
-         "Jm": 200e-6, "G": 107.815, "B": 0.817e-3, "Tc": (0.126, -0.071), "qlim": (-110 * deg, 110 * deg)},
+         "Jm": 200e-6, "G": 107.815, "B": 0.817e-3, "Tc": (0.126, -0.071), "qlim": (-45 * deg, 225 * deg)},
         {"d": 0.15005, "a": 0.0203, "alpha": -_PI / 2, "mass": 4.8, "com": [-0.0203, -0.0141, 0.070],
          "inertia": [0.066, 0.086, 0.0125, 0, 0, 0], "Jm": 200e-6, "G": -53.7063, "B": 1.38e-3,
-         "Tc": (0.132, -0.105), "qlim": (-135 * deg, 135 * deg)},
+         "Tc": (0.132, -0.105), "qlim": (-225 * deg, 45 * deg)},
         {"d": 0.4318, "alpha": _PI / 2, "mass": 0.82, "com": [0, 0.019, 0],
          "inertia": [1.8e-3, 1.3e-3, 1.8e-3, 0, 0, 0],
-         "Jm": 33e-6, "G": 76.0364, "B": 71.2e-6, "Tc": (11.2e-3, -16.9e-3), "qlim": (-266 * deg, 266 * deg)},
+         "Jm": 33e-6, "G": 76.0364, "B": 71.2e-6, "Tc": (11.2e-3, -16.9e-3), "qlim": (-110 * deg, 170 * deg)},
         {"alpha": -_PI / 2, "mass": 0.34, "com": [0, 0, 0], "inertia": [0.3e-3, 0.4e-3, 0.3e-3, 0, 0, 0],
          "Jm": 33e-6, "G": 71.923, "B": 82.6e-6, "Tc": (9.26e-3, -14.5e-3), "qlim": (-100 * deg, 100 * deg)},
         {"mass": 0.09, "com": [0, 0, 0.032], "inertia": [0.15e-3, 0.15e-3, 0.04e-3, 0, 0, 0],
@@ -232,7 +234,7 @@ def puma560() -> Robot:
                 "qz": [0, 0, 0, 0, 0, 0],
                 "qr": [0, _PI / 2, -_PI / 2, 0, 0, 0],
                 "qs": [0, 0, -_PI / 2, 0, 0, 0],
-                "qn": [0, _PI / 4, _PI, 0, _PI / 4, 0],
+                "qn": [0, _PI / 4, -_PI, 0, _PI / 4, 0],
             },
             description="Unimation PUMA 560 (Armstrong/Corke dynamics, motors and friction)",
         )
