@@ -788,3 +788,217 @@ def test_strict_governs_both_the_triangle_inequality_and_massless_joints(tmp_pat
     messages = " | ".join(str(w.message) for w in record)
     assert "link 'b'" in messages and "triangle inequality" in messages
     assert "joints ['j2'] move no mass" in messages
+
+
+# ----- locked joints and the tool link (reduced models, as pin.buildReducedModel) ------------------------------
+FINGERS = {"panda_finger_joint1": 0.02, "panda_finger_joint2": 0.02}
+
+
+def _assert_relative(actual: np.ndarray, expected: np.ndarray, tolerance: float, what: str) -> None:
+    """max |actual - expected| <= tolerance max |expected|."""
+    error = np.max(np.abs(np.asarray(actual) - expected))
+    assert error <= tolerance * np.max(np.abs(expected)), f"{what}: {error:.3e} against {np.max(np.abs(expected)):.3e}"
+
+
+def _pinocchio_reduced(path: Path, locked: dict[str, float]) -> pin.Model:
+    """Pinocchio's model of ``path`` with the ``locked`` joints fixed at their values."""
+    full = pin.buildModelFromUrdf(str(path))
+    q_lock = pin.neutral(full)
+    for name, value in locked.items():
+        joint = full.joints[full.getJointId(name)]
+        q_lock[joint.idx_q : joint.idx_q + joint.nq] = (np.cos(value), np.sin(value)) if joint.nq == 2 else value
+    return pin.buildReducedModel(full, [full.getJointId(name) for name in locked], q_lock)
+
+
+def _assert_reduced_matches_pinocchio(path: Path, arm: ad.Robot, locked: dict[str, float], tool: str) -> None:
+    """M, G, inverse and forward dynamics (no friction: Pinocchio ignores URDF damping), every joint frame and the
+    tool pose (Pinocchio's frame of the URDF link ``tool``) at random states, to 1e-12 of the largest entry."""
+    model = _pinocchio_reduced(path, locked)
+    data = model.createData()
+    assert arm.n == model.nv
+    assert arm.joint_names == list(model.names)[1:]
+    ids = list(range(1, model.njoints))
+    bare = arm.without_friction()
+    rng = np.random.default_rng(7)
+    lower, upper = np.maximum(arm.qlim[0], -3.0), np.minimum(arm.qlim[1], 3.0)
+    for _ in range(10):
+        q, qd, qdd = rng.uniform(lower, upper), rng.uniform(-2, 2, arm.n), rng.uniform(-3, 3, arm.n)
+        tau, config = rng.uniform(-20, 20, arm.n), _pin_q(model, ids, q)
+        _assert_relative(bare.inertia_matrix(q), pin.crba(model, data, config), 1e-12, "M")
+        _assert_relative(bare.gravity_vector(q), pin.computeGeneralizedGravity(model, data, config), 1e-12, "G")
+        _assert_relative(bare.inverse_dynamics(q, qd, qdd), pin.rnea(model, data, config, qd, qdd), 1e-12, "tau")
+        _assert_relative(bare.forward_dynamics(q, qd, tau), pin.aba(model, data, config, qd, tau), 1e-12, "qdd")
+        pin.framesForwardKinematics(model, data, config)
+        assert_allclose(arm.link_transforms(q), [data.oMi[i].homogeneous for i in range(1, model.njoints)], atol=1e-12)
+        expected = data.oMf[model.getFrameId(tool, pin.BODY)].homogeneous
+        assert_allclose(arm.tool_pose(q), expected, rtol=0, atol=1e-12, err_msg=tool)
+
+
+@pytest.mark.parametrize("tool", ["panda_hand_tcp", "panda_hand"])
+def test_panda_reduced_to_seven_joints_equals_pinocchio(tool: str) -> None:
+    """The two fingers locked at 2 cm, the tool on the hand (or its TCP): Pinocchio's reduced model, to 1e-12."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the mimic joint is locked: no warning
+        arm = load_urdf(URDFS["panda"], tool_link=tool, locked=FINGERS)
+    assert arm.n == 7
+    assert arm.kinds == ["revolute"] * 7
+    assert arm.is_chain
+    assert arm.tool_link == 6
+    full = _load_quiet(URDFS["panda"])
+    assert sum(link.inertial.mass for link in arm.links) == pytest.approx(
+        sum(link.inertial.mass for link in full.links)
+    )
+    assert_array_equal(arm.qlim, full.qlim[:, :7])
+    assert_array_equal(arm.viscous_friction, full.viscous_friction[:7])
+    _assert_reduced_matches_pinocchio(URDFS["panda"], arm, FINGERS, tool)
+
+
+def test_panda_locked_in_mid_chain_equals_pinocchio() -> None:
+    """Locking an elbow re-attaches the joints below it: their placements pass through the locked joint."""
+    locked = {"panda_joint4": -1.2, "panda_finger_joint1": 0.01, "panda_finger_joint2": 0.035}
+    arm = load_urdf(URDFS["panda"], tool_link="panda_hand_tcp", locked=locked)
+    assert arm.joint_names == [f"panda_joint{i}" for i in (1, 2, 3, 5, 6, 7)]
+    _assert_reduced_matches_pinocchio(URDFS["panda"], arm, locked, "panda_hand_tcp")
+
+
+def test_locked_branches_and_a_merged_tool_link_equal_pinocchio(tmp_path: Path) -> None:
+    """A tree: the locked 'j_left' keeps its child joint 'j_left_tip'; the tool link 'sensor' hangs by a fixed joint
+    from 'left', so its frame ends in the body of 'j_trunk'; a locked continuous joint takes any value."""
+    text = _robot(
+        _link("root"), _link("trunk"), _link("left", mass=0.8), _link("right", mass=2.0), _link("left_tip", mass=0.5),
+        _link("sensor", mass=0.1), _link("spinner", mass=0.4),
+        _joint("j_trunk", "root", "trunk"),
+        _joint("j_left", "trunk", "left", axis="1 0 0"),
+        _joint("j_right", "trunk", "right", "prismatic", xyz="-0.1 0.2 0", axis="0 0.6 0.8"),
+        _joint("j_left_tip", "left", "left_tip", "continuous", axis="0 1 0", extra=""),
+        _joint("f_sensor", "left", "sensor", "fixed", xyz="0.03 0.02 0.1", rpy="0.4 -0.1 0.7", extra=""),
+        _joint("j_spin", "right", "spinner", "continuous", axis="0 0 1", extra=""),
+    )  # fmt: skip
+    path = _write(tmp_path, text)
+    locked = {"j_left": 0.7, "j_spin": 5.0}
+    arm = load_urdf(path, tool_link="sensor", locked=locked)
+    assert arm.joint_names == ["j_trunk", "j_left_tip", "j_right"]
+    assert_array_equal(arm.parents, [-1, 0, 0])
+    assert arm.tool_link == 0
+    _assert_reduced_matches_pinocchio(path, arm, locked, "sensor")
+
+
+def test_loading_locked_is_reducing_the_loaded_arm() -> None:
+    """load_urdf(path, tool_link=t, locked=L) is load_urdf(path, tool_link=t).reduced(L): the same packed model,
+    tool and limits. By default the tool stays where it was, on the right finger's frame (at 2 cm), now on link 7."""
+    direct = load_urdf(URDFS["panda"], tool_link="panda_hand_tcp", locked=FINGERS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the mimic joint
+        reduced = load_urdf(URDFS["panda"], tool_link="panda_hand_tcp").reduced(FINGERS)
+    assert isinstance(reduced, ad.Robot)
+    assert reduced.description == "URDF panda.urdf; locked panda_finger_joint1=0.02, panda_finger_joint2=0.02"
+    for name in ("packed", "qlim", "tool", "tool_link", "gravity"):
+        assert_array_equal(getattr(reduced, name), getattr(direct, name), err_msg=name)
+    full = _load_quiet(URDFS["panda"])
+    default = load_urdf(URDFS["panda"], locked=FINGERS)
+    assert default.tool_link == 6
+    assert_array_equal(default.tool, full.reduced(FINGERS).tool)
+    q = np.random.default_rng(2).uniform(-1.0, 1.0, 7)
+    assert_allclose(default.tool_pose(q), full.tool_pose([*q, 0.02, 0.02]), rtol=0, atol=1e-15)
+
+
+def test_reduced_equals_the_full_arm_held_at_the_locked_values() -> None:
+    """PUMA 560 with q3 locked: M, G and tau are the full arm's with that row (and column) removed; the reduced arm
+    keeps the other joints' motors and friction, its named configurations, and drops the DH table."""
+    puma = ad.models.puma560()
+    arm = puma.reduced({"q3": 0.5})
+    assert arm.joint_names == ["q1", "q2", "q4", "q5", "q6"]
+    assert arm.dh is None and puma.dh is not None
+    assert_array_equal(arm.qn, np.delete(puma.qn, 2))
+    assert_array_equal(arm.reflected_inertia, np.delete(puma.reflected_inertia, 2))
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        q, qd, qdd = rng.uniform(-2, 2, (3, 5))
+        full_q, full_qd, full_qdd = (np.insert(x, 2, v) for x, v in ((q, 0.5), (qd, 0.0), (qdd, 0.0)))
+        keep = [0, 1, 3, 4, 5]
+        assert_allclose(arm.inertia_matrix(q), puma.inertia_matrix(full_q)[np.ix_(keep, keep)], rtol=1e-13, atol=1e-13)
+        assert_allclose(arm.gravity_vector(q), puma.gravity_vector(full_q)[keep], rtol=1e-13, atol=1e-12)
+        tau = puma.inverse_dynamics(full_q, full_qd, full_qdd)[keep]
+        assert_allclose(arm.inverse_dynamics(q, qd, qdd), tau, rtol=1e-13, atol=1e-12)
+        assert_allclose(arm.tool_pose(q), puma.tool_pose(full_q), rtol=0, atol=1e-15)
+
+
+def test_locking_massless_joints_lets_a_strict_load_succeed(tmp_path: Path) -> None:
+    """A massless leaf joint makes M singular (refused with strict); locked, it is a fixed joint and the arm loads."""
+    text = _robot(_link("a"), _link("b"), "<link name='c'/>", _joint("j1", "a", "b"), _joint("j2", "b", "c"))
+    path = _write(tmp_path, text)
+    with pytest.raises(ModelError, match=r"joints \['j2'\] move no mass"):
+        load_urdf(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        arm = load_urdf(path, locked={"j2": 0.3}, tool_link="c")
+    assert arm.joint_names == ["j1"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        full = load_urdf(path, strict=False)
+    assert_allclose(arm.tool_pose([0.4]), full.tool_pose([0.4, 0.3]), rtol=0, atol=1e-15)
+
+
+def test_a_mimic_joint_left_free_still_warns() -> None:
+    with pytest.warns(UserWarning, match=r"mimic joints \['panda_finger_joint2'\]"):
+        arm = load_urdf(URDFS["panda"], locked={"panda_finger_joint1": 0.01})
+    assert arm.n == 8
+
+
+LOCK_ERRORS = {
+    "unknown joint": ({"panda_finger_joint3": 0.0}, None, r"panda\.urdf: .*cannot lock joint 'panda_finger_joint3': "
+                      r"the file has no such joint \(its moving joints: \['panda_joint1'"),
+    "fixed joint": ({"panda_hand_joint": 0.0}, None, r"lock joint 'panda_hand_joint': it is fixed, already fixed"),
+    "above the limit": ({"panda_finger_joint1": 0.05}, None,
+                        r"panda\.urdf: robot 'panda': joint 'panda_finger_joint1' cannot be locked at 0\.05 m: "
+                        r"outside its limits \[0, 0\.04\]"),
+    "below the limit": ({"panda_joint4": 0.0}, None, r"joint 'panda_joint4' cannot be locked at 0 rad: outside its "
+                        r"limits \[-3\.0718, -0\.0698\]"),
+    "NaN": ({"panda_joint1": float("nan")}, None, r"'panda_joint1' must be locked at a finite real number, got nan"),
+    "infinite": ({"panda_joint1": np.inf}, None, r"joint 'panda_joint1' must be locked at a finite real number"),
+    "a string": ({"panda_joint1": "0.1"}, None, r"'panda_joint1' must be locked at a finite real number, got '0.1'"),
+    "complex": ({"panda_joint1": 0.1 + 0j}, None, r"finite real number"),
+    "a bool": ({"panda_joint1": True}, None, r"finite real number"),
+    "an array": ({"panda_joint1": np.array([0.1])}, None, r"finite real number"),
+    "None": ({"panda_joint1": None}, None, r"finite real number, got None"),
+    "not a mapping": (["panda_finger_joint1"], None, r"locked must be a mapping of joint name to value"),
+    "every joint": ({f"panda_joint{i}": 0.0 for i in range(1, 8)} | {"panda_joint4": -1.0} | FINGERS, None,
+                    r"locking every joint \(.*\) leaves no joint to move"),
+    "tool link unknown": (None, "panda_gripper", r"tool_link 'panda_gripper' is not a link of the file \(its links: "
+                          r"\['panda_link0'"),
+    "tool link is a joint": (None, "panda_joint1", r"tool_link 'panda_joint1' is not a link of the file"),
+    "tool link not a name": (None, 3, r"tool_link 3 is not a link of the file"),
+    "tool link is the root": (None, "panda_link0", r"tool_link 'panda_link0' is fixed to the root link 'panda_link0' "
+                              r"\(no moving joint between them\)"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize(("locked", "tool", "match"), list(LOCK_ERRORS.values()), ids=list(LOCK_ERRORS))
+def test_locked_joints_and_tool_link_errors(locked: object, tool: object, match: str) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the mimic joint, when left free
+        with pytest.raises(ModelError, match=match):
+            load_urdf(URDFS["panda"], locked=locked, tool_link=tool)
+
+
+def test_locking_the_only_joints_above_the_tool_welds_it_to_the_base(tmp_path: Path) -> None:
+    text = _robot(_link("a"), _link("b"), _link("c"), _joint("j1", "a", "b"), _joint("j2", "a", "c"))
+    path = _write(tmp_path, text)
+    with pytest.raises(ModelError, match=r"test\.urdf: robot 'test': locking \['j1'\] welds the tool \(on link 'j1'\) "
+                       r"to the base: no moving joint is left between them"):  # fmt: skip
+        load_urdf(path, locked={"j1": 0.1}, tool_link="b")
+    assert load_urdf(path, locked={"j1": 0.1}, tool_link="c").joint_names == ["j2"]
+
+
+def test_reduced_errors_name_the_joint_and_the_rule() -> None:
+    puma = ad.models.puma560()
+    with pytest.raises(ModelError, match=r"robot 'puma560': cannot lock joint 'q7': no such joint \(the joints: "):
+        puma.reduced({"q7": 0.0})
+    with pytest.raises(ModelError, match=r"joint 'q2' cannot be locked at 4 rad: outside its limits \[-0\.785398, "):
+        puma.reduced({"q2": 4.0})
+    with pytest.raises(ModelError, match=r"locked must be a mapping"):
+        puma.reduced([("q2", 0.1)])
+    symbolic = ad.models.two_link_planar(symbolic=True)
+    assert symbolic.reduced({"theta1": 0.3}).n == 1  # SymPy parameters pass into the placements
+    with pytest.raises(ModelError, match=r"moves the tool onto link 'theta1' through symbolic \(SymPy\) parameters"):
+        symbolic.reduced({"theta2": 0.3})

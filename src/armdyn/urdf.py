@@ -5,12 +5,15 @@ trees. Fixed joints are merged into their parent body (parallel-axis theorem). J
 are numbered depth first from the root, children in file order. Every number that reaches
 the model is checked finite where it is read, so an error names the element; joints that
 move no mass in any configuration (a singular M(q)) are found after the arm is built.
+Locked joints (``locked``) are fixed by ArmModel.reduced once the whole arm is built; the
+tool may sit on any link (``tool_link``), a merged one included.
 """
 
 from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -95,7 +98,13 @@ def _body(file: str, urdf_link: object, strict: bool) -> Inertial:
         raise ModelError(f"{file}: {error}") from None
 
 
-def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object = (0.0, 0.0, -9.81)) -> Robot:
+def load_urdf(
+    path: str | os.PathLike[str],
+    strict: bool = True,
+    gravity: object = (0.0, 0.0, -9.81),
+    tool_link: str | None = None,
+    locked: Mapping[str, float] | None = None,
+) -> Robot:
     """Read a URDF file into a Robot.
 
     Revolute, continuous, prismatic and fixed joints, in branching trees; fixed joints are
@@ -106,6 +115,16 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     A continuous joint, or a revolute or prismatic joint without ``<limit>``, is unlimited.
     Mimic joints load as independent joints, with a warning naming them. Meshes are never
     loaded.
+
+    ``locked`` holds joints at given values, as Pinocchio's ``buildReducedModel`` does: the
+    arm is loaded whole, then reduced by ``Robot.reduced(locked)`` (each locked joint becomes
+    fixed there, its body merged into its parent's as a fixed joint's is, the joints below it
+    kept), so ``load_urdf(path, locked=L)`` is ``load_urdf(path).reduced(L)``, without the
+    mimic warning for a locked joint. ``tool_link`` names the URDF link whose frame is the
+    tool (any link, a moving joint's child or one merged into a body through fixed or locked
+    joints, whose frame then becomes ``tool`` in that body's frame); by default the tool frame
+    is the link frame of the last moving joint of the whole file (depth first), and stays
+    where it is when that joint is locked.
 
     A joint whose motion moves no mass or inertia in any configuration (its subtree is
     massless, or only a point mass on its own axis or a thin rod along it, or its motion repeats
@@ -130,6 +149,12 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
         joint.
     gravity : array_like, optional
         Acceleration of gravity in the world frame, 3 values (default [0, 0, -9.81]).
+    tool_link : str, optional
+        The URDF link that carries the tool frame (default None: the child link of the last
+        moving joint, depth first).
+    locked : mapping of str to float, optional
+        Revolute, continuous or prismatic joints of the file, by name, to the value (rad or m)
+        each is locked at, within its limits (default None: every joint moves).
 
     Returns
     -------
@@ -147,7 +172,11 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
         inertia, a limit, a damping or friction) is NaN or infinite; when a joint axis has no
         direction; when a link's mass properties, friction or limits are invalid (see
         Inertial and Link); and, with ``strict``, when an inertia breaks the triangle
-        inequality or some joint moves no mass in any configuration (the message names them).
+        inequality or some joint moves no mass in any configuration (the message names them);
+        when ``locked`` is not a mapping, names a joint the file does not have or a fixed one,
+        or holds a value that is not finite or lies outside the joint's limits, or locks every
+        moving joint; when ``tool_link`` is not a link of the file, or is fixed to the root
+        link (no moving joint between them, also once the locked joints are fixed).
 
     Warns
     -----
@@ -185,8 +214,12 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
     roots = [name for name in links if name not in parent_of]
     if len(roots) != 1:
         raise ModelError(f"{path.name}: expected one root link, found {roots or 'none (the joints form a loop)'}")
+    locked = _check_locked(path.name, robot.joints, locked)
     built: list[Link] = []
     mimics: list[str] = []
+    # Where each URDF link's frame is: (index of the moving link whose body carries it, or -1
+    # for the root's; the frame's pose in that link's frame)
+    frames: dict[str, tuple[int, np.ndarray]] = {roots[0]: (-1, np.eye(4))}
     # Depth-first walk. Each stack entry: (urdf joint, index of the moving parent, placement
     # of the joint in that parent's frame accumulated across fixed joints)
     stack = [(joint, -1, np.eye(4)) for joint in reversed(children[roots[0]])]
@@ -198,18 +231,28 @@ def load_urdf(path: str | os.PathLike[str], strict: bool = True, gravity: object
             if parent >= 0:
                 owner = built[parent]
                 built[parent] = _with_inertial(owner, owner.inertial + child_body)
+            frames[joint.child] = (parent, placement)
             stack.extend((child, parent, placement) for child in reversed(children[joint.child]))
             continue
-        if joint.mimic is not None:
+        if joint.mimic is not None and joint.name not in locked:
             mimics.append(joint.name)
         built.append(_moving_link(path.name, joint, parent, placement, _body(path.name, links[joint.child], strict)))
         index = len(built) - 1
+        frames[joint.child] = (index, np.eye(4))
         stack.extend((child, index, np.eye(4)) for child in reversed(children[joint.child]))
     if mimics:
         warnings.warn(f"{path.name}: mimic joints {mimics} are loaded as independent joints", stacklevel=2)
     if not built:
         raise ModelError(f"{path.name}: the file has no revolute, continuous or prismatic joint")
-    arm = Robot(built, name=robot.name, gravity=gravity, description=f"URDF {path.name}")
+    tool_index, tool = _tool_frame(path.name, roots[0], frames, tool_link)
+    arm = Robot(
+        built, name=robot.name, gravity=gravity, tool=tool, tool_link=tool_index, description=f"URDF {path.name}"
+    )
+    if locked:
+        try:
+            arm = arm.reduced(locked)
+        except ModelError as error:
+            raise ModelError(f"{path.name}: {error}") from None
     massless = _massless_joints(arm)
     if massless:
         kinematics_only = "" if arm.has_dynamics else " (no link of the file carries any: a kinematics-only file)"
@@ -261,6 +304,43 @@ def _massless_joints(arm: Robot) -> list[str]:
         scale = np.where(zero[:, j], 0.0, 1.0 / np.where(zero[:, j], 1.0, pivot))
         work[:, j + 1 :, j + 1 :] -= scale[:, None, None] * column[:, :, None] * column[:, None, :]
     return [name for name, always in zip(arm.joint_names, zero.all(axis=0), strict=True) if always]
+
+
+def _check_locked(file: str, joints: list, locked: object) -> dict:
+    """``locked`` as a dict, refused unless it names moving joints of the file (values are checked by reduced)."""
+    if locked is None:
+        return {}
+    if not isinstance(locked, Mapping):
+        raise ModelError(f"{file}: locked must be a mapping of joint name to value, got {locked!r}")
+    kinds = {joint.name: joint.type for joint in joints}
+    moving = [joint.name for joint in joints if joint.type in _MOVING]
+    for name in locked:
+        if name not in kinds:
+            raise ModelError(
+                f"{file}: cannot lock joint '{name}': the file has no such joint (its moving joints: {moving})"
+            )
+        if kinds[name] not in _MOVING:
+            raise ModelError(
+                f"{file}: cannot lock joint '{name}': it is {kinds[name]}, already fixed; lock moving joints"
+            )
+    return dict(locked)
+
+
+def _tool_frame(
+    file: str, root: str, frames: dict[str, tuple[int, np.ndarray]], tool_link: object
+) -> tuple[int | None, np.ndarray | None]:
+    """(tool_link index, tool pose in that link's frame) for the URDF link named ``tool_link`` (None: the default)."""
+    if tool_link is None:
+        return None, None
+    if not isinstance(tool_link, str) or tool_link not in frames:
+        raise ModelError(f"{file}: tool_link {tool_link!r} is not a link of the file (its links: {list(frames)})")
+    index, pose = frames[tool_link]
+    if index < 0:
+        raise ModelError(
+            f"{file}: tool_link '{tool_link}' is fixed to the root link '{root}' (no moving joint between them), "
+            "so it cannot carry a tool; name a link that some joint moves"
+        )
+    return index, pose
 
 
 def _with_inertial(link: Link, inertial: Inertial) -> Link:

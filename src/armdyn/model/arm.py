@@ -399,6 +399,113 @@ class ArmModel:
         """
         return self.replace(gravity=gravity)
 
+    def reduced(self, locked: Mapping[str, float]) -> ArmModel:
+        """The arm with some joints locked: each becomes fixed at a given value.
+
+        Pinocchio's reduced model (``pin.buildReducedModel``). A locked joint's body is
+        merged into its parent's at the locked configuration (parallel-axis theorem, as the
+        URDF loader merges fixed joints), or onto the base when its parent is the base; the
+        joints below it stay, re-attached to that parent with their placements composed
+        through the locked joint. Any tree reduces so: a locked joint only turns one
+        moving frame into a fixed one. The locked joints' friction and motors go with them.
+        Kinematics and dynamics of the remaining joints equal those of the full arm with the
+        locked joints held at their values (and zero velocity and acceleration).
+
+        The tool stays on the same body: when its link is locked it moves to the link that
+        absorbs it, with ``tool`` composed so that the tool pose is unchanged. Named
+        configurations keep the remaining joints' values; the DH table (which no longer
+        describes the arm) is dropped.
+
+        Parameters
+        ----------
+        locked : mapping of str to float
+            Joint name to the value (rad or m) it is locked at, within the joint's limits.
+
+        Returns
+        -------
+        ArmModel
+            The reduced arm, of the same class, with ``n - len(locked)`` joints in the same
+            order.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``locked`` is not a mapping, names a joint the arm does not have, holds a
+            value that is not a finite real number or lies outside the joint's limits; when
+            every joint is locked; when the locked joints weld the tool to the base (no
+            moving joint left between them); or, for an arm with SymPy parameters, when the
+            tool's new pose would hold symbols.
+        """
+        where = f"robot '{self.name}'"
+        if not isinstance(locked, Mapping):
+            raise ModelError(f"{where}: locked must be a mapping of joint name to value, got {locked!r}")
+        values = {}
+        for name, value in locked.items():
+            if name not in self.joint_names:
+                raise ModelError(f"{where}: cannot lock joint '{name}': no such joint (the joints: {self.joint_names})")
+            link = self._links[self.joint_names.index(name)]
+            try:  # a real number; not a string, a bool or a complex number that float() would take
+                real = (
+                    not isinstance(value, (str, bytes, bool, np.bool_)) and np.isrealobj(value) and np.ndim(value) == 0
+                )
+                number = float(value) if real else np.nan
+            except (TypeError, ValueError):
+                number = np.nan
+            if not np.isfinite(number):
+                raise ModelError(f"{where}: joint '{name}' must be locked at a finite real number, got {value!r}")
+            lower, upper = link.limits
+            if not lower <= number <= upper:
+                unit = "rad" if link.kind == "revolute" else "m"
+                raise ModelError(
+                    f"{where}: joint '{name}' cannot be locked at {number:g} {unit}: outside its limits "
+                    f"[{lower:g}, {upper:g}]"
+                )
+            values[name] = number
+        if len(values) == self.n:
+            raise ModelError(f"{where}: locking every joint ({sorted(values)}) leaves no joint to move")
+        links: list[Link] = []
+        # For each link of this arm: (index of the reduced link whose frame carries it, or -1 for the base; its
+        # frame's pose in that frame, None for identity)
+        anchors: list[tuple[int, np.ndarray | None]] = []
+        for link in self._links:
+            owner, pose = (-1, None) if link.parent < 0 else anchors[link.parent]
+            joint = link.joint
+            placement = joint.placement if pose is None else pose @ joint.placement
+            if link.name in values:
+                frame = placement @ _motion(joint, values[link.name]) @ joint.frame_offset
+                anchors.append((owner, frame))
+                if owner >= 0:
+                    body = links[owner].inertial + link.inertial.transformed(frame)
+                    links[owner] = dataclasses.replace(links[owner], inertial=body)
+                continue
+            moved = joint if pose is None else dataclasses.replace(joint, placement=placement)
+            links.append(dataclasses.replace(link, joint=moved, parent=owner))
+            anchors.append((len(links) - 1, None))
+        tool_link, pose = anchors[self._tool_link]
+        if tool_link < 0:
+            raise ModelError(
+                f"{where}: locking {sorted(values)} welds the tool (on link '{self._links[self._tool_link].name}') to "
+                "the base: no moving joint is left between them; keep one of them free"
+            )
+        tool = self._tool if pose is None else pose @ self._tool
+        try:  # an arm with SymPy parameters may compose them into the tool, which must be numbers
+            tool = np.array(tool, dtype=float)
+        except TypeError:
+            raise ModelError(
+                f"{where}: locking {sorted(values)} moves the tool onto link '{self._links[tool_link].name}' through "
+                "symbolic (SymPy) parameters, and a tool pose must be numbers; lock joints that do not carry the tool"
+            ) from None
+        kept = [i for i, name in enumerate(self.joint_names) if name not in values]
+        locks = "locked " + ", ".join(f"{name}={value:g}" for name, value in values.items()) if values else ""
+        return self.replace(
+            links,
+            tool_link=tool_link,
+            tool=tool,
+            configurations={key: vector[kept] for key, vector in self._configurations.items()},
+            dh=None if values else self._dh,
+            description="; ".join(text for text in (self.description, locks) if text),
+        )
+
     # ----- structure ----------------------------------------------------------------
     @property
     def links(self) -> tuple[Link, ...]:
@@ -538,3 +645,15 @@ def _ancestor_table(parents: np.ndarray) -> np.ndarray:
         if parent >= 0:
             table[i] |= table[parent]
     return table
+
+
+def _motion(joint: Joint, value: float) -> np.ndarray:
+    """The joint's 4x4 motion at ``value``: a rotation about its axis (Rodrigues) or a translation along it."""
+    motion = np.eye(4)
+    if joint.is_revolute:
+        x, y, z = joint.axis
+        k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+        motion[:3, :3] = np.eye(3) + np.sin(value) * k + (1.0 - np.cos(value)) * (k @ k)
+    else:
+        motion[:3, 3] = value * joint.axis
+    return motion
