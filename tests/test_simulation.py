@@ -236,3 +236,21 @@ def test_built_in_controllers_run_compiled_without_a_warning() -> None:
             assert result.info["method"] == "rk4 (compiled)"
     with pytest.raises(ad.ModelError, match="controller must be callable"):
         simulate(arm, "computed-torque", t_final=0.01)
+
+
+def test_figures_name_the_controller_keep_legends_off_the_data_and_carry_units() -> None:
+    """Issue: the 12-entry legend covered the data, titles omitted the controller and gains, and
+    revolute-only arms got "rad or m" axes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    arm = ad.models.puma560()
+    result = simulate(arm, ComputedTorque(100, 20), Sinusoid(0.1, 0.5, offset=arm.qn), t_final=0.1, q0=arm.qn)
+    figure = result.plot()
+    assert "computed torque (kp = 100, kv = 20)" in figure._suptitle.get_text()
+    assert all(axis.get_legend() is None for axis in figure.axes) and len(figure.legends) == 1
+    labels = [axis.get_ylabel() for axis in figure.axes]
+    assert labels == ["joint position (rad)", "error q_d - q (rad)", "torque (N m)"]
+    polar = simulate(ad.models.polar_rp(), PDGravity([100, 100], [20, 20]), t_final=0.05, q0=[0.0, 1.0])
+    assert polar.plot().axes[-1].get_ylabel() == "torque (N m or N)"
+    assert result.info["controller"] == "computed torque (kp = 100, kv = 20)"

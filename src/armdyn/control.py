@@ -260,3 +260,30 @@ def control_law(
         pid_law(q, qd, desired, e_int, gain, tau)
     for i in range(q.shape[0]):
         tau[i] = min(max(tau[i], -gain[LIMIT, i]), gain[LIMIT, i])
+
+
+def describe(controller: object) -> str:
+    """A short description of a controller for titles and reports: its kind and gains."""
+    if controller is None:
+        return "no control (zero torque)"
+    if isinstance(controller, Digital):
+        return f"{describe(controller.controller)}, sampled every {controller.period * 1e3:g} ms"
+    if isinstance(controller, Saturated):
+        return f"{describe(controller.controller)}, torques within +-{_short(controller.limit)}"
+    if isinstance(controller, ComputedTorque | PDGravity | PID):
+        gains = [f"kp = {_short(controller.kp)}", f"kv = {_short(controller.kv)}"]
+        ki = getattr(controller, "ki", 0.0)
+        if np.any(np.asarray(ki, dtype=float) != 0):
+            gains.append(f"ki = {_short(ki)}")
+        model = getattr(controller, "model", None)
+        belief = f", model '{model.name}'" if model is not None else ""
+        label = {"ComputedTorque": "computed torque", "PDGravity": "PD plus gravity", "PID": "joint PID"}
+        return f"{label[type(controller).__name__]} ({', '.join(gains)}{belief})"
+    return getattr(controller, "__name__", type(controller).__name__)
+
+
+def _short(value: object) -> str:
+    array = np.atleast_1d(np.asarray(value, dtype=float))
+    if np.all(array == array[0]):
+        return f"{array[0]:g}"
+    return "[" + ", ".join(f"{v:g}" for v in array) + "]"

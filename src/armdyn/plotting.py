@@ -5,38 +5,66 @@ from __future__ import annotations
 from pathlib import Path
 
 
+def units(kinds: list[str], revolute: str, prismatic: str) -> str:
+    """The unit of a quantity over joints of these kinds: one unit, or both when the arm mixes kinds."""
+    found = {revolute if kind == "revolute" else prismatic for kind in kinds}
+    return found.pop() if len(found) == 1 else f"{revolute} or {prismatic}"
+
+
 def plot_result(result: object, path: str | Path | None = None, title: str | None = None) -> object:
-    """Joint values (solid) with their desired values (dashed), tracking errors, and torques."""
+    """Joint values (solid) with their desired values (dashed), tracking errors, and torques.
+
+    One colour per joint, named in a legend beside the plots (never over the data); the title
+    names the arm, the controller with its gains and the trajectory; axes carry the units of
+    the arm's joints (rad and N m for revolute joints, m and N for prismatic ones).
+    """
     import matplotlib
 
     if path is not None:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     n = result.q.shape[1]
+    kinds = result.arm.kinds
+    position, force = units(kinds, "rad", "m"), units(kinds, "N m", "N")
     rows = 3 if result.q_d is not None else 2
-    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.6 * rows), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.5 * rows + 0.6), sharex=True, layout="constrained")
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     names = result.arm.joint_names
     for i in range(n):
         colour = colours[i % len(colours)]
-        axes[0].plot(result.t, result.q[:, i], color=colour, label=f"{names[i]}")
+        axes[0].plot(result.t, result.q[:, i], color=colour)
         if result.q_d is not None:
-            axes[0].plot(result.t, result.q_d[:, i], color=colour, linestyle="--", label=f"{names[i]} desired")
-            axes[1].plot(result.t, result.error[:, i], color=colour, label=f"e{i + 1}")
-        axes[-1].plot(result.t, result.tau[:, i], color=colour, label=f"tau{i + 1}")
-    axes[0].set_ylabel("joint value (rad or m)")
-    axes[0].set_title(title or f"{result.arm.name}: simulated response")
+            axes[0].plot(result.t, result.q_d[:, i], color=colour, linestyle="--", linewidth=1.0)
+            axes[1].plot(result.t, result.error[:, i], color=colour)
+        axes[-1].plot(result.t, result.tau[:, i], color=colour)
+    axes[0].set_ylabel(f"joint position ({position})")
     if result.q_d is not None:
-        axes[1].set_ylabel("tracking error e = q_d - q")
+        axes[1].set_ylabel(f"error q_d - q ({position})")
         axes[1].axhline(0.0, color="0.6", linewidth=0.8)
-    axes[-1].set_ylabel("torque (N m or N)")
+    axes[-1].set_ylabel(f"torque ({force})")
     axes[-1].set_xlabel("time (s)")
     for axis in axes:
         axis.grid(True, alpha=0.3)
-        axis.legend(loc="upper right", fontsize=8, ncol=min(n, 3))
     axes[-1].set_xlim(result.t[0], result.t[-1])
+    handles = [Line2D([], [], color=colours[i % len(colours)], label=names[i]) for i in range(n)]
+    if result.q_d is not None:
+        handles += [Line2D([], [], color="0.3", label="actual"), Line2D([], [], color="0.3", ls="--", label="desired")]
+    fig.legend(handles=handles, loc="outside right upper", fontsize=8, frameon=False)
+    fig.suptitle(title or _title(result), fontsize=10)
     if path is not None:
         fig.savefig(path, dpi=150)
         plt.close(fig)
     return fig
+
+
+def _title(result: object) -> str:
+    info = result.info
+    parts = [result.arm.name]
+    if "controller" in info:
+        parts.append(info["controller"])
+    if result.q_d is not None and "trajectory" in info:
+        parts.append(f"tracking a {info['trajectory']}")
+    step = f", {info['method']}, dt = {info['dt'] * 1e3:g} ms" if "method" in info and "dt" in info else ""
+    return ": ".join(parts[:2]) + (f", {parts[2]}" if len(parts) > 2 else "") + step

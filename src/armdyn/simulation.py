@@ -413,13 +413,17 @@ def simulate(
             PythonLoopWarning,
             stacklevel=2,
         )
+    described = {"controller": control.describe(controller), "trajectory": trajectories.describe(trajectory)}
     if adaptive:
-        return _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method,
-                         coulomb_smoothing, progress, setup)  # fmt: skip
-    if compiled:
-        return _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup)
-    return _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
-                       coulomb_smoothing)  # fmt: skip
+        result = _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method,
+                           coulomb_smoothing, progress, setup)  # fmt: skip
+    elif compiled:
+        result = _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup)
+    else:
+        result = _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
+                             coulomb_smoothing)  # fmt: skip
+    result.info.update(described)
+    return result
 
 
 def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):

@@ -185,3 +185,16 @@ def packed(trajectory: object, n: int) -> tuple[int, np.ndarray] | None:
 
 def _width(values: tuple) -> int:
     return max(np.atleast_1d(np.asarray(v, dtype=float)).shape[0] for v in values)
+
+
+def describe(trajectory: object) -> str:
+    """A short description of a trajectory for titles and reports."""
+    if trajectory is None:
+        return "hold the start"
+    if isinstance(trajectory, Sinusoid):
+        return "sinusoid"
+    if isinstance(trajectory, Quintic):
+        return f"quintic move in {float(trajectory.t1) - float(trajectory.t0):g} s"
+    if isinstance(trajectory, CartesianCircle):
+        return f"circle of radius {trajectory.radius:g} m"
+    return getattr(trajectory, "__name__", type(trajectory).__name__)
