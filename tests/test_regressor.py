@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose
 
 import armdyn as ad
 from armdyn.dynamics import regressor as regressor_module
-from armdyn.dynamics.regressor import MAX_CONDITION, POOR_CONDITION, PoorExcitationWarning, parameter_names
+from armdyn.dynamics.regressor import parameter_names
 from tests.conftest import pinocchio_pair
 from tests.strategies import random_robot, random_state
 
@@ -127,6 +127,8 @@ def test_identification_checks_its_input() -> None:
 
 # ----- excitation, memory and arguments ---------------------------------------------------
 def test_identify_refuses_data_that_do_not_excite_the_parameters() -> None:
+    warning = regressor_module.PoorExcitationWarning
+    poor, limit = regressor_module.POOR_CONDITION, regressor_module.MAX_CONDITION
     arm = ad.models.puma560()
     zeros = np.zeros((200, 6))
     with pytest.raises(ad.ModelError, match=r"do not excite the 58 base parameters.*rank 3 of 58"):
@@ -136,13 +138,13 @@ def test_identify_refuses_data_that_do_not_excite_the_parameters() -> None:
     with pytest.raises(ad.ModelError, match=r"do not excite .*condition number"):
         ad.identify(arm, *tiny, arm.inverse_dynamics(*tiny))
     small = [1e-2 * x for x in (q, qd, qdd)]  # full rank, but a condition number near 1e9: a warning
-    with pytest.warns(PoorExcitationWarning, match=r"poorly: .* condition number 1\.\d+e\+09"):
+    with pytest.warns(warning, match=r"poorly: .* condition number 1\.\d+e\+09"):
         result = ad.identify(arm, *small, arm.inverse_dynamics(*small))
-    assert POOR_CONDITION < result.condition_number < MAX_CONDITION
+    assert poor < result.condition_number < limit
     with warnings.catch_warnings():
-        warnings.simplefilter("error", PoorExcitationWarning)  # well excited: no warning
+        warnings.simplefilter("error", warning)  # well excited: no warning
         result = ad.identify(arm, q, qd, qdd, arm.inverse_dynamics(q, qd, qdd))
-    assert result.condition_number < POOR_CONDITION
+    assert result.condition_number < poor
     assert np.all(result.standard_errors >= 0) and np.all(np.isfinite(result.standard_errors))
 
 
@@ -209,6 +211,9 @@ def test_a_regressor_too_large_for_memory_is_refused_beforehand(tmp_path: object
          ad.ModelError, r"q, qd, qdd and tau must hold the same samples"),
         (lambda arm: ad.identify(arm, *[np.zeros((20, 6))] * 4, drives=1), TypeError, "drives must be True or False"),
         (lambda arm: ad.identify("arm", *[np.zeros((20, 6))] * 4), TypeError, "robot must be an armdyn arm"),
+        (lambda arm: ad.identify(ad.models.two_link_planar(symbolic=True), *[np.zeros((20, 2))] * 4), TypeError,
+         "robot 'two_link_planar' has symbolic"),
+        (lambda arm: regressor_module.parameters(ad.models.polar_rp(symbolic=True)), TypeError, "has symbolic"),
     ],
 )  # fmt: skip
 def test_regressor_wrong_types_name_the_argument(call: object, error: type, message: str) -> None:

@@ -254,3 +254,26 @@ def test_figures_name_the_controller_keep_legends_off_the_data_and_carry_units()
     polar = simulate(ad.models.polar_rp(), PDGravity([100, 100], [20, 20]), t_final=0.05, q0=[0.0, 1.0])
     assert polar.plot().axes[-1].get_ylabel() == "torque (N m or N)"
     assert result.info["controller"] == "computed torque (kp = 100, kv = 20)"
+
+
+def test_one_scenario_through_every_route_gives_one_answer() -> None:
+    """Issue: ComputedTorque on the PUMA 560 (with Coulomb friction) tracked 100x worse on the Python
+    loop and rk45 than on the compiled loop: the Python controller compensated the exact sign law
+    while the plant followed the smoothed one."""
+    arm = ad.models.puma560()
+    path = Sinusoid(0.3, 0.5, offset=arm.qn)
+    start = {"q0": path(0.0, 6)[0], "qd0": path(0.0, 6)[1], "t_final": 0.3, "dt": 1e-3}
+    own_path = lambda t: path(t, 6)  # noqa: E731 - a trajectory of the user's own: the Python routes
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PythonLoopWarning)
+        compiled = simulate(arm, ComputedTorque(100, 20), path, **start)
+        python = simulate(arm, ComputedTorque(100, 20), own_path, **start)
+        rk45 = simulate(arm, ComputedTorque(100, 20), path, method="rk45", **start)
+        rk45_python = simulate(arm, ComputedTorque(100, 20), own_path, method="rk45", **start)
+    assert compiled.info["method"] == "rk4 (compiled)" and python.info["method"] == "rk4 (Python)"
+    assert "compiled right-hand side" in rk45.info["method"] and "Python" in rk45_python.info["method"]
+    assert_allclose(python.q, compiled.q, atol=1e-10)
+    assert_allclose(rk45_python.q, rk45.q, atol=1e-7)
+    # held torque over each 1 ms step (RK4) against continuous control (rk45): close, not equal
+    assert_allclose(rk45.q, compiled.q, atol=2e-4)
+    assert np.abs(compiled.error[-100:]).max() < 2e-3 and np.abs(python.error[-100:]).max() < 2e-3

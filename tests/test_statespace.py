@@ -150,6 +150,7 @@ def test_hamiltonian_forms_take_batches() -> None:
         (lambda arm: ss.brunovsky(2.5), TypeError, "n must be an integer"),
         (lambda arm: ss.brunovsky(True), TypeError, "n must be an integer"),
         (lambda arm: ss.brunovsky(0), ad.ModelError, "n must be at least 1"),
+        (lambda arm: ss.brunovsky(10**30), ad.ModelError, "n must be a number of joints for which A"),
         (lambda arm: ss.linearizing_torque(arm, "q", [0, 0], [0, 0]), ad.ModelError, "q must be an array"),
         (lambda arm: ss.linearizing_torque(arm, [0, 0], None, [0, 0]), ad.ModelError, "qd must be an array"),
         (lambda arm: ss.linearizing_torque(arm, [0, 0], [0, 0], {"u": 1}), ad.ModelError, "u must be an array"),

@@ -61,8 +61,8 @@ class _Group(TyperGroup):
             warnings.showwarning = _show_warning
             try:
                 return super().invoke(ctx)
-            except (typer.Exit, typer.Abort, typer.TyperException):
-                raise  # typer's own: exits, and usage errors (handled in main)
+            except (typer.Exit, typer.Abort, typer.TyperException, BrokenPipeError):
+                raise  # typer's own: exits and usage errors (handled in main), a closed pipe (exits quietly)
             except Exception as error:
                 if ctx.params.get("debug"):
                     raise
@@ -77,8 +77,8 @@ class _Group(TyperGroup):
             code = super().main(*args, standalone_mode=False, **kwargs)
         except typer.TyperException as error:  # a usage error: a bad option, a missing argument...
             if type(error).__name__ != "NoArgsIsHelpError":  # that one has printed the help already
-                where = getattr(getattr(error, "ctx", None), "command_path", None)
-                hint = f" (see '{where} --help')" if where and getattr(error, "ctx", None) else ""
+                ctx = getattr(error, "ctx", None)
+                hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
                 _error_line(error.format_message() + hint)
             sys.exit(error.exit_code)
         except typer.Abort:

@@ -28,8 +28,10 @@ def state(
         complex_input = np.iscomplexobj(value)
         if complex_input and not complex_ok:
             raise ModelError(f"{name} must be real{where}; it is complex")
+        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biufc":
+            raise TypeError(f"{name} holds {value.dtype} values, not numbers")
         array = np.asarray(value, dtype=complex if complex_input else float)
-    except (TypeError, ValueError) as error:
+    except (TypeError, ValueError, ArithmeticError) as error:
         if isinstance(error, ModelError):
             raise
         raise ModelError(f"{name} must be an array of numbers of shape ({n},) or (..., {n}){where}") from None
@@ -110,8 +112,10 @@ def gains(value: object, name: str, n: int) -> np.ndarray:
 def vector(value: object, name: str) -> np.ndarray:
     """A finite number or 1-D array of numbers, as a 1-D float array."""
     try:
+        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biuf":
+            raise TypeError(f"{name} holds {value.dtype} values, not numbers")
         array = np.atleast_1d(np.asarray(value, dtype=float))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, ArithmeticError):
         raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}") from None
     if array.ndim != 1 or not np.all(np.isfinite(array)):
         raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}")

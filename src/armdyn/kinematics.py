@@ -18,9 +18,11 @@ FRAMES = ("base", "tool")
 
 
 def _check_arm(robot: object) -> None:
-    """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot)."""
+    """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot) with numbers."""
     if not isinstance(robot, ArmModel):
         raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
+    if robot.is_symbolic:
+        raise TypeError(f"robot '{robot.name}' has symbolic (SymPy) parameters; numeric kinematics need numbers")
 
 
 def _numbers(value: object, name: str) -> np.ndarray:
@@ -29,7 +31,7 @@ def _numbers(value: object, name: str) -> np.ndarray:
         raise ModelError(f"{name} must be a number or an array of numbers, got {value!r}")
     try:
         array = np.asarray(value, dtype=complex if np.iscomplexobj(value) else float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, ArithmeticError):  # ArithmeticError: ints too large, objects that fail
         raise ModelError(f"{name} must be a number or an array of numbers, got {type(value).__name__}") from None
     if not np.all(np.isfinite(array)):
         raise ModelError(f"{name} must be finite (it holds NaN or infinity)")
@@ -78,7 +80,7 @@ def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
     armdyn.ModelError
         When ``value`` is not numbers, does not end in n, or holds NaN or infinity.
     TypeError
-        When ``robot`` is not an arm (an ArmModel).
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
     _check_arm(robot)
     return inputs.state(value, robot.n, name, f" for '{robot.name}'", complex_ok=True)
@@ -274,7 +276,7 @@ def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndar
     armdyn.ModelError
         When ``joints`` is not numbers of shape (..., n, 4, 4) or holds NaN or infinity.
     TypeError
-        When ``robot`` is not an arm (an ArmModel).
+        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
     _check_arm(robot)
     joints = _numbers(joints, "joints")

@@ -153,7 +153,7 @@ def brunovsky(n: int) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     armdyn.ModelError
-        When ``n`` is below 1.
+        When ``n`` is below 1, or so large that A would need more than 2 GiB.
     TypeError
         When ``n`` is not an integer (a bool is not one).
     """
@@ -162,6 +162,8 @@ def brunovsky(n: int) -> tuple[np.ndarray, np.ndarray]:
     if n < 1:
         raise ModelError(f"n must be at least 1, got {n}")
     n = int(n)
+    if 8 * (2 * n) ** 2 > 2**31:
+        raise ModelError(f"n must be a number of joints for which A (2 n x 2 n) fits in memory, got {n}")
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
     B = np.vstack([np.zeros((n, n)), np.eye(n)])

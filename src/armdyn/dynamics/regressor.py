@@ -56,9 +56,14 @@ class PoorExcitationWarning(UserWarning):
     """The samples excite the base parameters poorly: the estimates are sensitive to noise."""
 
 
-def _check_arm(robot: object) -> None:
+def _check_arm(robot: object, numeric: bool = True) -> None:
     if not isinstance(robot, ArmModel):
         raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
+    if numeric and robot.is_symbolic:
+        raise TypeError(
+            f"robot '{robot.name}' has symbolic (SymPy) parameters; numbers are needed here "
+            "(ClosedForm.W and ClosedForm.phi give the parameterization symbolically)"
+        )
 
 
 def _integer(value: object, name: str, minimum: int) -> int:
@@ -107,7 +112,7 @@ def parameter_names(robot: ArmModel) -> list[str]:
     TypeError
         When ``robot`` is not an arm (an ArmModel).
     """
-    _check_arm(robot)
+    _check_arm(robot, numeric=False)
     bodies = [f"{name}{i + 1}" for i in range(robot.n) for name in BODY_PARAMETERS]
     return bodies + [f"{name}{i + 1}" for i in range(robot.n) for name in JOINT_PARAMETERS]
 
