@@ -37,6 +37,7 @@ MODULES = (
     "armdyn.urdf",
     "armdyn.dynamics.regressor",
     "armdyn.model",
+    "armdyn.excitation",
 )
 # Entry points named one by one (their modules are not walked in full); all of them need Raises.
 ENTRY_POINTS = (

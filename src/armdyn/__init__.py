@@ -12,7 +12,16 @@ from armdyn.urdf import load_urdf
 __version__ = "0.1.0"
 
 
-_LAZY_MODULES = ("symbolic", "properties", "statespace", "control", "trajectories", "simulation", "plotting")
+_LAZY_MODULES = (
+    "symbolic",
+    "properties",
+    "statespace",
+    "control",
+    "trajectories",
+    "simulation",
+    "plotting",
+    "excitation",
+)
 
 
 def __getattr__(name: str) -> object:

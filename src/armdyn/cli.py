@@ -7,18 +7,29 @@ output path in a missing folder: armdyn's ModelError, ValueError, OSError, and t
 usage errors), 1 for an unexpected internal error (and for ``check`` when a property
 fails). ``armdyn --debug COMMAND ...`` shows the full traceback instead. Warnings from the
 library print as one line each, ``warning: ...``, on stderr.
+
+An arm is named by a built-in name, a URDF file (.urdf) or a DH table file (.json, .yaml,
+.yml; see ``armdyn.models.load_dh_file``), the same way for every command (``_arm``). While
+a command works, a spinner or progress bar shows on stderr (``_Activity``): when stderr is
+a terminal, always with ``armdyn --progress``, never with ``--no-progress``. Tables carry
+their units in the column headings; ``--output``/``-o`` writes what a command produces.
 """
 
 from __future__ import annotations
 
 import csv as csv_files
+import io
+import re
 import sys
 import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 import typer
+from numba.core import event as numba_events
 from rich.console import Console
 from rich.table import Table
 from typer.core import TyperGroup
@@ -29,6 +40,123 @@ from armdyn.robot import Robot
 
 INPUT_ERROR = 2
 INTERNAL_ERROR = 1
+
+
+COMPILING = "compiling kernels (first run only)..."
+
+
+class _Activity:
+    """What the running command is doing, on stderr: a spinner with a message, or a progress bar.
+
+    Shown when stderr is a terminal (``mode`` None, the default), always (``mode`` True,
+    ``armdyn --progress``) or never (``mode`` False, ``--no-progress``). One display at a
+    time; it is stopped before the command prints anything on stdout (``_Console``) and
+    when the command ends (``_Group``). While Numba compiles a kernel (the first run after
+    installing or changing armdyn: the cached kernels are loaded afterwards) the message
+    says so (``_Compiling``).
+    """
+
+    def __init__(self) -> None:
+        self.mode: bool | None = None
+        self.command = ""
+        self.compiling = 0  # the depth of the Numba compilations under way
+        self._message = ""
+        self._live: Any = None  # a rich Status or Progress while shown
+        self._task: Any = None  # the Progress task
+
+    def _console(self) -> Console | None:
+        if self.mode is False:
+            return None
+        display = Console(stderr=True, force_terminal=True if self.mode else None)
+        return display if display.is_terminal else None
+
+    def _text(self) -> str:
+        if not self.compiling:
+            return self._message
+        return f"{self._message}: {COMPILING}" if self._message else COMPILING
+
+    def refresh(self) -> None:
+        """Show the message again (after a change of it, or of ``compiling``)."""
+        from rich.status import Status
+
+        if isinstance(self._live, Status):
+            self._live.update(self._text())
+        elif self._live is not None:
+            self._live.update(self._task, description=self._text(), refresh=True)
+        elif self.compiling:
+            self.status(self._message or self.command)
+
+    def status(self, message: str) -> None:
+        """Show a spinner with this message (in place of what is shown)."""
+        from rich.status import Status
+
+        self._message = message
+        if isinstance(self._live, Status):
+            self.refresh()
+            return
+        display = self._console()
+        if display is None:
+            return
+        self.stop()
+        self._live = display.status(self._text())
+        self._live.start()
+
+    def bar(self, message: str) -> Callable[..., None] | None:
+        """Show a progress bar; the callback to call with the fraction done (and optionally the stage),
+        or None when nothing is shown."""
+        from rich import progress as bars
+
+        display = self._console()
+        if display is None:
+            return None
+        self.stop()
+        self._message = message
+        columns = (bars.SpinnerColumn(), bars.TextColumn("{task.description}"), bars.BarColumn(),
+                   bars.TaskProgressColumn(), bars.TimeElapsedColumn(), bars.TimeRemainingColumn())  # fmt: skip
+        bar = bars.Progress(*columns, console=display, transient=True)
+        task = bar.add_task(self._text(), total=1.0)
+        bar.start()
+        self._live, self._task = bar, task
+
+        def update(fraction: float, stage: str | None = None) -> None:
+            if self._live is bar:
+                self._message = message if stage is None else f"{message}: {stage}"
+                bar.update(task, completed=float(fraction), description=self._text(), refresh=True)
+
+        return update
+
+    def echo(self, line: str) -> None:
+        """One line on stderr, above the spinner or bar when one is shown."""
+        if self._live is not None:
+            self._live.console.print(line, markup=False, highlight=False, soft_wrap=True)
+        else:
+            print(line, file=sys.stderr)
+
+    def stop(self) -> None:
+        """Stop the spinner or bar (it leaves nothing behind)."""
+        if self._live is not None:
+            live, self._live, self._task = self._live, None, None
+            live.stop()
+
+
+_activity = _Activity()
+
+
+class _Compiling(numba_events.Listener):
+    """Numba's compile events (fired on a cache miss only): the spinner says that kernels compile."""
+
+    def on_start(self, event: object) -> None:
+        _activity.compiling += 1
+        if _activity.compiling == 1:
+            _activity.refresh()
+
+    def on_end(self, event: object) -> None:
+        _activity.compiling = max(0, _activity.compiling - 1)
+        if _activity.compiling == 0:
+            _activity.refresh()
+
+
+numba_events.register("numba:compile", _Compiling())
 
 
 def _error_line(text: str) -> None:
@@ -49,7 +177,7 @@ def _describe(error: BaseException) -> tuple[str, int]:
 
 
 def _show_warning(message: Warning | str, *args: object, **kwargs: object) -> None:
-    print("warning: " + " ".join(str(message).split()), file=sys.stderr)
+    _activity.echo("warning: " + " ".join(str(message).split()))
 
 
 class _Group(TyperGroup):
@@ -60,7 +188,10 @@ class _Group(TyperGroup):
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
             try:
-                return super().invoke(ctx)
+                try:
+                    return super().invoke(ctx)
+                finally:
+                    _activity.stop()
             except (typer.Exit, typer.Abort, typer.TyperException, BrokenPipeError):
                 raise  # typer's own: exits and usage errors (handled in main), a closed pipe (exits quietly)
             except Exception as error:
@@ -90,14 +221,53 @@ class _Group(TyperGroup):
 app = typer.Typer(
     cls=_Group, help="armdyn: the dynamics of robot manipulators.", no_args_is_help=True, add_completion=False
 )
-console = Console(width=None if Console().is_terminal else 140)
+
+
+class _Console(Console):
+    """The console of the commands' output (stdout): stops the spinner or bar before it prints."""
+
+    def print(self, *objects: Any, **options: Any) -> None:
+        """Print, as rich's Console.print, once the spinner or bar on stderr is gone.
+
+        Parameters
+        ----------
+        *objects : object
+            What to print.
+        **options
+            rich's Console.print options.
+        """
+        _activity.stop()
+        super().print(*objects, **options)
+
+
+console = _Console(width=None if Console().is_terminal else 140)
+
+
+def _version(value: bool) -> None:
+    if value:
+        from armdyn import __version__
+
+        print(f"armdyn {__version__}")
+        raise typer.Exit()
 
 
 @app.callback()
 def options(
+    ctx: typer.Context,
     debug: bool = typer.Option(False, "--debug", help="On an error, show the full traceback instead of one line."),
+    progress: bool | None = typer.Option(
+        None,
+        "--progress/--no-progress",
+        help="Show spinners and progress bars on stderr even when it is not a terminal (or never). "
+        "Default: only on a terminal.",
+    ),
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print armdyn's version and exit."
+    ),
 ) -> None:
     """armdyn: the dynamics of robot manipulators."""
+    _activity.mode = progress
+    _activity.command = ctx.invoked_subcommand or ""
 
 
 def _fail(message: str) -> NoReturn:
@@ -127,6 +297,83 @@ def _output_folder(path: str, option: str) -> Path:
     return folder
 
 
+TABLE_FORMATS = {".csv": "CSV", ".md": "Markdown", ".txt": "text"}
+
+
+def _table_file(path: str, option: str) -> Path:
+    """An output file for tables, its format named by its suffix (TABLE_FORMATS), checked as ``_output_file``."""
+    target = _output_file(path, option)
+    if target.suffix.lower() not in TABLE_FORMATS:
+        _fail(f"{option} {path}: the file must end in .csv, .md or .txt (CSV, Markdown or text)")
+    return target
+
+
+@dataclass
+class _Sheet:
+    """A table as text: what the commands print (as a rich Table) and write (CSV, Markdown, text)."""
+
+    title: str
+    columns: list[str]
+    rows: list[list[str]]
+    caption: str = ""
+
+    def rich(self, justify: str = "right") -> Table:
+        table = Table(title=self.title, caption=self.caption or None)
+        for column in self.columns:
+            table.add_column(column, justify=justify, overflow="fold")
+        for row in self.rows:
+            table.add_row(*row)
+        return table
+
+
+def _write_sheets(target: Path, sheets: Sequence[_Sheet], notes: Sequence[str] = ()) -> None:
+    """Write tables to a file in the format of its suffix: CSV (a header row and the rows; with
+    several tables, each after a row holding its title, separated by an empty row), Markdown
+    (a heading and a table each, then the notes) or text (as printed, then the notes)."""
+    suffix = target.suffix.lower()
+    if suffix == ".csv":
+        with target.open("w", newline="", encoding="utf-8") as handle:
+            writer = csv_files.writer(handle)
+            for index, sheet in enumerate(sheets):
+                if len(sheets) > 1:
+                    if index:
+                        writer.writerow([])
+                    writer.writerow([sheet.title])
+                writer.writerow(sheet.columns)
+                writer.writerows(sheet.rows)
+        return
+    if suffix == ".md":
+
+        def cells(values: Sequence[str]) -> str:
+            return "| " + " | ".join(value.replace("|", "\\|") for value in values) + " |"
+
+        lines = []
+        for sheet in sheets:
+            lines += [f"## {sheet.title}", "", cells(sheet.columns), "|" + "---|" * len(sheet.columns)]
+            lines += [cells(row) for row in sheet.rows]
+            lines += ["", sheet.caption, ""] if sheet.caption else [""]
+        lines += [f"- {note}" for note in notes]
+        target.write_text("\n".join(lines).rstrip() + "\n", encoding="utf-8")
+        return
+    text = io.StringIO()
+    plain = Console(file=text, width=160, no_color=True, highlight=False)
+    for sheet in sheets:
+        plain.print(sheet.rich())
+    for note in notes:
+        plain.print(note, markup=False)
+    target.write_text(text.getvalue(), encoding="utf-8")
+
+
+def _units(arm: Robot, revolute: str, prismatic: str) -> str:
+    """The unit of a joint quantity of the arm, for a column heading: e.g. "rad", "m" or "rad; m for P"."""
+    kinds = set(arm.kinds)
+    if kinds == {"revolute"}:
+        return revolute
+    if kinds == {"prismatic"}:
+        return prismatic
+    return f"{revolute}; {prismatic} for P"
+
+
 def _number(value: object, digits: int = 4) -> str:
     if hasattr(value, "free_symbols"):
         return str(value)
@@ -140,20 +387,96 @@ def _vector(values: object, digits: int = 4) -> str:
     return "[" + ", ".join(_number(v, digits) for v in np.asarray(values).ravel()) + "]"
 
 
-def _arm(name: str) -> Robot:
-    return catalog.load(name)  # a ModelError naming the known arms for an unknown name
+ARM_FILES = (".urdf", ".json", ".yaml", ".yml")
+ARM_HELP = "A built-in arm (see 'armdyn models'), a URDF file (.urdf) or a DH table file (.json, .yaml)."
+STRICT_HELP = "Refuse inertias that break the triangle inequality (and, in a URDF, joints that move no mass)."
+
+
+def _arm(name: str, strict: bool = True) -> Robot:
+    """The arm a command names: a built-in arm, a URDF file (.urdf) or a DH table file (.json,
+    .yaml, .yml); ``strict`` as ``armdyn.load_urdf`` and ``armdyn.models.load_dh_file`` take it.
+
+    Parameters
+    ----------
+    name : str
+        The built-in name (any case) or the file's path.
+    strict : bool, optional
+        For a file: refuse inertias that break the triangle inequality, and URDF joints that
+        move no mass (default True); False loads them with a warning.
+
+    Returns
+    -------
+    Robot
+        The arm.
+
+    Raises
+    ------
+    armdyn.ModelError
+        For an unknown name (the message lists the built-in arms), a file of another kind, or
+        a file the loader refuses.
+    OSError
+        When the file cannot be read.
+    """
+    _activity.status(f"{_activity.command} {name}".strip())
+    suffix = Path(name).suffix.lower()
+    if suffix == ".urdf":
+        from armdyn.urdf import load_urdf
+
+        return load_urdf(name, strict=strict)
+    if suffix in ARM_FILES:
+        return catalog.load_dh_file(name, strict=strict)
+    try:
+        return catalog.load(name)
+    except ModelError as error:
+        path = Path(name)
+        if path.is_file():
+            _fail(f"{name}: an arm file must be a URDF (.urdf) or a DH table (.json, .yaml, .yml)")
+        if path.suffix or len(path.parts) > 1:
+            _fail(f"{name}: no such file (an arm is a built-in name, {', '.join(catalog.names())}; a URDF file, "
+                  ".urdf; or a DH table file, .json or .yaml)")  # fmt: skip
+        raise ModelError(f"{error}; or give a URDF file (.urdf) or a DH table file (.json, .yaml)") from None
+
+
+def _values(text: str, option: str) -> np.ndarray:
+    """Numbers separated by commas; each may be arithmetic on pi, e.g. "-pi/2"."""
+    parts = [part.strip() for part in text.split(",")]
+    if not all(parts):
+        _fail(f"{option} {text!r}: give numbers separated by commas")
+    return np.array([catalog._value(part, option) for part in parts])
+
+
+def _per_joint(text: str, option: str, n: int) -> float | np.ndarray:
+    """One number for every joint (a float), or n numbers separated by commas."""
+    values = _values(text, option)
+    if len(values) == 1:
+        return float(values[0])
+    if len(values) != n:
+        _fail(f"{option} has {len(values)} values, but the arm has {n} joints (give 1 value, or {n})")
+    return values
+
+
+def _joint_state(text: str, option: str, arm: Robot) -> np.ndarray:
+    """A joint vector: one of the arm's named configurations, one number for every joint, or n numbers."""
+    if text.strip() in arm.configurations:
+        return np.array(arm.configurations[text.strip()], dtype=float)
+    if re.fullmatch(r"\s*[A-Za-z_]\w*\s*", text) and text.strip() != "pi":
+        known = ", ".join(arm.configurations) or "none"
+        _fail(f"{option} {text.strip()!r}: {arm.name} has no configuration of that name (it has: {known}); "
+              f"or give 1 or {arm.n} numbers separated by commas")  # fmt: skip
+    return np.broadcast_to(_per_joint(text, option, arm.n), (arm.n,)).copy()
 
 
 @app.command()
-def models() -> None:
+def models(
+    output: str | None = typer.Option(None, "--output", "-o", help="Also write the list to this .csv, .md or .txt."),
+) -> None:
     """List the built-in arms."""
-    table = Table(title="Built-in arms")
-    for column in ("name", "joints", "DOF", "dynamics", "motors", "friction", "description"):
-        table.add_column(column)
+    target = _table_file(output, "--output") if output else None
+    sheet = _Sheet("Built-in arms", ["name", "joints", "DOF", "dynamics", "motors", "friction", "description"], [])
     for name in catalog.names():
         arm = catalog.load(name)
         kinds = "".join("R" if kind == "revolute" else "P" for kind in arm.kinds)
-        table.add_row(
+        sheet.rows.append([
             name,
             kinds,
             str(arm.n),
@@ -161,34 +484,58 @@ def models() -> None:
             "yes" if np.any(arm.reflected_inertia > 0) else "no",
             "yes" if np.any(arm.viscous_friction > 0) or np.any(arm.coulomb_friction != 0) else "no",
             arm.description,
-        )
-    console.print(table)
+        ])  # fmt: skip
+    console.print(sheet.rich(justify="left"))
+    if target is not None:
+        _write_sheets(target, [sheet])
+        console.print(f"wrote {output}")
 
 
 @app.command()
-def show(name: str) -> None:
-    """Print an arm's DH (or joint) table and its dynamics table."""
-    arm = _arm(name)
-    console.print(f"[bold]{arm.name}[/bold]: {arm.description}  (n = {arm.n}, gravity {_vector(arm.gravity)})")
-    console.print(_geometry_table(arm))
-    console.print(_dynamics_table(arm))
+def show(
+    name: str = typer.Argument(..., help=ARM_HELP),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    output: str | None = typer.Option(
+        None, "--output", "-o", help="Also write the tables to this file: .csv, .md or .txt (by its suffix)."
+    ),
+) -> None:
+    """Print an arm's DH (or joint) table and its dynamics table, with units."""
+    target = _table_file(output, "--output") if output else None
+    arm = _arm(name, strict)
+    from rich.markup import escape
+
+    gravity = f"gravity {_vector(arm.gravity)} m/s^2"
+    described = f"{arm.name}: {arm.description}" if arm.description else arm.name
+    console.print(f"[bold]{escape(described)}[/bold]  (n = {arm.n}, {gravity})", highlight=False)
+    sheets = [_geometry_sheet(arm), _dynamics_sheet(arm)]
+    for sheet in sheets:
+        console.print(sheet.rich())
     if arm.configurations:
         console.print(
             "configurations: " + "; ".join(f"{key} = {_vector(value)}" for key, value in arm.configurations.items())
         )
+    if target is not None:
+        if arm.configurations:
+            unit = _units(arm, "rad", "m")
+            columns = ["name", *(f"{joint} ({unit})" for joint in arm.joint_names)]
+            rows = [[key, *(_number(v, 8) for v in value)] for key, value in arm.configurations.items()]
+            sheets.append(_Sheet("Configurations", columns, rows))
+        _write_sheets(target, sheets, [f"{described} (n = {arm.n}, {gravity})"])
+        console.print(f"wrote {output}")
 
 
-def _geometry_table(arm: Robot) -> Table:
+def _geometry_sheet(arm: Robot) -> _Sheet:
     limits = arm.qlim
+    unit = _units(arm, "rad", "m")
+    bounds = [f"q min ({unit})", f"q max ({unit})"]
     if arm.dh is not None:
-        table = Table(title=f"Denavit-Hartenberg parameters ({arm.dh['convention']})")
-        for column in ("joint", "kind", "theta", "d", "a", "alpha", "q min", "q max"):
-            table.add_column(column, justify="right")
+        sheet = _Sheet(f"Denavit-Hartenberg parameters ({arm.dh['convention']})",
+                       ["joint", "kind", "theta (rad)", "d (m)", "a (m)", "alpha (rad)", *bounds], [])  # fmt: skip
         for index, row in enumerate(arm.dh["rows"]):
             revolute = row["kind"] == "revolute"
             theta = f"q{index + 1}" + ("" if row["theta"] == 0 else f" + {_number(row['theta'])}")
             d = f"q{index + 1}" + ("" if row["d"] == 0 else f" + {_number(row['d'])}")
-            table.add_row(
+            sheet.rows.append([
                 arm.joint_names[index],
                 "R" if revolute else "P",
                 theta if revolute else _number(row["theta"]),
@@ -197,14 +544,12 @@ def _geometry_table(arm: Robot) -> Table:
                 _number(row["alpha"]),
                 _number(limits[0, index]),
                 _number(limits[1, index]),
-            )
-        return table
-    table = Table(title="Joints")
-    for column in ("joint", "kind", "parent", "axis", "placement xyz", "q min", "q max"):
-        table.add_column(column, justify="right")
+            ])  # fmt: skip
+        return sheet
+    sheet = _Sheet("Joints", ["joint", "kind", "parent", "axis", "placement xyz (m)", *bounds], [])
     for index, link in enumerate(arm.links):
         placement = link.joint.placement
-        table.add_row(
+        sheet.rows.append([
             link.name,
             "R" if link.kind == "revolute" else "P",
             "base" if link.parent < 0 else arm.joint_names[link.parent],
@@ -212,18 +557,19 @@ def _geometry_table(arm: Robot) -> Table:
             _vector(placement[:3, 3], 4),
             _number(limits[0, index]),
             _number(limits[1, index]),
-        )
-    return table
+        ])  # fmt: skip
+    return sheet
 
 
-def _dynamics_table(arm: Robot) -> Table:
-    table = Table(title="Dynamics (inertia about the c.o.m. in the link frame; motor side Jm, B, Tc)")
-    for column in ("link", "mass", "c.o.m.", "Ixx Iyy Izz", "Ixy Iyz Ixz", "Jm", "G", "B", "Tc+ / Tc-"):
-        table.add_column(column, justify="right")
+def _dynamics_sheet(arm: Robot) -> _Sheet:
+    friction = _units(arm, "N m", "N")
+    columns = ["link", "mass (kg)", "c.o.m. (m)", "Ixx Iyy Izz (kg m^2)", "Ixy Iyz Ixz (kg m^2)", "Jm (kg m^2)",
+               "G (ratio)", f"B ({_units(arm, 'N m/(rad/s)', 'N/(m/s)')})", f"Tc+ / Tc- ({friction})"]  # fmt: skip
+    sheet = _Sheet("Dynamics (inertia about the c.o.m. in the link frame; motor side Jm, B, Tc)", columns, [])
     for link in arm.links:
         body = link.inertial
         inertia = body.inertia
-        table.add_row(
+        sheet.rows.append([
             link.name,
             _number(body.mass),
             _vector(body.com),
@@ -233,13 +579,13 @@ def _dynamics_table(arm: Robot) -> Table:
             _number(link.gear_ratio),
             _number(link.viscous),
             f"{_number(link.coulomb[0])} / {_number(link.coulomb[1])}",
-        )
-    return table
+        ])  # fmt: skip
+    return sheet
 
 
 @app.command()
 def derive(
-    name: str,
+    name: str = typer.Argument(..., help=ARM_HELP),
     latex: bool = typer.Option(False, "--latex", help="Print LaTeX instead of the terminal form."),
     output: str | None = typer.Option(None, "--output", "-o", help="Write to this file instead of printing."),
     code: str | None = typer.Option(None, "--code", help="Generate code instead: 'python' or 'c'."),
@@ -247,20 +593,32 @@ def derive(
         True, help="For the book's arms: keep their parameters as symbols (m1, m2, a1, ...)."
     ),
     method: str = typer.Option("auto", help="'lagrange' (the book's trace formula), 'recursive' or 'auto'."),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
 ) -> None:
     """Derive an arm's robot equation in closed form: M, Vm, V, G (and F), as text, LaTeX or code."""
     from armdyn.symbolic import derive as derive_closed_form
 
     if code is not None and code not in ("python", "c"):
         _fail(f"--code must be 'python' or 'c', got '{code}'")
+    if code is not None and latex:
+        _fail(f"--latex and --code {code} exclude each other: give --latex for the equations in LaTeX, "
+              f"or --code {code} for {'Python' if code == 'python' else 'C'} source")  # fmt: skip
     target = _output_file(output, "--output") if output else None
     book = {"two_link_planar", "polar_rp", "cylindrical"}
-    arm = getattr(catalog, name)(symbolic=True) if symbolic and name in book else _arm(name)
-    form = derive_closed_form(arm, method=method)
+    arm = getattr(catalog, name.lower())(symbolic=True) if symbolic and name.lower() in book else _arm(name, strict)
+    progress = _activity.bar(f"deriving the closed form of {arm.name}")
+    if progress is None:
+        form = derive_closed_form(arm, method=method)
+    else:
+        form = derive_closed_form(arm, method=method, progress=progress)
+    _activity.status(f"writing the equations of {arm.name}" + (f" as {code} code" if code else ""))
     if code is not None:
         text = form.to_python() if code == "python" else form.to_c()
-    else:
-        text = form.latex() if latex else form.pretty()
+    elif latex:
+        text = form.latex_document() if target is not None else form.latex()
+    else:  # the terminal gets a summary of long entries; a file gets every entry in full
+        text = form.pretty(limit=None) if target is not None else form.pretty()
+    _activity.stop()
     if target is not None:
         target.write_text(text, encoding="utf-8")
         console.print(f"wrote {output}")
@@ -270,40 +628,175 @@ def derive(
 
 @app.command()
 def check(
-    name: str,
+    name: str = typer.Argument(..., help=ARM_HELP),
     samples: int = typer.Option(300, help="Random joint configurations to sample before refining."),
     seed: int = typer.Option(0, help="Random seed."),
+    limits: str = typer.Option(
+        "arm",
+        help="The joint range to check over: lower:upper per joint, separated by commas "
+        "('-1.5708:1.5708,-1.5708:1.5708'; pi allowed: '-pi/2:pi/2'; one pair for every joint), or 'arm': the "
+        "arm's own limits (a whole turn for a revolute joint without them, 1 m for a prismatic one).",
+    ),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    output: str | None = typer.Option(
+        None, "--output", "-o", help="Also write the table to this file: .csv, .md or .txt (by its suffix)."
+    ),
 ) -> None:
-    """Check the properties of Table 3.3.1 on an arm and compute its bounds."""
+    """Check the properties of Table 3.3.1 on an arm and compute its bounds (with units)."""
     from armdyn.properties import check as check_properties
 
-    report = check_properties(_arm(name), samples=samples, seed=seed)
+    target = _table_file(output, "--output") if output else None
+    arm = _arm(name, strict)
+    ranges = _limits(limits, arm)
+    _activity.status(f"checking Table 3.3.1 on {arm.name} ({samples} samples, refined by L-BFGS-B)")
+    report = check_properties(arm, samples=samples, seed=seed, limits=ranges)
+    report.references.update(_book_values(arm, report.ranges))
     console.print(report.table())
-    console.print("bounds: " + ", ".join(f"{key} = {value:.6g}" for key, value in report.bounds.items()))
-    for note in report.notes:
-        console.print(f"note: {note}")
+    bounds = "bounds: " + ", ".join(
+        f"{key} = {value:.6g}" + (f" {report.units[key]}" if report.units.get(key) else "")
+        for key, value in report.bounds.items()
+    )
+    console.print(bounds, highlight=False)
+    notes = list(report.notes)
+    if report.references:
+        notes.append(
+            "book values: Example 3.3-1 (BOOK.md section 4), the RR arm of Example 3.2-2 with |theta_i| <= pi/2"
+        )
+    for note in notes:
+        console.print(f"note: {note}", highlight=False)
     console.print("[green]all properties hold[/green]" if report.all_hold else "[red]some properties fail[/red]")
+    if target is not None:
+        columns, rows = report.records(digits=8)
+        ranges_text = ", ".join(f"[{lo:.8g}, {hi:.8g}]" for lo, hi in report.ranges)
+        sheet = _Sheet(f"Table 3.3.1 for {report.arm}, joint ranges {ranges_text}", columns, rows)
+        _write_sheets(target, [sheet], [bounds, *(f"note: {note}" for note in notes)])
+        console.print(f"wrote {output}")
     if not report.all_hold:
         raise typer.Exit(1)
 
 
+def _limits(text: str, arm: Robot) -> list[tuple[float, float]] | None:
+    """The ranges of ``check --limits``: None for 'arm' (the arm's own), else (lower, upper) per joint."""
+    if text.strip().lower() == "arm":
+        return None
+    pairs = []
+    for part in text.split(","):
+        ends = part.split(":")
+        if len(ends) != 2:
+            _fail(f"--limits {text!r}: give lower:upper for each joint, separated by commas "
+                  "(e.g. -1.5708:1.5708,-1.5708:1.5708), or 'arm' for the arm's own limits")  # fmt: skip
+        lower, upper = (catalog._value(end.strip(), "--limits") for end in ends)
+        pairs.append((lower, upper))
+    if len(pairs) == 1:
+        pairs *= arm.n
+    if len(pairs) != arm.n:
+        _fail(f"--limits has {len(pairs)} lower:upper pairs, but the arm has {arm.n} joints (give 1 pair, or {arm.n})")
+    return pairs
+
+
+def _book_values(arm: Robot, ranges: Sequence[tuple[float, float]]) -> dict[str, float]:
+    """The bounds Example 3.3-1 gives (BOOK.md section 4), when ``arm`` is the RR arm of Example 3.2-2
+    (any masses m1, m2 and lengths a1, a2) and the ranges are |theta_i| <= pi/2; else none.
+
+    ||M(q)||_1 lies between m1 = (m1+m2) a1^2 + 2 m2 a2^2 and m2 = m1 + 3 m2 a1 a2 (the 1-norm is
+    the first column sum, (m1+m2) a1^2 + 2 m2 a2^2 + 3 m2 a1 a2 cos(theta2)); gb = (m1+m2) g a1 +
+    2 m2 g a2; for unit masses and lengths mu1 = 3 - sqrt 8, mu2 = 3 + sqrt 8 (at theta2 = 0).
+    """
+    if arm.n != 2 or arm.dh is None or arm.is_symbolic or set(arm.kinds) != {"revolute"}:
+        return {}
+    if not np.allclose(np.asarray(ranges, dtype=float), [(-np.pi / 2, np.pi / 2)] * 2, atol=1e-4):
+        return {}
+    mass1, mass2 = (float(link.inertial.mass) for link in arm.links)
+    a1, a2 = (float(row["a"]) for row in arm.dh["rows"])
+    g = -float(arm.gravity[1])
+    try:
+        book = catalog.two_link_planar(mass1, mass2, a1, a2, g)
+    except ModelError:
+        return {}
+    rng = np.random.default_rng(0)
+    q, qd, qdd = rng.uniform(-np.pi, np.pi, (3, 8, 2))
+    if not np.allclose(arm.inverse_dynamics(q, qd, qdd), book.inverse_dynamics(q, qd, qdd), rtol=1e-9, atol=1e-12):
+        return {}
+    lower = (mass1 + mass2) * a1**2 + 2 * mass2 * a2**2
+    values = {"m1": lower, "m2": lower + 3 * mass2 * a1 * a2, "gb": (mass1 + mass2) * g * a1 + 2 * mass2 * g * a2}
+    if np.allclose([mass1, mass2, a1, a2], 1.0):
+        values.update(mu1=3 - np.sqrt(8), mu2=3 + np.sqrt(8))
+    return values
+
+
 @app.command()
 def identify(
-    name: str,
-    csv: str = typer.Argument(..., help="CSV with columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun (a header row)."),
+    name: str = typer.Argument(..., help=ARM_HELP),
+    csv: str | None = typer.Argument(
+        None, help="CSV with columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun (a header row); none with --generate."
+    ),
     output: str | None = typer.Option(
         None, "--output", "-o", help="Also write the estimates to this CSV file (name, estimate, std. error, model)."
     ),
+    generate: bool = typer.Option(
+        False,
+        "--generate",
+        help="Generate the samples instead of reading them: an optimized excitation trajectory (a Fourier series "
+        "per joint, Swevers et al. 1997) tracked by the simulated arm under computed torque, Coulomb friction by "
+        "the exact sign law, with --noise on the torques.",
+    ),
+    noise: float = typer.Option(0.1, "--noise", help="With --generate: the torque noise's standard deviation (N m)."),
+    seed: int = typer.Option(0, "--seed", help="With --generate: the seed of the trajectory's start and the noise."),
+    period: float = typer.Option(
+        10.0, "--period", help="With --generate: the trajectory's period (s), also the seconds of data."
+    ),
+    harmonics: int = typer.Option(5, "--harmonics", help="With --generate: the trajectory's harmonics per joint."),
+    dt: float = typer.Option(1e-3, "--dt", help="With --generate: the sample interval and simulation step (s)."),
+    velocity_band: float = typer.Option(
+        0.0,
+        "--velocity-band",
+        help="Leave out each joint's equations where its speed is below this (rad/s or m/s): friction near zero "
+        "velocity that is not the Coulomb sign law (simulate's smoothed friction; stiction). Default 0.",
+    ),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
 ) -> None:
-    """Identify an arm's base parameters by least squares from measured samples in a CSV file."""
+    """Identify an arm's base parameters by least squares: from measured samples in a CSV file, or
+    from samples generated along an optimized excitation trajectory (--generate)."""
     from armdyn.dynamics.regressor import identify as identify_parameters
 
-    arm = _arm(name)
+    if generate and csv is not None:
+        _fail(f"give either a CSV file of samples or --generate, not both (got {csv} and --generate)")
+    if not generate:
+        if csv is None:
+            _fail("give a CSV file of samples (columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun), or --generate")
+        defaults = (("--noise", noise, 0.1), ("--seed", seed, 0), ("--period", period, 10.0),
+                    ("--harmonics", harmonics, 5), ("--dt", dt, 1e-3))  # fmt: skip
+        given = [option for option, value, default in defaults if value != default]
+        if given:
+            _fail(f"{', '.join(given)} {'goes' if len(given) == 1 else 'go'} with --generate, not with a CSV file")
+    for option, value in (("--velocity-band", velocity_band), ("--noise", noise)):  # before any work
+        if not (np.isfinite(value) and value >= 0):
+            _fail(f"{option} must be a finite number >= 0, got {value}")
     target = _output_file(output, "--output") if output else None
-    arrays = _read_samples(csv, arm.n)
-    result = identify_parameters(arm, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"])
+    arm = _arm(name, strict)
+    if generate:
+        arrays, trajectory = _generated_samples(arm, noise, seed, period, harmonics, dt)
+    else:
+        arrays, trajectory = _read_samples(csv, arm.n), None
+    _activity.status(f"identifying the base parameters of {arm.name} from {len(arrays['q'])} samples")
+    result = identify_parameters(arm, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"],
+                                 velocity_band=velocity_band)  # fmt: skip
     console.print(result.table())
-    console.print(f"residual rms {result.residual_rms:.3g} N m over {result.samples} samples")
+    left_out = f", {result.left_out} joint equations left out by --velocity-band" if result.left_out else ""
+    console.print(f"residual rms {result.residual_rms:.3g} N m over {result.samples} samples{left_out}")
+    if trajectory is not None:
+        z = np.abs(result.normalized_errors)
+        console.print(
+            f"generated: a Fourier series of {harmonics} harmonics per joint, period {period:g} s, optimized to "
+            f"cond(W) {trajectory.condition_number:.3g} over a period; {len(arrays['q'])} samples simulated under "
+            f"computed torque every {dt:g} s, torque noise {noise:g} N m (seed {seed})",
+            highlight=False,
+        )
+        console.print(
+            f"{np.count_nonzero(z <= 3)} of {len(z)} base parameters within 3 standard errors of the model values; "
+            f"largest |estimate - model| = {z.max():.3g} standard errors",
+            highlight=False,
+        )
     if target is not None:
         with target.open("w", newline="", encoding="utf-8") as handle:
             writer = csv_files.writer(handle)
@@ -311,6 +804,20 @@ def identify(
             for row in zip(result.names, result.phi, result.standard_errors, result.base.phi, strict=True):
                 writer.writerow([row[0], *(repr(float(value)) for value in row[1:])])
         console.print(f"wrote {output}")
+
+
+def _generated_samples(
+    arm: Robot, noise: float, seed: int, period: float, harmonics: int, dt: float
+) -> tuple[dict[str, np.ndarray], object]:
+    """``identify --generate``: an excitation trajectory optimized for the arm, and one period of samples
+    simulated along it with torque noise (armdyn.excitation), as (q, qd, qdd, tau arrays, the trajectory)."""
+    from armdyn.excitation import excitation_trajectory, identification_data
+
+    _activity.status(f"optimizing an excitation trajectory for {arm.name} ({harmonics} harmonics, {period:g} s)")
+    trajectory = excitation_trajectory(arm, period=period, harmonics=harmonics, seed=seed)
+    _activity.status(f"simulating {period:g} s of {arm.name} along it (computed torque, noise {noise:g} N m)")
+    data = identification_data(arm, trajectory, dt=dt, noise=noise, seed=seed)
+    return {"q": data.q, "qd": data.qd, "qdd": data.qdd, "tau": data.tau}, trajectory
 
 
 def _read_samples(path: str, n: int) -> dict[str, np.ndarray]:
@@ -349,7 +856,8 @@ def _read_samples(path: str, n: int) -> dict[str, np.ndarray]:
     return {key: values[:, [where[c] for c in group]] for key, group in groups.items()}
 
 
-def _controller(kind: str, kp: float, kv: float, ki: float, period: float, limit: float) -> object:
+def _controller(kind: str, kp: object, kv: object, ki: object, period: float, limit: object) -> object:
+    """The controller of ``simulate``: gains and torque limit one number or one per joint."""
     from armdyn import control
 
     kinds = {
@@ -361,19 +869,21 @@ def _controller(kind: str, kp: float, kv: float, ki: float, period: float, limit
     if kind not in kinds:
         _fail(f"--controller must be one of {', '.join(kinds)}, got '{kind}'")
     controller = kinds[kind]()
-    if controller is None and (period != 0 or limit != np.inf):
+    limited = not np.all(np.asarray(limit, dtype=float) == np.inf)
+    if controller is None and (period != 0 or limited):
         _fail("--period and --torque-limit need a controller (--controller none applies no torque)")
-    if limit != np.inf:  # Saturated refuses NaN and limits <= 0
+    if limited:  # Saturated refuses NaN and limits <= 0
         controller = control.Saturated(controller, limit)
     if period != 0:  # Digital refuses a negative or non-finite period
         controller = control.Digital(controller, period)
     return controller
 
 
-def _trajectory(kind: str, arm: Robot, amplitude: float, frequency: float) -> object:
+def _trajectory(kind: str, arm: Robot, amplitude: float, frequency: float, start: np.ndarray | None = None) -> object:
+    """The desired trajectory of ``simulate``, about ``start`` (default the arm's qz, or zeros)."""
     from armdyn import trajectories
 
-    offset = arm.configurations.get("qz", np.zeros(arm.n))
+    offset = start if start is not None else np.asarray(arm.configurations.get("qz", np.zeros(arm.n)), dtype=float)
     if kind == "sine":  # the book's pattern: sin on odd joints, cos on even ones (Example 4.4-1)
         phase = [0.0 if i % 2 == 0 else np.pi / 2 for i in range(arm.n)]
         return trajectories.Sinusoid(amplitude, frequency, phase, offset)
@@ -386,43 +896,69 @@ def _trajectory(kind: str, arm: Robot, amplitude: float, frequency: float) -> ob
     _fail(f"--trajectory must be sine, quintic or none, got '{kind}'")
 
 
+PER_JOINT = "one number for every joint, or one per joint separated by commas"
+Q0_HELP = (
+    f"Start positions (rad or m): a configuration of the arm (qz, qn, ...) or {PER_JOINT}. The trajectory runs "
+    "about it. Default: the arm's qz, or zeros."
+)
+SIMULATE_OUTPUT_HELP = (
+    "Write ARM.png (the figure), ARM.csv (the samples) and ARM-report.md (the report table) into this folder "
+    "(made if missing; its parent must exist)."
+)
+
+
 @app.command()
 def simulate(
-    name: str,
+    name: str = typer.Argument(..., help=ARM_HELP),
     controller: str = typer.Option("computed-torque", help="computed-torque, pd-gravity, pid or none."),
-    kp: float = typer.Option(100.0, help="Proportional gain (per joint)."),
-    kv: float = typer.Option(20.0, help="Derivative gain."),
-    ki: float = typer.Option(0.0, help="Integral gain."),
-    trajectory: str = typer.Option("sine", help="sine, quintic or none (hold the start)."),
+    kp: str = typer.Option("100", help=f"Proportional gain: {PER_JOINT} (400,400,400,50,50,50)."),
+    kv: str = typer.Option("20", help=f"Derivative gain: {PER_JOINT}."),
+    ki: str = typer.Option("0", help=f"Integral gain: {PER_JOINT}."),
+    trajectory: str = typer.Option("sine", help="sine (about the start), quintic (from it) or none (hold it)."),
     amplitude: float = typer.Option(0.1, help="Trajectory amplitude (rad or m)."),
     frequency: float = typer.Option(0.5, help="Trajectory frequency (Hz)."),
     t_final: float = typer.Option(5.0, "--t-final", help="Simulated time (s)."),
     dt: float = typer.Option(1e-3, help="Integration step (s)."),
     method: str = typer.Option("rk4", help="rk4 or an adaptive solver: rk45, rk23, dop853, radau, bdf, lsoda."),
     period: float = typer.Option(0.0, help="Digital control sample period (s); 0 for continuous."),
-    torque_limit: float = typer.Option(float("inf"), "--torque-limit", help="Saturate torques at +-this."),
-    disturbance: float = typer.Option(0.0, help="A constant disturbance torque tau_d on every joint."),
+    torque_limit: str = typer.Option(
+        "inf", "--torque-limit", help=f"Saturate torques at +-this (N m or N): {PER_JOINT}; inf for none."
+    ),
+    disturbance: str = typer.Option("0", help=f"A constant disturbance torque tau_d (N m or N): {PER_JOINT}."),
+    q0: str | None = typer.Option(None, "--q0", help=Q0_HELP),
+    qd0: str | None = typer.Option(None, "--qd0", help=f"Start velocities (rad/s or m/s): {PER_JOINT}. Default 0."),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
     plot: str | None = typer.Option(None, help="Write the figure to this PNG file."),
     csv: str | None = typer.Option(None, help="Write the samples to this CSV file."),
+    output: str | None = typer.Option(None, "--output", "-o", help=SIMULATE_OUTPUT_HELP),
 ) -> None:
-    """Simulate an arm under control and report the tracking errors."""
-    from rich.progress import Progress
-
+    """Simulate an arm under control and report the tracking errors (with units)."""
     from armdyn.simulation import simulate as run
 
-    arm = _arm(name)
     plot_file = _output_file(plot, "--plot") if plot else None
     csv_file = _output_file(csv, "--csv") if csv else None
-    law = _controller(controller, kp, kv, ki, period, torque_limit)
-    desired = _trajectory(trajectory, arm, amplitude, frequency)
-    start = desired(0.0, arm.n)[0] if desired is not None and controller == "none" else None
-    with Progress(transient=True, console=console) as bar:
-        task = bar.add_task(f"simulating {t_final:g} s of {arm.name}", total=1.0)
-        result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start,
-                     disturbance=None if disturbance == 0 else [disturbance] * arm.n,
-                     progress=lambda fraction: bar.update(task, completed=fraction))  # fmt: skip
+    folder = _output_folder(output, "--output") if output else None
+    arm = _arm(name, strict)
+    gains = [_per_joint(value, option, arm.n) for value, option in ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))]
+    law = _controller(controller, *gains, period, _per_joint(torque_limit, "--torque-limit", arm.n))
+    start = _joint_state(q0, "--q0", arm) if q0 is not None else None
+    velocity = _joint_state(qd0, "--qd0", arm) if qd0 is not None else None
+    tau_d = np.broadcast_to(_per_joint(disturbance, "--disturbance", arm.n), (arm.n,))
+    desired = _trajectory(trajectory, arm, amplitude, frequency, start)
+    if start is None and desired is not None and controller == "none":
+        start = desired(0.0, arm.n)[0]
+    progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
+    result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
+                 disturbance=None if not np.any(tau_d) else tau_d.copy(), progress=progress)  # fmt: skip
     _check_finite(result)
-    _report(result)
+    report = _report(result)
+    if folder is not None:
+        folder.mkdir(exist_ok=True)
+        stem = re.sub(r"[^\w-]+", "_", arm.name).strip("_") or "arm"
+        result.plot(folder / f"{stem}.png")
+        result.to_csv(folder / f"{stem}.csv")
+        _write_sheets(folder / f"{stem}-report.md", [report])
+        console.print(f"wrote {folder / f'{stem}.png'}, {folder / f'{stem}.csv'} and {folder / f'{stem}-report.md'}")
     if plot_file is not None:
         result.plot(plot_file)
         console.print(f"wrote {plot}")
@@ -441,29 +977,32 @@ def _check_finite(result: object) -> None:
         )
 
 
-def _report(result: object) -> None:
-    table = Table(
-        title=f"{result.arm.name}: {result.info['method']}, {len(result.t) - 1} steps of {result.info['dt']:g} s"
-    )
-    for column in ("joint", "final q", "final error", "max |error| after 1 s", "max |tau|"):
-        table.add_column(column, justify="right")
+def _report(result: object) -> _Sheet:
+    """Print the report of a run (a table per joint, with units) and return it."""
+    arm = result.arm
+    position, torque = _units(arm, "rad", "m"), _units(arm, "N m", "N")
+    columns = ["joint", f"final q ({position})", f"final error ({position})", f"max |error| after 1 s ({position})",
+               f"max |tau| ({torque})"]  # fmt: skip
+    title = f"{arm.name}: {result.info['method']}, {len(result.t) - 1} steps of {result.info['dt']:g} s"
+    sheet = _Sheet(title, columns, [])
     late = result.t >= min(1.0, result.t[-1])
-    for i, joint in enumerate(result.arm.joint_names):
+    for i, joint in enumerate(arm.joint_names):
         error = result.error
-        table.add_row(
+        sheet.rows.append([
             joint,
             f"{result.q[-1, i]:.6g}",
             "-" if error is None else f"{error[-1, i]:.3g}",
             "-" if error is None else f"{np.abs(error[late, i]).max():.3g}",
             f"{np.abs(result.tau[:, i]).max():.4g}",
-        )
-    console.print(table)
+        ])  # fmt: skip
+    console.print(sheet.rich())
+    return sheet
 
 
 @app.command()
 def demo(
     output: str = typer.Option(
-        "out", help="Folder for demo.png and demo.csv (made if missing; its parent must exist)."
+        "out", "--output", "-o", help="Folder for demo.png and demo.csv (made if missing; its parent must exist)."
     ),
 ) -> None:
     """The chapter end to end on the RR arm of Example 3.2-2: closed form, properties, and Example 4.4-1."""
@@ -473,20 +1012,27 @@ def demo(
     from armdyn.symbolic import derive as derive_closed_form
 
     folder = _output_folder(output, "--output")
+    _activity.status("deriving the closed form of the two-link planar arm")
+    form = derive_closed_form(catalog.two_link_planar(symbolic=True), method="lagrange")
     console.rule("[bold]armdyn: Chapter 3 on the two-link planar elbow arm (Example 3.2-2)")
-    form = derive_closed_form(catalog.two_link_planar(symbolic=True))
     console.print(
         "The robot equation M(q) qdd + Vm(q, qd) qd + G(q) = tau, derived by the book's Lagrange-Euler route:\n"
     )
     print(form.pretty())
     console.rule("[bold]Table 3.3.1, for m1 = m2 = a1 = a2 = 1, |theta_i| <= pi/2 (Example 3.3-1)")
     arm = catalog.two_link_planar(1.0, 1.0, 1.0, 1.0, g=9.8)
+    _activity.status("checking Table 3.3.1")
     report = check_properties(arm, samples=200, limits=[(-np.pi / 2, np.pi / 2)] * 2)
+    report.references.update(_book_values(arm, report.ranges))
     console.print(report.table())
-    console.print("bounds: " + ", ".join(f"{key} = {value:.4g}" for key, value in report.bounds.items()))
+    console.print(
+        "bounds: " + ", ".join(f"{key} = {value:.4g} {report.units[key]}" for key, value in report.bounds.items()),
+        highlight=False,
+    )
     console.rule("[bold]Example 4.4-1: PD computed-torque control, kp = 100, kv = 20, RK4 with a 1 ms step")
     desired = trajectories.Sinusoid([0.1, 0.1], [0.5, 0.5], phase=[0.0, np.pi / 2])
-    result = run(arm, control.ComputedTorque(100.0, 20.0), desired, t_final=5.0, dt=1e-3)
+    progress = _activity.bar("simulating Example 4.4-1")
+    result = run(arm, control.ComputedTorque(100.0, 20.0), desired, t_final=5.0, dt=1e-3, progress=progress)
     _report(result)
     folder.mkdir(exist_ok=True)
     result.plot(folder / "demo.png", title="Example 4.4-1: PD computed-torque control of the two-link arm")

@@ -30,7 +30,7 @@ def state(
             raise ModelError(f"{name} must be real{where}; it is complex")
         if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biufc":
             raise TypeError(f"{name} holds {value.dtype} values, not numbers")
-        array = np.asarray(value, dtype=complex if complex_input else float)
+        array = np.asarray(np.asarray(value), dtype=complex if complex_input else float)  # no ndarray subclass
     except (TypeError, ValueError, ArithmeticError) as error:
         if isinstance(error, ModelError):
             raise
@@ -39,11 +39,17 @@ def state(
         raise ModelError(f"{name} must have shape ({n},) or (..., {n}){where}, got {array.shape}")
     if array.size and not _finite(array):
         raise ModelError(f"{name} must be finite (it holds NaN or infinity){where}")
-    if bounded and array.size and np.abs(array).max() >= LARGEST_STATE:
-        raise ModelError(
-            f"{name} holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: angles that large have no "
-            "exact sine or cosine in double precision; reduce them modulo 2 pi"
-        )
+    if array.size and np.abs(array).max() >= LARGEST_STATE:
+        if name == "q":
+            raise ModelError(
+                f"q holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: angles that large have no "
+                "exact sine or cosine in double precision; reduce them modulo 2 pi"
+            )
+        if bounded:
+            raise ModelError(
+                f"{name} holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: beyond the range the "
+                "dynamics are computed in (products of such values overflow)"
+            )
     return array
 
 
@@ -57,8 +63,9 @@ def batch_states(
     names: Sequence[str], values: Sequence[object], n: int, where: str = ""
 ) -> tuple[tuple[int, ...], list[np.ndarray]]:
     """Check and broadcast state arguments; return the batch shape and each as a (B, n) C array.
-    Joint positions ``q`` are bounded by LARGEST_STATE (their sine and cosine must be exact)."""
-    arrays = [state(value, n, name, where, bounded=name == "q") for name, value in zip(names, values, strict=True)]
+    Every state is bounded by LARGEST_STATE (the sine and cosine of q must be exact, and
+    products of larger rates overflow)."""
+    arrays = [state(value, n, name, where) for name, value in zip(names, values, strict=True)]
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
     except ValueError:
@@ -66,7 +73,9 @@ def batch_states(
         raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
     shape = (*batch, n)
     flat = [
-        np.require(a if a.shape == shape else np.broadcast_to(a, shape), np.float64, ["C", "W"]).reshape(-1, n)
+        np.require(np.asarray(a if a.shape == shape else np.broadcast_to(a, shape)), np.float64, ["C", "W"]).reshape(
+            -1, n
+        )
         for a in arrays
     ]
     return batch, flat
@@ -91,9 +100,11 @@ def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
 def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
     """A tool wrench [force; moment] (6,) or one per state (..., 6), as a (B, 6) C array."""
     try:
+        if np.iscomplexobj(f_ext):
+            raise TypeError("complex")
         wrench = np.asarray(f_ext, dtype=float)
-    except (TypeError, ValueError):
-        raise ModelError("f_ext must be a wrench [force; moment] of 6 numbers") from None
+    except (TypeError, ValueError, ArithmeticError):
+        raise ModelError("f_ext must be a wrench [force; moment] of 6 real numbers") from None
     if wrench.ndim == 0 or wrench.shape[-1] != 6 or not np.all(np.isfinite(wrench)):
         raise ModelError(f"f_ext must be a finite wrench [force; moment] of shape (..., 6), got {wrench.shape}")
     if wrench.ndim > 1 and wrench.shape[:-1] != batch:

@@ -2,12 +2,16 @@
 
 The book's three examples (BOOK.md section 4) take ``symbolic=True`` to carry SymPy
 symbols (m1, m2, a1, a2, g, ...) as parameters, ready for closed-form derivation.
+``load_dh_file`` reads an arm of one's own from a DH table in a JSON or YAML file.
 """
 
 from __future__ import annotations
 
+import os
+import re
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
@@ -357,3 +361,166 @@ def load(name: str) -> Robot:
         return _CATALOG[name.lower()]()
     except KeyError:
         raise ModelError(f"no built-in arm named '{name}' (known: {', '.join(_CATALOG)})") from None
+
+
+# ----- DH table files ---------------------------------------------------------------------------------
+_FILE_KEYS = ("rows", "name", "gravity", "convention", "description", "configurations")
+_TEXT_KEYS = ("kind", "name", "strict")  # row keys whose values are not numbers
+
+
+def _value(text: str, where: str) -> float:
+    """A number written as text: a float, or arithmetic on numbers and pi ("-pi/2", "0.5*pi", "2**-3").
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    where : str
+        What the text is, for the error message.
+
+    Returns
+    -------
+    float
+        Its value.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the text is neither a number nor such an expression.
+    """
+    import ast
+    import operator
+
+    binary = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+              ast.Pow: operator.pow}  # fmt: skip
+    unary = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+
+    def evaluate(node: ast.AST) -> float:
+        if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+            return float(node.value)
+        if isinstance(node, ast.Name) and node.id == "pi":
+            return _PI
+        if isinstance(node, ast.BinOp) and type(node.op) in binary:
+            return binary[type(node.op)](evaluate(node.left), evaluate(node.right))
+        if isinstance(node, ast.UnaryOp) and type(node.op) in unary:
+            return unary[type(node.op)](evaluate(node.operand))
+        raise ValueError
+
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    try:
+        if re.search(r"0[xXoObB]|_", text):  # decimal numbers only, as float() takes them
+            raise ValueError
+        return float(evaluate(ast.parse(text.strip(), mode="eval").body))
+    except (SyntaxError, ValueError, TypeError, ArithmeticError, RecursionError):
+        raise ModelError(
+            f"{where}: {text!r} is not a number (write a number, or arithmetic on numbers and pi such as -pi/2)"
+        ) from None
+
+
+def _numbers(value: object, where: str) -> object:
+    """Strings inside a number, list or table read from a file, replaced by their values (see ``_value``)."""
+    if isinstance(value, str):
+        return _value(value, where)
+    if isinstance(value, list):
+        return [_numbers(item, where) for item in value]
+    return value
+
+
+def load_dh_file(path: str | os.PathLike[str], strict: bool = True) -> Robot:
+    """An arm from a Denavit-Hartenberg table file, JSON or YAML (by suffix).
+
+    The file holds either the list of rows itself, or a mapping with the key ``rows`` and
+    optionally ``name`` (default the file's stem), ``gravity`` (3 values, default
+    [0, 0, -9.81]), ``convention`` ('standard' or 'modified'), ``description`` and
+    ``configurations`` (name to n joint values). Each row is a mapping with the keys of
+    ``Robot.from_dh``: kind ('R' or 'P'), a, alpha, d, theta, mass, com, inertia, Jm, G, B,
+    Tc, qlim, name, strict. Numbers may also be written as text with arithmetic on pi
+    ("-pi/2", "pi/4"). Reading YAML (.yaml, .yml) needs PyYAML; JSON needs nothing more.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file: .json, .yaml or .yml.
+    strict : bool, optional
+        The triangle-inequality check for rows that do not set ``strict`` themselves
+        (default True: inertias that break it are refused; False loads them with a warning).
+
+    Returns
+    -------
+    Robot
+        The arm.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the suffix is none of those, the file is not valid JSON or YAML, its content is
+        not a table as above, a value is not a number, PyYAML is missing for a YAML file, or
+        ``Robot.from_dh`` refuses a row (the message names the file).
+    OSError
+        When the file cannot be read.
+    """
+    import json
+
+    file = Path(path)
+    suffix = file.suffix.lower()
+    if suffix not in (".json", ".yaml", ".yml"):
+        raise ModelError(f"{file}: a DH table file must end in .json, .yaml or .yml")
+    data = file.read_bytes()  # an OSError names the file
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise ModelError(f"{file} is not a text file (it is not UTF-8 text)") from None
+    if suffix == ".json":
+        try:
+            content = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise ModelError(f"{file}, line {error.lineno}: not valid JSON ({error.msg})") from None
+    else:
+        try:
+            import yaml
+        except ImportError:
+            raise ModelError(
+                f"{file}: reading YAML needs PyYAML (pip install pyyaml); or write the table as JSON"
+            ) from None
+        try:
+            content = yaml.safe_load(text)
+        except yaml.YAMLError as error:
+            raise ModelError(f"{file}: not valid YAML ({' '.join(str(error).split())})") from None
+    if isinstance(content, list):
+        content = {"rows": content}
+    if not isinstance(content, dict) or "rows" not in content:
+        raise ModelError(f"{file}: a DH table file holds a list of rows, or a mapping with the key 'rows'")
+    unknown = sorted(str(key) for key in content if key not in _FILE_KEYS)
+    if unknown:
+        raise ModelError(f"{file}: unknown keys {unknown} (known: {', '.join(_FILE_KEYS)})")
+    rows = content["rows"]
+    if not isinstance(rows, list) or not rows:
+        raise ModelError(f"{file}: 'rows' must be a non-empty list of rows, one per joint")
+    table = []
+    for index, row in enumerate(rows):
+        if not isinstance(row, dict):
+            raise ModelError(f"{file}, row {index + 1}: a row is a mapping of DH keys (a, alpha, d, theta, ...)")
+        values = {key: value if key in _TEXT_KEYS else _numbers(value, f"{file}, row {index + 1}, {key}")
+                  for key, value in row.items()}  # fmt: skip
+        table.append({"strict": strict, **values})
+    options: dict[str, object] = {"name": str(content.get("name", file.stem))}
+    if "gravity" in content:
+        options["gravity"] = _numbers(content["gravity"], f"{file}, gravity")
+    if "description" in content:
+        options["description"] = str(content["description"])
+    if "configurations" in content:
+        configurations = content["configurations"]
+        if not isinstance(configurations, dict):
+            raise ModelError(f"{file}: 'configurations' must map names to joint values")
+        options["configurations"] = {
+            str(key): _numbers(value, f"{file}, configuration {key}") for key, value in configurations.items()
+        }
+    try:
+        return Robot.from_dh(table, convention=str(content.get("convention", "standard")), **options)
+    except ModelError as error:
+        raise ModelError(f"{file}: {error}") from None
+    except (TypeError, ValueError) as error:
+        raise ModelError(f"{file}: {' '.join(str(error).split())}") from None

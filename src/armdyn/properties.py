@@ -57,6 +57,15 @@ def _groups(only: object) -> set[str]:
     return set(names)
 
 
+COLUMNS = (
+    "property", "statement", "holds", "bound (computed)", "book value", "extreme sampled", "residual or margin", "how",
+)  # fmt: skip
+"""The columns of ``Report.records`` and ``Report.table``; each means one thing (see ``Report.records``)."""
+
+MEASURES = ("extreme", "residual", "margin")
+"""What a Row's ``worst`` is (see Row)."""
+
+
 @dataclass
 class Row:
     """One property: its statement, whether it holds, the worst value found and the bound.
@@ -70,11 +79,24 @@ class Row:
     holds : bool
         Whether it held on every sample.
     worst : float
-        The worst value found (the largest error, or the extreme of the bounded quantity).
+        The worst value found; ``measure`` says what it is.
     bound : float or None
         The computed bound, None for an identity.
     how : str
         How the value was found (samples, refinement).
+    unit : str, optional
+        The unit of the property's quantity: of ``worst`` (unless it is a relative
+        residual), ``lowest`` and ``bound`` (default "": a relative or pure number).
+    measure : str, optional
+        What ``worst`` is (MEASURES): "extreme" (default), the extreme of the bounded
+        quantity found on the samples; "residual", the largest relative residual of an
+        identity (0 is exact); "margin", the largest excess lhs - rhs of an inequality
+        found (<= 0 where it holds), in ``unit`` (relative when ``unit`` is "").
+    names : tuple of str, optional
+        The names, in ``Report.bounds``, of the bounds this row computed (e.g. ("mu1", "mu2")).
+    lowest : float or None, optional
+        For a quantity bounded on both sides, the smallest value sampled (``worst`` is then
+        the largest).
     """
 
     name: str
@@ -83,6 +105,16 @@ class Row:
     worst: float
     bound: float | None
     how: str
+    unit: str = ""
+    measure: str = "extreme"
+    names: tuple[str, ...] = ()
+    lowest: float | None = None
+
+
+def _quantity(value: float, unit: str, digits: int) -> str:
+    """A number with its unit, e.g. "5.828 kg m^2"."""
+    text = f"{value:.{digits}g}"
+    return f"{text} {unit}" if unit else text
 
 
 @dataclass
@@ -102,6 +134,12 @@ class Report:
         The (lower, upper) range sampled for each joint.
     notes : list of str, optional
         Remarks on the report (for example that prismatic joints make bounds depend on q).
+    units : dict of str to str, optional
+        The unit of each bound in ``bounds``, e.g. {"mu1": "kg m^2"}.
+    references : dict of str to float, optional
+        Values to compare the computed bounds with, by the same names: the book's (e.g.
+        Example 3.3-1's m1 = 4, m2 = 7); shown in the table's "book value" column. Empty
+        unless the caller sets them.
     """
 
     arm: str
@@ -109,6 +147,8 @@ class Report:
     bounds: dict[str, float]
     ranges: list[tuple[float, float]]
     notes: list[str] = field(default_factory=list)
+    units: dict[str, str] = field(default_factory=dict)
+    references: dict[str, float] = field(default_factory=dict)
 
     @property
     def all_hold(self) -> bool:
@@ -137,26 +177,84 @@ class Report:
                 return row
         raise KeyError(name)
 
+    def _named(self, values: Mapping[str, float], names: Sequence[str], digits: int) -> str:
+        return ", ".join(
+            f"{name} = {_quantity(values[name], self.units.get(name, ''), digits)}" for name in names if name in values
+        )
+
+    def records(self, digits: int = 4) -> tuple[list[str], list[list[str]]]:
+        """The table as text: the column names (COLUMNS) and one row of cells per property.
+
+        Each column means one thing, every number carrying its unit: "bound (computed)", the
+        bounds computed for the property, by name (``bounds``); "book value", the reference
+        values for them (``references``, often none); "extreme sampled", the extreme of the
+        bounded quantity on the samples (lowest to largest when bounded on both sides);
+        "residual or margin", the largest relative residual of an identity (0 is exact) or
+        the largest excess lhs - rhs of an inequality (<= 0 where it holds).
+
+        Parameters
+        ----------
+        digits : int, optional
+            Significant digits of the numbers (default 4).
+
+        Returns
+        -------
+        tuple of (list of str, list of list of str)
+            The column names and the rows.
+        """
+        rows = []
+        for row in self.rows:
+            bound = self._named(self.bounds, row.names, digits)
+            if not bound and row.bound is not None:
+                bound = _quantity(row.bound, row.unit, digits)
+            extreme = residual = ""
+            if row.measure == "extreme":
+                extreme = _quantity(row.worst, row.unit, digits)
+                if row.lowest is not None:
+                    extreme = f"{_quantity(row.lowest, row.unit, digits)} to {extreme}"
+            elif row.measure == "residual" or not row.unit:
+                residual = f"{row.worst:.3g} (relative)"
+            else:
+                residual = _quantity(row.worst, row.unit, 3)
+            holds = "yes" if row.holds else "NO"
+            references = self._named(self.references, row.names, digits)
+            rows.append([row.name, row.statement, holds, bound, references, extreme, residual, row.how])
+        return list(COLUMNS), rows
+
     def table(self) -> object:
-        """A rich Table of the report.
+        """A rich Table of the report (the columns of ``records``).
 
         Returns
         -------
         rich.table.Table
-            One line per property: statement, whether it holds, worst value, bound, how.
+            One line per property: statement, whether it holds, the computed bounds, the
+            book's values, the extreme sampled, the residual or margin, and how.
         """
         from rich.table import Table
 
-        table = Table(title=f"Table 3.3.1 for {self.arm}")
-        for column in ("property", "statement", "holds", "worst found", "bound", "how"):
+        ranges = ", ".join(f"[{lo:.4g}, {hi:.4g}]" for lo, hi in self.ranges)
+        table = Table(
+            title=f"Table 3.3.1 for {self.arm}, joint ranges {ranges}",
+            caption="residual: the largest relative error of an identity (0 is exact); "
+            "margin: the largest lhs - rhs of an inequality found (<= 0 where it holds)",
+        )
+        columns, rows = self.records()
+        for column in columns:
             table.add_column(column, overflow="fold")
-        for row in self.rows:
-            bound = "" if row.bound is None else f"{row.bound:.6g}"
-            table.add_row(
-                row.name, row.statement, "[green]yes[/green]" if row.holds else "[red]NO[/red]",
-                f"{row.worst:.3g}", bound, row.how,
-            )  # fmt: skip
+        for cells in rows:
+            cells[2] = "[green]yes[/green]" if cells[2] == "yes" else "[red]NO[/red]"
+            table.add_row(*cells)
         return table
+
+
+def _si(robot: Robot, revolute: str, prismatic: str) -> str:
+    """The unit of a quantity of the arm: ``revolute`` for revolute joints, ``prismatic`` for prismatic ones."""
+    kinds = set(robot.kinds)
+    if kinds == {"revolute"}:
+        return revolute
+    if kinds == {"prismatic"}:
+        return prismatic
+    return f"{revolute} or {prismatic}"
 
 
 def joint_ranges(
@@ -328,6 +426,7 @@ def check(
     rows: list[Row] = []
     bounds: dict[str, float] = {}
     notes = []
+    torque = _si(robot, "N m", "N")
     prismatic = [i for i, kind in enumerate(robot.kinds) if kind == "prismatic"]
     if prismatic:
         notes.append(
@@ -346,26 +445,31 @@ def check(
         norms = np.linalg.norm(G, axis=-1)
         gb, how = _extreme(lambda p: float(np.linalg.norm(robot.gravity_vector(p))), q, norms, box, True)
         bounds["gb"] = gb
-        rows.append(
-            Row("gravity bound", "||G(q)|| <= gb", bool(np.all(norms <= gb * (1 + 1e-12))), norms.max(), gb, how)
-        )
+        rows.append(Row("gravity bound", "||G(q)|| <= gb", bool(np.all(norms <= gb * (1 + 1e-12))), norms.max(), gb,
+                        how, torque, "extreme", ("gb",)))  # fmt: skip
     if "linearity" in groups:
         qd, qdd = rng.uniform(-2, 2, (2, samples, n))
         W = robot.regressor(q, qd, qdd)
         tau = robot.inverse_dynamics(q, qd, qdd)
         error = np.abs(W @ robot.parameters() - tau).max() / (np.abs(tau).max() + 1e-300)
         rows.append(Row("linearity", "M qdd + Vm qd + F + G = W(q, qd, qdd) phi", error < 1e-10, error, None,
-                        f"{samples} samples, recursive regressor"))  # fmt: skip
+                        f"{samples} samples, recursive regressor", torque, "residual"))  # fmt: skip
     if "passivity" in groups:
         _passivity_rows(robot, ranges, rows)
-    return Report(robot.name, rows, bounds, ranges, notes)
+    inertia = _si(robot, "kg m^2", "kg")
+    units = {"mu1": inertia, "mu2": inertia, "m1": inertia, "m2": inertia,
+             "vb": _si(robot, "N m/(rad/s)^2", "N/(m/s)^2"), "v": _si(robot, "N m/(rad/s)", "N/(m/s)"), "k": torque,
+             "gb": torque}  # fmt: skip
+    return Report(robot.name, rows, bounds, ranges, notes, {key: unit for key, unit in units.items() if key in bounds})
 
 
 def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bounds: dict[str, float]) -> None:
+    unit = _si(robot, "kg m^2", "kg")
     M = robot.inertia_matrix(q)
     scale = np.abs(M).max()
     asymmetry = np.abs(M - np.swapaxes(M, -1, -2)).max() / scale
-    rows.append(Row("symmetry", "M(q) = M(q)^T", asymmetry < TOLERANCE, asymmetry, None, f"{len(q)} samples"))
+    rows.append(Row("symmetry", "M(q) = M(q)^T", asymmetry < TOLERANCE, asymmetry, None, f"{len(q)} samples", unit,
+                    "residual"))  # fmt: skip
     eig = np.linalg.eigvalsh(0.5 * (M + np.swapaxes(M, -1, -2)))
 
     def smallest(p: np.ndarray) -> float:
@@ -377,10 +481,10 @@ def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bound
     mu1, how1 = _extreme(smallest, q, eig[:, 0], box, False)
     mu2, how2 = _extreme(largest, q, eig[:, -1], box, True)
     bounds["mu1"], bounds["mu2"] = mu1, mu2
-    rows.append(Row("positive definite", "M(q) > 0", mu1 > 0, eig[:, 0].min(), mu1, how1))
+    rows.append(Row("positive definite", "M(q) > 0", mu1 > 0, eig[:, 0].min(), mu1, how1, unit, "extreme", ("mu1",)))
     rows.append(Row("inertia bounds", "mu1 I <= M(q) <= mu2 I, (1/mu2) I <= M^-1 <= (1/mu1) I",
                     mu1 > 0 and mu1 <= eig[:, 0].min() + 1e-12 and eig[:, -1].max() <= mu2 + 1e-12,
-                    eig[:, -1].max(), mu2, how2))  # fmt: skip
+                    eig[:, -1].max(), mu2, how2, unit, "extreme", ("mu1", "mu2"), eig[:, 0].min()))  # fmt: skip
     ones = np.abs(M).sum(axis=-2).max(axis=-1)  # induced 1-norm: the largest column sum
 
     def norm1(p: np.ndarray) -> float:
@@ -389,13 +493,15 @@ def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bound
     m1, _ = _extreme(norm1, q, ones, box, False)
     m2, how = _extreme(norm1, q, ones, box, True)
     bounds["m1"], bounds["m2"] = m1, m2
-    rows.append(Row("norm bounds", "m1 <= ||M(q)||_1 <= m2 (induced 1-norm)", 0 < m1 <= m2, ones.max(), m2, how))
+    rows.append(Row("norm bounds", "m1 <= ||M(q)||_1 <= m2 (induced 1-norm)", 0 < m1 <= m2, ones.max(), m2, how, unit,
+                    "extreme", ("m1", "m2"), ones.min()))  # fmt: skip
 
 
 def _coriolis_rows(
     robot: Robot, q: np.ndarray, x: np.ndarray, y: np.ndarray, box: list, rows: list[Row], bounds: dict, groups: set
 ) -> None:
     n = robot.n
+    torque = _si(robot, "N m", "N")
     Vm = robot.coriolis_matrix(q, x)
     V = robot.coriolis_vector(q, x)
     scale = np.abs(Vm).max() + 1e-300
@@ -403,7 +509,7 @@ def _coriolis_rows(
         stretched = robot.coriolis_vector(q, 2.5 * x)
         quadratic = np.abs(stretched - 6.25 * V).max() / (6.25 * np.abs(V).max() + 1e-300)
         rows.append(Row("quadratic", "V(q, s qd) = s^2 V(q, qd)", quadratic < TOLERANCE, quadratic, None,
-                        f"{len(q)} samples, s = 2.5"))  # fmt: skip
+                        f"{len(q)} samples, s = 2.5", torque, "residual"))  # fmt: skip
         norms = np.linalg.norm(Vm, ord=2, axis=(-2, -1))
 
         def vm_norm(p: np.ndarray) -> float:
@@ -415,7 +521,8 @@ def _coriolis_rows(
         v_ratio = np.linalg.norm(V, axis=-1)  # |x| = 1
         holds = bool(np.all(v_ratio <= vb * (1 + 1e-9)) and np.all(norms <= vb * (1 + 1e-9)))
         rows.append(Row("Coriolis bound", "||V|| <= vb ||qd||^2 and ||Vm(q, qd)||_2 <= vb ||qd||", holds,
-                        norms.max(), vb, how))  # fmt: skip
+                        norms.max(), vb, how + ", ||qd|| = 1", _si(robot, "N m/(rad/s)^2", "N/(m/s)^2"), "extreme",
+                        ("vb",)))  # fmt: skip
         symmetric = (
             np.abs(
                 np.einsum("...ij,...j->...i", robot.coriolis_matrix(q, x), y)
@@ -424,12 +531,12 @@ def _coriolis_rows(
             / scale
         )
         rows.append(Row("Christoffel symmetry", "Vm(q, x) y = Vm(q, y) x", symmetric < TOLERANCE, symmetric, None,
-                        f"{len(q)} samples"))  # fmt: skip
+                        f"{len(q)} samples", torque, "residual"))  # fmt: skip
     if "skew" in groups:
         S = robot.inertia_matrix_dot(q, x) - 2 * Vm
         skew = np.abs(S + np.swapaxes(S, -1, -2)).max() / scale
         rows.append(Row("skew symmetry", "Mdot - 2 Vm is skew: x^T (Mdot - 2 Vm) x = 0", skew < TOLERANCE, skew, None,
-                        f"{len(q)} samples"))  # fmt: skip
+                        f"{len(q)} samples", torque, "residual"))  # fmt: skip
 
 
 def _friction_rows(robot: Robot, x: np.ndarray, rng: np.random.Generator, rows: list[Row], bounds: dict) -> None:
@@ -441,10 +548,11 @@ def _friction_rows(robot: Robot, x: np.ndarray, rng: np.random.Generator, rows: 
     lhs = np.linalg.norm(F, axis=-1)
     rhs = v * np.linalg.norm(speeds, axis=-1) + k
     rows.append(Row("friction bound", "||Fv qd + Fd|| <= v ||qd|| + k", bool(np.all(lhs <= rhs * (1 + 1e-12) + 1e-15)),
-                    float((lhs - rhs).max()), None, "v = max Fv_ii, k = ||max |Fd_i|||, on samples"))  # fmt: skip
+                    float((lhs - rhs).max()), None, "v = max Fv_ii, k = ||max |Fd_i|||, on samples",
+                    _si(robot, "N m", "N"), "margin", ("v", "k")))  # fmt: skip
     power = np.einsum("...i,...i->...", speeds, F)
     rows.append(Row("dissipation", "qd^T F(qd) >= 0", bool(np.all(power >= -1e-12)), float(power.min()), 0.0,
-                    f"{len(x)} samples"))  # fmt: skip
+                    f"{len(x)} samples", "W"))  # fmt: skip
 
 
 def _passivity_rows(robot: Robot, ranges: list[tuple[float, float]], rows: list[Row]) -> None:
@@ -481,8 +589,8 @@ def _passivity_rows(robot: Robot, ranges: list[tuple[float, float]], rows: list[
         if label == "lossless":
             error = abs(gained - supplied) / scale
             rows.append(Row("passivity", "K(t) - K(0) = integral qd^T (tau - G) dt", error < 1e-6, error, None,
-                            "RK4, 1 ms steps over 1 s, sinusoidal torques, no friction"))  # fmt: skip
+                            "RK4, 1 ms steps over 1 s, sinusoidal torques, no friction", "J", "residual"))  # fmt: skip
         else:
             rows.append(Row("passivity with friction", "K(t) - K(0) <= integral qd^T (tau - G) dt",
                             gained <= supplied + 1e-9 * scale, (gained - supplied) / scale, None,
-                            "the same run with the arm's friction"))  # fmt: skip
+                            "the same run with the arm's friction", "", "margin"))  # fmt: skip

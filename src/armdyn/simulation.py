@@ -285,7 +285,7 @@ def _one_state(value: object, n: int, name: str, allow_scalar: bool = False) -> 
     """One finite state vector (n,) (or a scalar for every joint), checked by armdyn.inputs."""
     if allow_scalar and np.ndim(value) == 0:
         value = np.full(n, value, dtype=float) if isinstance(value, (int, float, np.number)) else value
-    array = inputs.state(value, n, name, bounded=name in ("q0", "qd0"))
+    array = inputs.state(value, n, name, bounded=name in ("q0", "qd0"))  # torques may be large
     if array.shape != (n,):
         raise ModelError(f"{name} must be one state of {n} values, got shape {array.shape}")
     return array
@@ -536,7 +536,7 @@ def _dynamics(arms, events, eps):
     bare = [a.replace([_no_coulomb(link) for link in a.links]) for a in arms]
 
     def qdd(t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        _check_bounded(q, qd)
+        _check_bounded(q, qd, tau)
         index = sum(1 for e in events if t >= e[0])
         return bare[index].forward_dynamics(q, qd, tau - smooth_coulomb_vector(arms[index].coulomb_friction, eps, qd))
 
@@ -588,7 +588,11 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
             e_int = e_int + (desired[0] - q) * dt * hold
             tau = _torque(controller, plant, t, q, qd, desired, e_int, smoothing)
         applied = tau - _tau_d(disturbance, t, q, qd)
-        k1v = qdd_of(t, q, qd, applied)
+        try:
+            k1v = qdd_of(t, q, qd, applied)
+        except _DivergedError as diverged:  # the torque itself blew up
+            rows, joint = k, diverged.joint
+            break
         times[k] = t
         out["q"][k], out["qd"][k], out["qdd"][k], out["tau"][k], out["q_d"][k] = q, qd, k1v, tau, desired[0]
         try:
@@ -621,8 +625,10 @@ class _DivergedError(Exception):
         self.joint = joint
 
 
-def _check_bounded(q: np.ndarray, qd: np.ndarray) -> None:
-    bad = ~((np.abs(q) < LARGEST_STATE) & np.isfinite(qd))
+def _check_bounded(q: np.ndarray, qd: np.ndarray, tau: np.ndarray | None = None) -> None:
+    bad = ~((np.abs(q) < LARGEST_STATE) & (np.abs(qd) < LARGEST_STATE))
+    if tau is not None:
+        bad |= ~(np.abs(tau) < LARGEST_STATE)
     if bad.any():
         raise _DivergedError(int(np.flatnonzero(bad)[0]))
 

@@ -18,6 +18,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba.core.errors import NumbaError
 
 from armdyn import inputs
 from armdyn.dynamics.aba import aba_batch, aba_one
@@ -46,6 +47,10 @@ if TYPE_CHECKING:
     from armdyn.robot import Robot
 
 _empty = np.empty
+# What the compiled one-state entries raise for arguments they do not take (lists, batches, other
+# dtypes: TypeError; an empty list: ValueError; a masked array: a NumbaError): the general path
+# then checks them and names what is wrong.
+_NOT_ONE_STATE = (TypeError, ValueError, NumbaError)
 _NO_WRENCH = np.zeros((1, 6))
 
 
@@ -133,7 +138,7 @@ def inverse_dynamics(
         try:
             if inverse_dynamics_one(arm.packed, q, qd, qdd, tau) == 0:
                 return tau
-        except TypeError:  # not one state of 1-D float64 arrays: the general path
+        except _NOT_ONE_STATE:  # not one state of 1-D float64 arrays: the general path
             pass
     return _rnea(arm, INVERSE_DYNAMICS, ("q", "qd", "qdd"), (q, qd, qdd), out, f_ext)
 
@@ -164,7 +169,7 @@ def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     try:
         if nonlinear_one(arm.packed, q, qd, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _rnea(arm, NONLINEAR, ("q", "qd"), (q, qd), out)
 
@@ -195,7 +200,7 @@ def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     try:
         if coriolis_vector_one(arm.packed, q, qd, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _rnea(arm, CORIOLIS, ("q", "qd"), (q, qd), out)
 
@@ -226,7 +231,7 @@ def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
     try:
         if gravity_one(arm.packed, q, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _rnea(arm, GRAVITY_ONLY, ("q",), (q,), out)
 
@@ -258,7 +263,7 @@ def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.nda
     try:
         if friction_one(arm.packed, qd, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _batch(arm, friction_batch, ("qd",), (qd,), out, (arm.n,))
 
@@ -292,7 +297,7 @@ def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
     try:
         if crba_one(arm.packed, q, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _batch(arm, crba_batch, ("q",), (q,), out, (n, n))
 
@@ -326,7 +331,7 @@ def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     try:
         if coriolis_one(arm.packed, q, qd, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _batch(arm, coriolis_batch, ("q", "qd"), (q, qd), out, (n, n))
 
@@ -363,7 +368,7 @@ def forward_dynamics(
     try:
         if aba_one(arm.packed, q, qd, tau, qdd) == 0:
             return qdd
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     model = _model(arm)
     batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), arm.n, _where(arm))
@@ -414,7 +419,7 @@ def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = N
     try:
         if energy_one(arm.packed, q, qd, result) == 0:
             return result
-    except TypeError:
+    except _NOT_ONE_STATE:
         pass
     return _batch(arm, energy_batch, ("q", "qd"), (q, qd), out, (2,))
 

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -12,9 +16,11 @@ import sympy
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic import codegen
+from armdyn.symbolic.algebra import collapse_sums
 from armdyn.symbolic.derive import Derivation, derive_raw
 
-_COLLAPSE_LIMIT = 4  # joints up to which trigonometric products are collapsed (c1 c2 - s1 s2 -> c12)
+_DERIVED = 0.5  # the share of derive's progress taken by the derivation, before the conversion to SymPy
+_FACTOR_LIMIT = 4  # joints up to which common factors are taken out (a2 m2 (a1 c2 + a2)); slow for six
 
 
 def robot_symbols(robot: Robot) -> dict[str, sympy.Symbol]:
@@ -46,9 +52,12 @@ class ClosedForm:
     """M, Vm, V, G, F and tau of an arm as SymPy matrices, with the means to print and run them.
 
     ``q``, ``qd``, ``qdd`` are the joint symbols q1..qn, qd1..qdn, qdd1..qddn. Revolute
-    angles enter through cos(q_i) and sin(q_i); for arms of up to four joints products are
-    collapsed as the book writes them (cos(q1) cos(q2) - sin(q1) sin(q2) = cos(q1 + q2)).
-    Made by ``derive``, which is the way to build one.
+    angles enter through cos(q_i) and sin(q_i); products are collapsed as the book writes
+    them (cos(q1) cos(q2) - sin(q1) sin(q2) = cos(q1 + q2), see
+    ``armdyn.symbolic.algebra.collapse_sums``), and for arms of up to four joints common
+    factors are taken out (a2 m2 (a1 c2 + a2)). Made by ``derive``, which is the way to
+    build one. ``pretty``, ``latex`` and ``latex_document`` print the equations, ``save``
+    writes them (or code) to a file, ``to_python``, ``to_c`` and ``compile`` give code.
 
     Parameters
     ----------
@@ -60,6 +69,9 @@ class ClosedForm:
         The friction mode the derivation used: True, False or "symbolic" (see ``derive``).
     method : str
         The method used, "lagrange" or "recursive".
+    progress : callable, optional
+        Called as progress(fraction, stage) before each matrix is converted to SymPy
+        (``derive`` passes its own).
 
     Attributes
     ----------
@@ -70,7 +82,14 @@ class ClosedForm:
         The joint symbols, (n, 1).
     """
 
-    def __init__(self, robot: Robot, raw: Derivation, friction: str | bool, method: str) -> None:
+    def __init__(
+        self,
+        robot: Robot,
+        raw: Derivation,
+        friction: str | bool,
+        method: str,
+        progress: Callable[[float, str], object] | None = None,
+    ) -> None:
         self.robot = robot
         self.raw = raw
         self.method = method
@@ -80,26 +99,41 @@ class ClosedForm:
         self.q = sympy.Matrix([sympy.Symbol(f"q{i + 1}") for i in range(n)])
         self.qd = sympy.Matrix([sympy.Symbol(f"qd{i + 1}") for i in range(n)])
         self.qdd = sympy.Matrix([sympy.Symbol(f"qdd{i + 1}") for i in range(n)])
-        self._trig = {}
+        self._trig_kind = {}
         for i, (c, s) in raw.trig.items():
-            self._trig[c.name] = sympy.cos(self.q[i])
-            self._trig[s.name] = sympy.sin(self.q[i])
-        self.M = self._matrix(raw.M)
-        self.Vm = self._matrix(raw.Vm)
-        self.V = self._matrix([[x] for x in raw.V])
-        self.G = self._matrix([[x] for x in raw.G])
-        self.F = self._matrix([[x] for x in raw.F])
-        self.tau = self._matrix([[x] for x in raw.tau])
+            self._trig_kind[c.name], self._trig_kind[s.name] = ("c", (i,)), ("s", (i,))
+        parts = [("M", raw.M), ("Vm", raw.Vm), ("V", [[x] for x in raw.V]), ("G", [[x] for x in raw.G])]
+        parts += [("F", [[x] for x in raw.F]), ("tau", [[x] for x in raw.tau])]
+        done, total = 0, sum(len(rows) * len(rows[0]) for _, rows in parts)
+        for name, rows in parts:
+            if progress is not None:
+                progress(_DERIVED + (1 - _DERIVED) * done / total, f"SymPy form of {name}")
+            setattr(self, name, self._matrix(rows))
+            done += len(rows) * len(rows[0])
+        if progress is not None:
+            progress(1.0, "done")
 
     # ----- conversion to SymPy --------------------------------------------------------------------
     def _sympy(self, expr: se.Basic, collapse: bool = True) -> sympy.Expr:
+        names: dict[str, tuple[str, tuple[int, ...]]] = {}
+        if collapse:
+            expr, names = collapse_sums(expr, self.raw.trig)
+        q = self.raw.q
+        trig = {}  # in SymEngine, which is fast, before the one conversion to SymPy
+        for symbol in expr.free_symbols:
+            kind, joints = names.get(symbol.name) or self._trig_kind.get(symbol.name, (None, ()))
+            if kind is not None:
+                angle = se.Add(*(q[j] for j in joints))
+                trig[symbol] = se.cos(angle) if kind == "c" else se.sin(angle)
+        if trig:
+            expr = expr.xreplace(trig)
+        if not self.robot.is_symbolic:  # exact inside, shown as the decimals the arm was given in
+            expr = _as_doubles(expr)
         value = sympy.sympify(expr)
-        names = {s: self._trig.get(s.name) or self._named.get(s.name) for s in value.free_symbols}
-        value = value.xreplace({s: t for s, t in names.items() if t is not None})
-        value = value.xreplace({s: sympy.Symbol(s.name) for s in value.free_symbols if s.name[:1] == "q"})
-        if collapse and self.robot.n <= _COLLAPSE_LIMIT and value.has(sympy.sin, sympy.cos):
-            value = sympy.factor_terms(sympy.trigsimp(value))
-        return value
+        named = {s: self._named[s.name] for s in value.free_symbols if s.name in self._named}
+        if named:  # the arm's own symbols, with their assumptions
+            value = value.xreplace(named)
+        return sympy.factor_terms(value) if collapse and self.robot.n <= _FACTOR_LIMIT else value
 
     def _matrix(self, rows: list[list[se.Basic]]) -> sympy.Matrix:
         return sympy.Matrix([[self._sympy(x) for x in row] for row in rows])
@@ -145,57 +179,224 @@ class ClosedForm:
     def _short(self, expr: sympy.Expr) -> sympy.Expr:
         """cos(q1 + q2) -> c_{12}, sin(q2) -> s_{2}: the book's notation."""
         index = {q: i + 1 for i, q in enumerate(self.q)}
+        separator = "," if self.robot.n >= 10 else ""
         replacements = {}
         for f in expr.atoms(sympy.cos, sympy.sin):
             terms = sympy.Add.make_args(f.args[0])
             if all(t in index for t in terms):
-                label = "".join(str(index[t]) for t in sorted(terms, key=index.get))
+                label = separator.join(str(index[t]) for t in sorted(terms, key=index.get))
                 replacements[f] = sympy.Symbol(("c" if isinstance(f, sympy.cos) else "s") + f"_{{{label}}}")
         return expr.xreplace(replacements)
 
-    def _display(self) -> list[tuple[str, sympy.Matrix]]:
-        dot = {self.qd[i]: sympy.Symbol(rf"\dot{{q}}_{{{i + 1}}}") for i in range(self.robot.n)}
-        ddot = {self.qdd[i]: sympy.Symbol(rf"\ddot{{q}}_{{{i + 1}}}") for i in range(self.robot.n)}
-        joints = {self.q[i]: sympy.Symbol(f"q_{{{i + 1}}}") for i in range(self.robot.n)}
-        items = [("M(q)", self.M), (r"V_m(q, \dot{q})", self.Vm), (r"V(q, \dot{q})", self.V), ("G(q)", self.G)]
+    def _display(self) -> list[_Shown]:
+        """M, Vm, V, G and (when not zero) F in the book's notation, with their raw entries."""
+        n = self.robot.n
+        dot = {self.qd[i]: sympy.Symbol(rf"\dot{{q}}_{{{i + 1}}}") for i in range(n)}
+        ddot = {self.qdd[i]: sympy.Symbol(rf"\ddot{{q}}_{{{i + 1}}}") for i in range(n)}
+        joints = {self.q[i]: sympy.Symbol(f"q_{{{i + 1}}}") for i in range(n)}
+        raw = self.raw
+        items = [
+            ("M(q)", "M", "M", self.M, raw.M),
+            (r"V_m(q, \dot{q})", "V_m", "Vm", self.Vm, raw.Vm),
+            (r"V(q, \dot{q})", "V", "V", self.V, [[x] for x in raw.V]),
+            ("G(q)", "G", "G", self.G, [[x] for x in raw.G]),
+        ]
         if any(x != 0 for x in self.F):
-            items.append((r"F(\dot{q})", self.F))
+            items.append((r"F(\dot{q})", "F", "F", self.F, [[x] for x in raw.F]))
         out = []
-        for label, m in items:
+        for label, entry, plain, m, rows in items:
             shown = m.applyfunc(lambda e: self._short(e).xreplace(dot).xreplace(ddot).xreplace(joints))
-            out.append((label, shown))
+            out.append(_Shown(label, entry, plain, shown, rows))
         return out
 
-    def latex(self) -> str:
-        """The equations as LaTeX, in the book's layout: M(q) qdd + Vm qd + F + G = tau, then each term.
+    def _entry_label(self, shown: _Shown, i: int, j: int) -> str:
+        index = f"{i + 1}" if shown.matrix.shape[1] == 1 else f"{i + 1}{j + 1}"
+        if self.robot.n >= 10 and shown.matrix.shape[1] > 1:
+            index = f"{i + 1},{j + 1}"
+        if shown.entry == "V_m":
+            return f"(V_m)_{{{index}}}"
+        return f"{shown.entry}_{{{index}}}"
 
-        cos(q1 + q2) is written c_{12}, sin(q2) s_{2}, as the book does.
+    def latex(self, width: int = 100) -> str:
+        r"""The equations as LaTeX, in the book's layout: M(q) qdd + Vm qd + F + G = tau, then each term.
+
+        cos(q1 + q2) is written c_{12}, sin(q2) s_{2}, as the book does. Every formula is in
+        a display (``\[ ... \]`` or ``align*``), so the text compiles inside a document
+        with ``\usepackage{amsmath}`` (``latex_document`` gives a complete one). A term whose
+        entries are all short is one matrix, in an ``aligned`` block; otherwise each entry
+        is its own equation, broken over lines of about ``width`` characters, with
+        ``\allowdisplaybreaks`` needed for page breaks in long ones (M is symmetric, so only
+        its upper triangle is written).
+
+        Parameters
+        ----------
+        width : int, optional
+            The longest line of a broken entry, in characters of LaTeX source (default 100);
+            a line holds at least one term.
 
         Returns
         -------
         str
-            A display equation followed by an ``aligned`` block, one line per term.
+            The LaTeX text: a display equation, then one block per term.
         """
-        lines = [r"M(q)\,\ddot{q} + V_m(q,\dot{q})\,\dot{q} + F(\dot{q}) + G(q) = \tau"]
-        for label, m in self._display():
-            lines.append(f"{label} &= {sympy.latex(m, mat_delim='[')}")
-        body = " \\\\\n".join(lines[1:])
-        return f"\\[ {lines[0]} \\]\n\\begin{{aligned}}\n{body}\n\\end{{aligned}}\n"
+        lines = [r"\[ M(q)\,\ddot{q} + V_m(q,\dot{q})\,\dot{q} + F(\dot{q}) + G(q) = \tau \]"]
+        compact, long = [], []
+        for shown in self._display():
+            entries = [[sympy.latex(shown.matrix[i, j], full_prec=False) for j in range(shown.matrix.shape[1])]
+                       for i in range(shown.matrix.shape[0])]  # fmt: skip
+            longest_row = max(sum(len(x) + 3 for x in row) for row in entries)
+            if max(len(x) for row in entries for x in row) <= _COMPACT_ENTRY and longest_row <= _COMPACT_ROW:
+                compact.append(f"{shown.label} &= {_latex_matrix(entries)}")
+            else:
+                long.append((shown, entries))
+        if compact:
+            lines += [r"\[ \begin{aligned}", " \\\\\n".join(compact), r"\end{aligned} \]"]
+        for shown, entries in long:
+            rows = []
+            for i, row in enumerate(entries):
+                for j, text in enumerate(row):
+                    if shown.entry == "M" and j < i:
+                        continue
+                    label = self._entry_label(shown, i, j)
+                    if len(text) <= width:
+                        rows.append(f"{label} &= {text}")
+                    else:
+                        broken = _broken_terms(shown.matrix[i, j], width)
+                        rows.append(f"{label} &= " + " \\\\\n&\\quad ".join(broken))
+            if shown.entry == "M":
+                rows.append(r"M_{ij} &= M_{ji} \quad (i > j)")
+            lines += [rf"% {shown.plain}, entry by entry", r"\begin{align*}", " \\\\\n".join(rows), r"\end{align*}"]
+        return "\n".join(lines) + "\n"
 
-    def pretty(self) -> str:
+    def latex_document(self, width: int = 100) -> str:
+        r"""A complete LaTeX document of the equations, ready for ``pdflatex``.
+
+        An ``article`` with the ``amsmath`` and ``geometry`` packages and
+        ``\allowdisplaybreaks`` (long entries break across pages), a title naming the arm
+        and the notation, and ``latex(width)`` as its body.
+
+        Parameters
+        ----------
+        width : int, optional
+            Passed to ``latex``: the longest line of a broken entry (default 100).
+
+        Returns
+        -------
+        str
+            The .tex source.
+        """
+        name = _latex_text(self.robot.name)
+        notation = r"$c_{12} = \cos(q_1 + q_2)$, $s_{2} = \sin(q_2)$"
+        return "\n".join(
+            [
+                r"\documentclass[10pt]{article}",
+                r"\usepackage[margin=2cm]{geometry}",
+                r"\usepackage{amsmath}",
+                r"\allowdisplaybreaks",
+                r"\begin{document}",
+                rf"\section*{{The robot equation of {name}}}",
+                rf"Derived in closed form by armdyn ({_latex_text(self.method)} method); {notation}.",
+                "",
+                self.latex(width),
+                r"\end{document}",
+                "",
+            ]
+        )
+
+    def pretty(self, limit: int | None = 150) -> str:
         """The equations for the terminal (SymPy's pretty printer, c_12 = cos(q1 + q2)).
+
+        A term whose matrix drawing is at most ``limit`` characters wide is drawn as one
+        matrix. Otherwise its entries are drawn one by one, and an entry longer than
+        ``limit`` characters (as plain text) is summarised: its operation count and length,
+        and a note that ``save`` writes it in full (the PUMA 560's full form is some
+        250,000 characters).
+
+        Parameters
+        ----------
+        limit : int or None, optional
+            The widest matrix and the longest entry drawn (default 150 characters); None
+            draws every term as one matrix, in full.
 
         Returns
         -------
         str
             M(q), Vm(q, qd), V(q, qd), G(q) and, when not zero, F(qd), one block each.
         """
-        blocks = []
-        for label, m in self._display():
-            clean = label.replace("\\dot{q}", "qd").replace(r"\,", "").replace("_m", "m")
-            shown = m.applyfunc(lambda e: e.xreplace({s: sympy.Symbol(_plain(s.name)) for s in e.free_symbols}))
-            blocks.append(f"{clean} =\n{sympy.pretty(shown, use_unicode=True, wrap_line=False)}")
+        blocks, summarised = [], 0
+        for shown in self._display():
+            clean = shown.label.replace("\\dot{q}", "qd").replace(r"\,", "").replace("_m", "m")
+            m = shown.matrix.applyfunc(lambda e: e.xreplace({s: sympy.Symbol(_plain(s.name)) for s in e.free_symbols}))
+            sizes = [[len(str(m[i, j])) for j in range(m.shape[1])] for i in range(m.shape[0])]
+            if limit is None or max(x for row in sizes for x in row) <= limit:  # else too wide: no need to draw
+                drawn = sympy.pretty(m, use_unicode=True, wrap_line=False, full_prec=False)
+                if limit is None or max(len(line) for line in drawn.split("\n")) <= limit:
+                    blocks.append(f"{clean} =\n{drawn}")
+                    continue
+            lines = [f"{clean}, entry by entry:"]
+            for i in range(m.shape[0]):
+                for j in range(m.shape[1]):
+                    if shown.entry == "M" and j < i:
+                        continue
+                    label = f"{shown.plain}[{i + 1}]" if m.shape[1] == 1 else f"{shown.plain}[{i + 1},{j + 1}]"
+                    if sizes[i][j] <= limit:
+                        drawn = sympy.pretty(m[i, j], use_unicode=True, wrap_line=False, full_prec=False).split("\n")
+                        middle = len(drawn) // 2
+                        pad = " " * (len(label) + 3)
+                        lines += [(f"{label} = " if k == middle else pad) + text for k, text in enumerate(drawn)]
+                    else:
+                        summarised += 1
+                        operations = codegen.count_operations(shown.raw[i][j])
+                        lines.append(f"{label} = ... ({operations:,} operations, {sizes[i][j]:,} characters)")
+            if shown.entry == "M":
+                lines.append("M[i,j] = M[j,i] for i > j")
+            blocks.append("\n".join(lines))
+        if summarised:
+            blocks.append(
+                f"{summarised} entries longer than {limit} characters are summarised: form.save('file.tex') "
+                "(or .txt, .py, .c) writes them in full, and pretty(limit=None) draws them."
+            )
         return "\n\n".join(blocks)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the full equations to a file, in the form its suffix names.
+
+        ".tex": ``latex_document()``; ".txt": ``pretty(limit=None)``; ".py": ``to_python()``;
+        ".c" or ".h": ``to_c()``. The text is UTF-8.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write (replaced if it exists).
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When the suffix is none of .tex, .txt, .py, .c and .h, the folder does not
+            exist, or the path is a folder.
+        """
+        target = Path(path)
+        writers = {
+            ".tex": self.latex_document,
+            ".txt": lambda: self.pretty(limit=None),
+            ".py": self.to_python,
+            ".c": self.to_c,
+            ".h": self.to_c,
+        }
+        writer = writers.get(target.suffix.lower())
+        if writer is None:
+            raise ModelError(f"save: cannot tell the form from the suffix of '{target}' (use .tex, .txt, .py or .c)")
+        if not target.parent.is_dir():
+            raise ModelError(f"save: the folder '{target.parent}' does not exist")
+        if target.is_dir():
+            raise ModelError(f"save: '{target}' is a folder")
+        target.write_text(writer(), encoding="utf-8")
+        return target
 
     def __repr__(self) -> str:
         return f"ClosedForm('{self.robot.name}', n={self.robot.n}, method='{self.method}')"
@@ -276,15 +477,82 @@ class ClosedForm:
         return codegen.compile_closed_form(self.raw, {name: given[name] for name in names})
 
 
+_COMPACT_ENTRY, _COMPACT_ROW = 100, 200  # LaTeX characters: a term with entries and rows this short is one matrix
+
+
+@dataclass
+class _Shown:
+    """One term of the equation as printed: its labels, its entries shown and raw."""
+
+    label: str  # LaTeX of the term, "M(q)"
+    entry: str  # LaTeX of an entry's name, "M" (M_{12})
+    plain: str  # plain name, "M" (M[1,2])
+    matrix: sympy.Matrix  # the entries in the book's notation
+    raw: list[list[se.Basic]]  # the same entries as SymEngine polynomials
+
+
+def _latex_matrix(entries: list[list[str]]) -> str:
+    """A bracketed matrix, one row per source line."""
+    rows = " \\\\\n".join(" & ".join(row) for row in entries)
+    return "\\left[\\begin{matrix}\n" + rows + "\n\\end{matrix}\\right]"
+
+
+def _broken_terms(expr: sympy.Expr, width: int) -> list[str]:
+    """The expanded terms of ``expr`` in LaTeX, joined by + and -, as lines of about ``width`` characters."""
+    lines, current = [], ""
+    for k, term in enumerate(sympy.expand(expr).as_ordered_terms()):
+        text = sympy.latex(term, full_prec=False)
+        if k > 0:
+            text = f"- {text[1:].lstrip()}" if text.startswith("-") else f"+ {text}"
+        if current and len(current) + 1 + len(text) > width:
+            lines.append(current)
+            current = text
+        else:
+            current = f"{current} {text}" if current else text
+    lines.append(current)
+    return lines
+
+
+def _latex_text(text: str) -> str:
+    """Plain text for LaTeX's text mode (two_link_planar -> two\\_link\\_planar)."""
+    special = {"\\": r"\textbackslash{}", "{": r"\{", "}": r"\}", "$": r"\$", "&": r"\&", "#": r"\#",
+               "^": r"\^{}", "_": r"\_", "~": r"\~{}", "%": r"\%"}  # fmt: skip
+    return "".join(special.get(ch, ch) for ch in text)
+
+
+def _as_doubles(expr: se.Basic) -> se.Basic:
+    """``expr`` with its constants that are not integers (109/400, sqrt(2)/4) as doubles."""
+    if not expr.free_symbols:
+        return expr if expr.is_Integer else se.RealDouble(float(expr))
+    if isinstance(expr, se.Mul):
+        constant = [a for a in expr.args if not a.free_symbols]
+        rest = [_as_doubles(a) for a in expr.args if a.free_symbols]
+        return se.Mul(*([_as_doubles(se.Mul(*constant))] if constant else []), *rest)
+    if isinstance(expr, se.Piecewise):  # args (value, condition, value, condition, ...)
+        args = expr.args
+        return se.Piecewise(*((_as_doubles(args[k]), args[k + 1]) for k in range(0, len(args), 2)))
+    if not expr.args:
+        return expr
+    return expr.func(*(_as_doubles(a) for a in expr.args))
+
+
 def _plain(name: str) -> str:
     return name.replace("\\dot{q}_{", "qd").replace("\\ddot{q}_{", "qdd").replace("_{", "").replace("}", "")
 
 
-def derive(robot: Robot, method: str = "auto", friction: str | bool = True) -> ClosedForm:
+def derive(
+    robot: Robot,
+    method: str = "auto",
+    friction: str | bool = True,
+    progress: Callable[[float, str], object] | None = None,
+) -> ClosedForm:
     """The closed-form robot equation of ``robot`` (numeric, symbolic or mixed parameters).
 
     M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md sections 1 and 4), with the
-    reflected motor inertias G^2 Jm on the diagonal of M.
+    reflected motor inertias G^2 Jm on the diagonal of M. Numeric parameters are taken as
+    the exact values they were written as (0.5 = 1/2, cos(pi/2) = 0, cos(pi/4) = sqrt(2)/2;
+    see ``armdyn.symbolic.algebra.exact_float``), so the algebra cancels exactly and no
+    round-off terms appear; a numeric arm's coefficients are shown as decimals.
 
     Parameters
     ----------
@@ -292,11 +560,18 @@ def derive(robot: Robot, method: str = "auto", friction: str | bool = True) -> C
         The arm; its parameters may be numbers, SymPy expressions, or both.
     method : str, optional
         "lagrange" (the book's trace formula with pseudo-inertia matrices), "recursive"
-        (composite rigid bodies, for larger arms) or "auto" (default: Lagrange up to three
-        joints).
+        (composite rigid bodies) or "auto" (default, the recursive route for any arm:
+        both give the same polynomials, and the recursion is the faster).
     friction : str or bool, optional
         True (default) for the arm's own friction, False for none, "symbolic" for new
-        symbols v_i (viscous) and k_i (Coulomb), F_i = v_i qd_i + k_i sgn(qd_i).
+        symbols v_i (viscous) and k_i (Coulomb), F_i = v_i qd_i + k_i sgn(qd_i). The
+        arm's own Coulomb law is k sgn(qd) when symmetric, else a Piecewise: Tc+ for
+        qd > 0, Tc- for qd < 0, 0 at rest.
+    progress : callable, optional
+        Called as progress(fraction, stage) as the derivation proceeds: the fraction done
+        (0 to 1) and the stage starting ("kinematics", "inertia matrix", "gravity",
+        "Christoffel symbols", "Coriolis matrix", "tau", then "SymPy form of M" and so
+        on), last with (1.0, "done").
 
     Returns
     -------
@@ -308,6 +583,13 @@ def derive(robot: Robot, method: str = "auto", friction: str | bool = True) -> C
     armdyn.ModelError
         When ``method`` is not "auto", "lagrange" or "recursive".
     """
-    raw = derive_raw(robot, method, friction)
-    chosen = method if method != "auto" else ("lagrange" if robot.n <= 3 else "recursive")
-    return ClosedForm(robot, raw, friction, chosen)
+    chosen = "recursive" if method == "auto" else method
+    inner = None
+    if progress is not None:
+
+        def inner(fraction: float, stage: str) -> None:
+            if stage != "done":
+                progress(_DERIVED * fraction, stage)
+
+    raw = derive_raw(robot, chosen, friction, inner)
+    return ClosedForm(robot, raw, friction, chosen, progress)

@@ -62,12 +62,42 @@ def operation_counts(raw: Derivation, cse: bool) -> dict[str, int]:
     return counts
 
 
-def _body(raw: Derivation, name: str, line: Callable[[str, str], str], value: Callable[[se.Basic], str]) -> list[str]:
-    """Statements: trigonometric and state variables that the expressions use, CSE temporaries, results."""
+def literal(expr: se.Basic) -> se.Basic:
+    """``expr`` with each constant that is not an integer (109/400, sqrt(2)/4, a double) as a
+    symbol named by its double's shortest round-trip repr, so Python and C read the exact double."""
+    if not expr.free_symbols:
+        if expr.is_Integer:
+            return expr
+        value = float(expr)
+        named = se.Symbol(repr(abs(value)))
+        return -named if value < 0 else named
+    if isinstance(expr, se.Mul):
+        constant = [a for a in expr.args if not a.free_symbols]
+        rest = [literal(a) for a in expr.args if a.free_symbols]
+        return se.Mul(*([literal(se.Mul(*constant))] if constant else []), *rest)
+    if not expr.args:
+        return expr
+    return expr.func(*(literal(a) for a in expr.args))
+
+
+def _body(
+    raw: Derivation,
+    name: str,
+    line: Callable[[str, str], str],
+    value: Callable[[se.Basic], str],
+    choose: Callable[[list[tuple[str, str]], str], str],
+) -> list[str]:
+    """Statements: trigonometric and state variables that the expressions use, the Coulomb laws
+    (Tc+ for qd > 0, Tc- for qd < 0, 0 at rest), CSE temporaries, results."""
     entries = _entries(raw, name)
-    replacements, reduced = _cse([x for _, x in entries])
+    laws: dict[se.Basic, se.Symbol] = {}
+    for _, expr in entries:
+        for law in sorted(expr.atoms(se.Piecewise), key=str):
+            laws.setdefault(law, se.Symbol(f"coulomb{len(laws) + 1}"))
+    exprs = [literal(x.subs(laws) if laws else x) for _, x in entries]
+    replacements, reduced = _cse(exprs)
     used = set()
-    for expr in [x for _, x in replacements] + reduced:
+    for expr in [x for _, x in replacements] + reduced + list(laws):
         used |= {s.name for s in expr.free_symbols}
     lines = []
     for i, (c, s) in raw.trig.items():
@@ -80,6 +110,10 @@ def _body(raw: Derivation, name: str, line: Callable[[str, str], str], value: Ca
             if symbol.name in used:
                 array = symbol.name.rstrip("0123456789")
                 lines.append(line(symbol.name, f"{array}[{i}]"))
+    for law, symbol in laws.items():
+        args = law.args
+        cases = [(_case_value(args[k], value), value(args[k + 1])) for k in range(0, len(args) - 2, 2)]
+        lines.append(line(symbol.name, choose(cases, _case_value(args[-2], value))))
     lines += [line(str(symbol), value(expr)) for symbol, expr in replacements]
     for (index, _), expr in zip(entries, reduced, strict=True):
         target = f"out[{', '.join(map(str, index))}]" if len(index) > 1 else f"out[{index[0]}]"
@@ -87,8 +121,20 @@ def _body(raw: Derivation, name: str, line: Callable[[str, str], str], value: Ca
     return lines
 
 
+def _case_value(expr: se.Basic, value: Callable[[se.Basic], str]) -> str:
+    text = value(literal(expr))
+    return f"{text}.0" if expr.is_Integer else text
+
+
 def _python_value(expr: se.Basic) -> str:
     return str(expr)
+
+
+def _python_choice(cases: list[tuple[str, str]], otherwise: str) -> str:
+    text = otherwise
+    for result, condition in reversed(cases):
+        text = f"({result} if {condition} else {text})"
+    return text
 
 
 def python_source(raw: Derivation, parameters: list[str], returns: bool = True) -> str:
@@ -97,7 +143,7 @@ def python_source(raw: Derivation, parameters: list[str], returns: bool = True) 
     parts = ["from math import cos, sin", "from numpy import sign", ""]
     for name, (args, _) in FUNCTIONS.items():
         parts.append(f"def {name}({', '.join(args)}, out{extra}):")
-        parts += [f"    {s}" for s in _body(raw, name, lambda t, v: f"{t} = {v}", _python_value)]
+        parts += [f"    {s}" for s in _body(raw, name, lambda t, v: f"{t} = {v}", _python_value, _python_choice)]
         parts += ["    return out" if returns else "    return", "", ""]
     return "\n".join(parts).rstrip() + "\n"
 
@@ -115,14 +161,19 @@ def c_source(raw: Derivation, parameters: list[str]) -> str:
         return f"const double {target} = {value};"
 
     def c_value(expr: se.Basic) -> str:
-        text = sympy.ccode(sympy.sympify(expr), standard="c99")
+        return sympy.ccode(sympy.sympify(expr), standard="c99")
+
+    def c_choice(cases: list[tuple[str, str]], otherwise: str) -> str:
+        text = otherwise
+        for result, condition in reversed(cases):
+            text = f"(({condition}) ? {result} : {text})"
         return text
 
     parts = ["#include <math.h>", ""]
     for name, (args, _) in FUNCTIONS.items():
         signature = ", ".join(f"const double *{a}" for a in args)
         parts.append(f"void {name}({signature}, double *out{extra}) {{")
-        parts += [f"    {s}" for s in _body(raw, name, c_line, c_value)]
+        parts += [f"    {s}" for s in _body(raw, name, c_line, c_value, c_choice)]
         parts += ["}", ""]
     return "\n".join(parts)
 

@@ -9,7 +9,11 @@ Both routes work on trigonometric polynomials (algebra.py):
 - "recursive", which scales to six joints and more: the composite-rigid-body
   algorithm for M (Featherstone 6.2), each composite inertia carried to the parent
   frame with the local transform only, so each expression involves only the joints
-  between two links.
+  between two links. "auto" takes it for every arm.
+
+The arm's numbers enter exactly where the user wrote exact values (algebra.exact_float:
+0.5 is 1/2, cos(pi/2) is 0), so both routes reach the same canonical polynomials, term
+for term, with no round-off residue.
 
 The Christoffel symbols v_ijk = 1/2 (dm_kj/dq_i + dm_ki/dq_j - dm_ij/dq_k) (3.3.47) give
 Vm and the matrices V_k of Table 3.3.1; V = Vm qd; tau = M qdd + V + F + G.
@@ -17,6 +21,7 @@ Vm and the matrices V_k of Table 3.3.1; V = Vm qd; tau = M qdd + V + F + G.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +29,7 @@ import symengine as se
 
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
-from armdyn.symbolic.algebra import TrigAlgebra, cross, matrix, number, skew
+from armdyn.symbolic.algebra import TrigAlgebra, cross, matrix, number, skew, transform
 
 
 @dataclass
@@ -67,7 +72,7 @@ class _Arm:
     def _local_transform(self, i: int) -> se.DenseMatrix:
         """X_i = placement @ motion(q_i) @ frame_offset: link i in its parent link's frame."""
         joint = self.robot.links[i].joint
-        axis = [number(a) for a in joint.axis]
+        axis = [number(a, geometric=True) for a in joint.axis]
         motion = se.eye(4)
         if i in self.trig:
             c, s = self.trig[i]
@@ -79,13 +84,12 @@ class _Arm:
         else:
             for r in range(3):
                 motion[r, 3] = self.q[i] * axis[r]
-        transform = matrix(joint.placement) * motion * matrix(joint.frame_offset)
-        return self.algebra.reduce_matrix(transform)
+        return self.algebra.reduce_matrix(transform(joint.placement) * motion * transform(joint.frame_offset))
 
     def world_transforms(self) -> list[se.DenseMatrix]:
         world: list[se.DenseMatrix] = []
         for i, link in enumerate(self.robot.links):
-            parent = matrix(self.robot.base) if link.parent < 0 else world[link.parent]
+            parent = transform(self.robot.base) if link.parent < 0 else world[link.parent]
             world.append(self.algebra.reduce_matrix(parent * self.local[i]))
         return world
 
@@ -113,10 +117,10 @@ class _Arm:
     def motion_subspace(self, i: int) -> list[se.Basic]:
         """S_i in link i's own frame: [a; o x a] (revolute) or [0; a] (prismatic), constants."""
         joint = self.robot.links[i].joint
-        offset = np.asarray(joint.frame_offset)
-        rotation_t = matrix(offset[:3, :3]).T
-        a = list(rotation_t * matrix(np.reshape(joint.axis, (3, 1))))
-        o = [-x for x in rotation_t * matrix(np.reshape(offset[:3, 3], (3, 1)))]
+        offset = transform(joint.frame_offset)
+        rotation_t = offset[:3, :3].T
+        a = list(rotation_t * matrix(np.reshape(joint.axis, (3, 1)), geometric=True))
+        o = [-x for x in rotation_t * offset[:3, 3]]
         if i in self.trig:
             return [se.expand(x) for x in a + cross(o, a)]
         return [se.Integer(0)] * 3 + [se.expand(x) for x in a]
@@ -217,8 +221,19 @@ def christoffel(arm: _Arm, M: list[list[se.Basic]]) -> list[list[list[se.Basic]]
             for i in range(n)]  # fmt: skip
 
 
+def coulomb_law(rate: se.Symbol, positive: se.Basic, negative: se.Basic) -> se.Basic:
+    """Tc+ for rate > 0, Tc- for rate < 0 and 0 at rest, as the numeric kernels compute it.
+
+    A symmetric law (Tc- = -Tc+) is written k sgn(rate); an asymmetric one as the
+    Piecewise the user gave, never through sgn^2.
+    """
+    if positive == -negative:
+        return positive * se.sign(rate)
+    return se.Piecewise((positive, se.Gt(rate, 0)), (negative, se.Lt(rate, 0)), (se.Integer(0), True))
+
+
 def friction(arm: _Arm, mode: str | bool) -> tuple[list[se.Basic], list[se.Symbol]]:
-    """F(qd) = Fv qd + Fd sgn(qd); the arm's own values, none, or new symbols v_i, k_i."""
+    """F(qd) = Fv qd + Fd(qd); the arm's own values, none, or new symbols v_i, k_i (F = v qd + k sgn(qd))."""
     n, robot = arm.n, arm.robot
     if mode == "symbolic":
         symbols, F = [], []
@@ -232,34 +247,61 @@ def friction(arm: _Arm, mode: str | bool) -> tuple[list[se.Basic], list[se.Symbo
     viscous, coulomb = robot.viscous_friction, robot.coulomb_friction
     F = []
     for i in range(n):
-        positive, negative = number(coulomb[i, 0]), number(coulomb[i, 1])
-        if positive == -negative:  # symmetric Coulomb friction: k sgn(qd)
-            F.append(number(viscous[i]) * arm.qd[i] + positive * se.sign(arm.qd[i]))
-        else:  # Tc+ for qd > 0, Tc- for qd < 0: (Tc+ - Tc-)/2 sgn(qd) + (Tc+ + Tc-)/2 |sgn(qd)|
-            half_sum, half_gap = (positive + negative) / 2, (positive - negative) / 2
-            sgn = se.sign(arm.qd[i])
-            F.append(number(viscous[i]) * arm.qd[i] + half_gap * sgn + half_sum * sgn * sgn)
+        law = coulomb_law(arm.qd[i], number(coulomb[i, 0]), number(coulomb[i, 1]))
+        F.append(number(viscous[i]) * arm.qd[i] + law)
     return F, []
 
 
-def derive_raw(robot: Robot, method: str = "auto", with_friction: str | bool = True) -> Derivation:
-    """The closed form of ``robot`` as trigonometric polynomials (see the module docstring)."""
+STAGES = (  # (stage, fraction of derive_raw's work done when it starts)
+    ("kinematics", 0.0),
+    ("inertia matrix", 0.1),
+    ("gravity", 0.5),
+    ("Christoffel symbols", 0.55),
+    ("Coriolis matrix", 0.8),
+    ("tau", 0.9),
+)
+
+
+def derive_raw(
+    robot: Robot,
+    method: str = "auto",
+    with_friction: str | bool = True,
+    progress: Callable[[float, str], object] | None = None,
+) -> Derivation:
+    """The closed form of ``robot`` as trigonometric polynomials (see the module docstring).
+
+    ``progress``, when given, is called as progress(fraction, stage) at the start of each
+    stage of STAGES and with (1.0, "done") at the end.
+    """
     if method == "auto":
-        method = "lagrange" if robot.n <= 3 else "recursive"
+        method = "recursive"
     if method not in ("lagrange", "recursive"):
         raise ModelError(f"method must be 'auto', 'lagrange' or 'recursive', got '{method}'")
+    report = dict(STAGES)
+
+    def stage(name: str) -> None:
+        if progress is not None:
+            progress(report.get(name, 1.0), name)
+
+    stage("kinematics")
     arm = _Arm(robot)
     A, n = arm.algebra, robot.n
     world = arm.world_transforms()
+    stage("inertia matrix")
     M = inertia_matrix_lagrange(arm, world) if method == "lagrange" else inertia_matrix_recursive(arm)
     armature = robot.reflected_inertia
     for i in range(n):
         if armature[i] != 0:
             M[i][i] = M[i][i] + number(armature[i])
+    stage("gravity")
     G = gravity_vector(arm, world)
+    stage("Christoffel symbols")
     v = christoffel(arm, M)
+    stage("Coriolis matrix")
     Vm = [[A.reduce(sum(v[i][j][k] * arm.qd[i] for i in range(n))) for j in range(n)] for k in range(n)]
     V = [A.reduce(sum(Vm[k][j] * arm.qd[j] for j in range(n))) for k in range(n)]
+    stage("tau")
     F, parameters = friction(arm, with_friction)
     tau = [A.reduce(sum(M[k][j] * arm.qdd[j] for j in range(n)) + V[k] + G[k]) + F[k] for k in range(n)]
+    stage("done")
     return Derivation(arm.q, arm.qd, arm.qdd, arm.trig, M, v, Vm, V, G, F, tau, parameters)

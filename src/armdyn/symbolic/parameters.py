@@ -79,13 +79,17 @@ def _numeric(form: ClosedForm) -> tuple[sympy.Matrix, sympy.Matrix, list[float]]
     raw = derive_raw(twin, "recursive", False)
     drives, drive_values = [], []
     viscous, coulomb, armature = robot.viscous_friction, robot.coulomb_friction, robot.reflected_inertia
-    tau = []
+    tau, indicators = [], {}
     for i in range(robot.n):
         v, up, down, ia = se.symbols(f"v{i + 1} Tcp{i + 1} Tcn{i + 1} Ia{i + 1}")
-        sgn = se.sign(raw.qd[i])
-        tau.append(raw.tau[i] + v * raw.qd[i] + up * (sgn + sgn**2) / 2 + down * (sgn**2 - sgn) / 2 + ia * raw.qdd[i])
+        # [qd > 0] and [qd < 0] as placeholders while differentiating (SymEngine leaves d Piecewise/dx
+        # as a Piecewise of zeros), then as the Piecewise the kernels' law is
+        above, below = se.Symbol(f"_above{i + 1}"), se.Symbol(f"_below{i + 1}")
+        indicators[above] = se.Piecewise((1, se.Gt(raw.qd[i], 0)), (0, True))
+        indicators[below] = se.Piecewise((1, se.Lt(raw.qd[i], 0)), (0, True))
+        tau.append(raw.tau[i] + v * raw.qd[i] + up * above + down * below + ia * raw.qdd[i])
         drives += [v, up, down, ia]
         drive_values += [viscous[i], coulomb[i, 0], coulomb[i, 1], armature[i]]
     phi = [se.Symbol(str(s)) for s in names] + drives
-    W = [[form._sympy(se.diff(t, p), collapse=False) for p in phi] for t in tau]
+    W = [[form._sympy(se.diff(t, p).subs(indicators), collapse=False) for p in phi] for t in tau]
     return sympy.Matrix(W), sympy.Matrix([sympy.Symbol(p.name) for p in phi]), [float(x) for x in values + drive_values]

@@ -1,0 +1,1897 @@
+"""Fuzzing the public surface: hostile inputs give a correct result or a clear error, never garbage.
+
+Every callable reachable from ``armdyn.__all__`` (the Robot methods and constructors, the model
+classes, ``load_urdf``, ``identify``, ``base_parameters``, ``armdyn.kinematics``,
+``armdyn.lagrange``, ``armdyn.models``), ``armdyn.simulate`` with the controllers and
+trajectories, ``armdyn.properties``, ``armdyn.statespace``, the compiled closed forms and every
+command of the ``armdyn`` CLI is called with values from tests/fuzz_values.py: NaN, infinities,
+complex numbers, huge values, wrong shapes and dtypes, junk objects, bad ``out=`` buffers,
+hostile files, mixed with valid but unusual values (int arrays, lists, views, batches).
+
+The rule (tests/fuzz_values.py): a case passes when the call returns the result its plain
+float equivalent gives (finite), or raises ModelError or TypeError naming the argument. Any
+other exception, a RuntimeWarning or ComplexWarning, a NaN or infinity in a result, a changed
+input, or an unnamed argument fails. A command passes with exit code 0 (no NaN printed), or
+exit code 2 with one ``error: ...`` line on stderr and no traceback.
+
+Cases that could take the interpreter down (compiled kernels and compiled closed forms with
+bad ``out=`` buffers, huge batches, simulations and commands asked for enormous runs, XML
+bombs) run in child interpreters with a memory limit (``RISKY``), started at the beginning
+and collected at the end; a crash fails the test, naming the case, and the child is restarted
+after it. Each test reports every class of failure it found with a reproduction each; the
+last line of the module's output counts the cases tried.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import dataclasses
+import functools
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+import armdyn as ad
+from armdyn import control, kinematics, properties, statespace, trajectories
+from armdyn.cli import app
+from armdyn.dynamics import regressor as parameterization
+from tests import fuzz_values as fv
+from tests.fuzz_values import (
+    NOTHING,
+    Arg,
+    Kinds,
+    Target,
+    Value,
+    choice_values,
+    finite,
+    items_values,
+    lazy,
+    non_negative,
+    none_is_valid,
+    out_values,
+    positive,
+    scalar_values,
+    state_values,
+)
+from tests.strategies import random_robot
+
+ROOT = Path(__file__).resolve().parent.parent
+CHILD_MEMORY = 3 * 2**30  # address space of a child interpreter: a huge allocation fails fast there
+CHILD_TIMEOUT = 110.0  # seconds for one child interpreter
+CHILD_COUNT = [0]  # cases tried in child interpreters
+# files written for the cases (removed at the end); a child interpreter is given a folder inside the parent's
+SCRATCH = Path(os.environ.get("ARMDYN_FUZZ_SCRATCH") or tempfile.mkdtemp(prefix="armdyn-fuzz-"))
+
+
+def junk(verdict: str = "bad", skip: tuple[str, ...] = (), **names: tuple[str, ...]) -> list[Value]:
+    """The junk objects of fuzz_values as Values."""
+    return [Value(f"junk: {label}", value, verdict, **names) for label, value in fv.junk_values() if label not in skip]
+
+
+# ----- arms and their valid states ------------------------------------------------------------
+
+
+def _build_arms() -> list[tuple[str, ad.Robot]]:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        arms = [(name, ad.models.load(name)) for name in ("two_link_planar", "cylindrical", "puma560", "scara")]
+        arms += [("polar_rp", ad.models.polar_rp()), ("random tree (4 joints)", random_robot(7, 4))]
+    return arms
+
+
+ARMS = _build_arms()
+SMALL_ARMS = [item for item in ARMS if item[0] in ("two_link_planar", "cylindrical", "scara")]
+_STATES: dict[int, dict[str, np.ndarray]] = {}
+
+
+def states(arm: ad.Robot) -> dict[str, np.ndarray]:
+    """Valid states of an arm (fixed, away from singular configurations): q, qd, qdd, tau, p."""
+    if id(arm) not in _STATES:
+        rng = np.random.default_rng(arm.n)
+        lower, upper = arm.qlim
+        prismatic = np.array(arm.kinds) == "prismatic"
+        q = np.where(prismatic, rng.uniform(0.3, 1.0, arm.n), rng.uniform(-1.0, 1.0, arm.n))
+        q = np.clip(q, lower, upper)
+        qd = rng.uniform(0.2, 1.0, arm.n) * rng.choice([-1.0, 1.0], arm.n)
+        qdd = rng.uniform(-1.0, 1.0, arm.n)
+        tau = arm.inverse_dynamics(q, qd, qdd)
+        _STATES[id(arm)] = {"q": q, "qd": qd, "qdd": qdd, "tau": tau, "p": arm.inertia_matrix(q) @ qd}
+    return {k: v.copy() for k, v in _STATES[id(arm)].items()}
+
+
+def _state_arg(name: str, **options: object) -> Arg:
+    """A state argument named like its key in ``states`` (q, qd, qdd, tau, p)."""
+    bounded = options.pop("bounded", name == "q")
+    return Arg(
+        lambda arm: states(arm)[name],
+        lambda arm: state_values(states(arm)[name], bounded=bounded, **options),
+        state=True,
+    )
+
+
+def _one_state(key: str, none_ok: bool = False, **options: object) -> Arg:
+    def values(arm: ad.Robot) -> Kinds:
+        kinds = state_values(states(arm)[key], batch=False, bounded=key == "q")
+        return none_is_valid(kinds) if none_ok else kinds
+
+    return Arg(lambda arm: states(arm)[key], values, **options)
+
+
+def _out_arg(shape: Callable[[ad.Robot], tuple[int, ...]], risky: bool = False) -> Arg:
+    return Arg(lambda arm: None, lambda arm: out_values(shape(arm), risky), alone=True)
+
+
+@functools.cache
+def _arm_items(arm: ad.Robot, robot_only: bool, symbolic_ok: bool = False) -> tuple[Value, ...]:
+    plain = ad.ArmModel(arm.links, name=arm.name, gravity=arm.gravity, base=arm.base, tool=arm.tool)
+    items = [
+        Value("the arm", arm, "same", arm),
+        Value("an ArmModel (not a Robot)", plain, "bad" if robot_only else "same", arm),
+        Value("a symbolic arm", ad.models.two_link_planar(symbolic=True), "either" if symbolic_ok else "bad"),
+        Value("the Robot class", ad.Robot, "bad"),
+        Value("a name", arm.name, "bad"),
+        Value("a Link", arm.links[0], "bad"),
+        Value("a list of links", list(arm.links), "bad"),
+    ]
+    return tuple(items + junk())
+
+
+def _robot_arg(robot_only: bool = False, symbolic_ok: bool = False) -> Arg:
+    """A function's arm argument: the arm, its plain ArmModel, a symbolic arm, junk."""
+    return Arg(
+        lambda arm: arm, lambda arm: items_values(_arm_items(arm, robot_only, symbolic_ok)), names=("robot", "arm")
+    )
+
+
+def _method(name: str, args: dict[str, Arg], arms: list | None = None, **options: object) -> Target:
+    return Target(f"Robot.{name}", lambda arm, **kw: getattr(arm, name)(**kw), args, arms or ARMS, **options)
+
+
+# ----- the dynamics, kinematics and parameterization as Robot methods ---------------------------
+
+
+def VECTOR(arm: ad.Robot) -> tuple[int, ...]:
+    return (arm.n,)
+
+
+def MATRIX(arm: ad.Robot) -> tuple[int, ...]:
+    return (arm.n, arm.n)
+
+
+DYNAMICS = {  # method: (state arguments, shape of out= or None when it has none)
+    "inverse_dynamics": (("q", "qd", "qdd"), VECTOR),
+    "forward_dynamics": (("q", "qd", "tau"), VECTOR),
+    "inertia_matrix": (("q",), MATRIX),
+    "inertia_matrix_dot": (("q", "qd"), None),
+    "coriolis_matrix": (("q", "qd"), MATRIX),
+    "coriolis_vector": (("q", "qd"), VECTOR),
+    "gravity_vector": (("q",), VECTOR),
+    "friction": (("qd",), VECTOR),
+    "nonlinear_terms": (("q", "qd"), VECTOR),
+    "kinetic_energy": (("q", "qd"), None),
+    "potential_energy": (("q",), None),
+    "energies": (("q", "qd"), lambda arm: (2,)),
+}
+
+
+def dynamics_targets() -> list[Target]:
+    wrench = np.array([1.0, -2.0, 0.5, 0.1, 0.2, -0.3])
+    targets = []
+    for name, (names, _) in DYNAMICS.items():
+        args = {k: _state_arg(k) for k in names}
+        if name == "inverse_dynamics":
+            args["f_ext"] = Arg(
+                lambda arm: None, lambda arm: none_is_valid(state_values(wrench, batch=False, bounded=False))
+            )
+        targets.append(_method(name, args))
+    args = {k: _state_arg(k) for k in ("q", "qd", "qdd")}
+    args["out"] = _out_arg(lambda arm: (arm.n, 14 * arm.n))
+    targets.append(_method("regressor", args))
+    targets.append(Target("Robot.parameters", lambda arm: arm.parameters(), {}, ARMS, sweeps=3))
+    return targets
+
+
+def _link_values(arm: ad.Robot) -> Kinds:
+    n = arm.n
+    items = [Value(f"valid {k!r}", k, "same", k) for k in (None, 0, n - 1)]
+    items += [Value("numpy int64", np.int64(n - 1), "same", n - 1), Value("numpy uint8", np.uint8(0), "same", 0)]
+    items += [Value(f"{k!r}"[:30], k, "bad") for k in (-1, n, 10**400, 1.0, True, np.bool_(False), "1", [1])]
+    items += [Value("0-d int array", np.array(0), "either", 0), Value("numpy float64", np.float64(0), "bad")]
+    return items_values(items + junk(skip=("None",)))
+
+
+FRAME = Arg(
+    lambda arm: "base",
+    lambda arm: choice_values(["base", "tool", np.str_("tool")], ["BASE", "world", "", "base ", b"base", 0]),
+)
+LINK = Arg(lambda arm: None, _link_values)
+
+
+def kinematics_targets() -> list[Target]:
+    q = _state_arg("q", complex_ok=True)
+    qd = _state_arg("qd", complex_ok=True)
+    return [
+        _method("link_transforms", {"q": q}),
+        _method("tool_pose", {"q": q}),
+        _method("link_transform_derivatives", {"q": q}),
+        _method("jacobian", {"q": q, "frame": FRAME, "link": LINK}),
+        _method("jacobian_dot", {"q": q, "qd": qd, "frame": FRAME, "link": LINK}),
+    ]
+
+
+# ----- model variants and constructors --------------------------------------------------------
+
+
+def inertia_values(valid: tuple = (0.01, 0.02, 0.015)) -> Kinds:
+    """Values for an inertia tensor about the centre of mass: 3 moments, 6 values or 3x3."""
+    tensor = np.diag(np.asarray(valid, dtype=float))
+    items = [
+        Value("3 moments", list(valid), "same", tensor),
+        Value("6 values", [*valid, 0.0, 0.0, 0.0], "same", tensor),
+        Value("3x3 nested list", tensor.tolist(), "same", tensor),
+        Value("3x3 int zeros", np.zeros((3, 3), dtype=int), "same", np.zeros((3, 3))),
+        Value("3x3 float32", tensor.astype(np.float32), "same", tensor.astype(np.float32).astype(float)),
+        Value("negative moment", [-0.01, 0.02, 0.015], "bad"),
+        Value("not symmetric", [[0.01, 0.005, 0], [0, 0.02, 0], [0, 0, 0.015]], "bad"),
+        Value("indefinite", [[0.01, 0.05, 0], [0.05, 0.01, 0], [0, 0, 0.015]], "bad"),
+        Value("triangle inequality broken", [0.01, 0.01, 0.5], "bad", names=("triangle",)),
+        Value("NaN moment", [np.nan, 0.02, 0.015], "bad"),
+        Value("inf moment", [np.inf, 0.02, 0.015], "bad"),
+        Value("1e300 moments", [1e300, 1e300, 1e300], "either"),
+        Value("complex moments", [0.01 + 1j, 0.02, 0.015], "bad"),
+        Value("shape (2, 2)", np.eye(2), "bad"),
+        Value("shape (4,)", [0.01, 0.02, 0.015, 0.0], "bad"),
+        Value("shape (3, 3, 1)", np.zeros((3, 3, 1)), "bad"),
+        Value("scalar", 0.01, "bad"),
+        Value("text moments", ["a", "b", "c"], "bad"),
+        Value("ragged", [[0.01, 0], [0, 0.02, 0], [0, 0, 0.015]], "bad"),
+    ]
+    return items_values(items + junk(skip=("None",)))
+
+
+def transform_values(none_ok: bool = True) -> Kinds:
+    """Values for a 4x4 rigid transform (a base, a tool, a placement)."""
+    c, s = np.cos(0.3), np.sin(0.3)
+    turn = np.array([[c, -s, 0, 0.1], [s, c, 0, 0.2], [0, 0, 1, 0.3], [0, 0, 0, 1.0]])
+    eye = np.eye(4)
+    entry = np.arange(16).reshape(4, 4)
+    items = [
+        Value("rotation about z", turn, "same", turn),
+        Value("nested list", turn.tolist(), "same", turn),
+        Value("int identity", np.eye(4, dtype=int), "same", eye),
+        Value("read-only", fv._readonly(turn), "same", turn),
+        Value("Fortran order", np.asfortranarray(turn), "same", turn),
+        Value("float32 identity", np.eye(4, dtype=np.float32), "same", eye),
+        Value("float32 rotation", turn.astype(np.float32), "either", turn.astype(np.float32).astype(float)),
+        Value("scaled by 2", np.diag([2.0, 2.0, 2.0, 1.0]), "bad"),
+        Value("mirror", np.diag([1.0, -1.0, 1.0, 1.0]), "bad"),
+        Value("last row [0 0 1 1]", np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 1, 1.0]]), "bad"),
+        Value("NaN translation", np.where(entry == 3, np.nan, eye), "bad"),
+        Value("inf rotation", np.where(entry == 0, np.inf, eye), "bad"),
+        Value("1e300 translation", np.where(entry == 3, 1e300, eye), "either"),
+        Value("nearly rigid (1e-12 off)", eye + 1e-12 * np.diag([1.0, 0, 0, 0]), "either", eye),
+        Value("shape (3, 3)", np.eye(3), "bad"),
+        Value("shape (4, 4, 1)", np.eye(4)[..., None], "bad"),
+        Value("batch (2, 4, 4)", np.stack([eye, eye]), "bad"),
+        Value("complex identity", np.eye(4, dtype=complex), "bad"),
+        Value("object identity", np.eye(4).astype(object), "either", eye),
+        Value("text", np.full((4, 4), "x"), "bad"),
+        Value("flat 16", np.eye(4).ravel(), "bad"),
+        Value("None", None, "same" if none_ok else "bad", eye if none_ok else NOTHING),
+    ]
+    return items_values(items + junk(skip=("None",)))
+
+
+def gravity_arg() -> Arg:
+    g = np.array([0.0, 0.0, -9.81])
+    return Arg(lambda arm: g.copy(), lambda arm: state_values(g, batch=False, bounded=False), names=("gravity",))
+
+
+def _configurations_values(arm: ad.Robot) -> Kinds:
+    n = arm.n
+    ok = {"qa": [0.1] * n}
+    items = [
+        Value("valid mapping", ok, "same", ok),
+        Value("None", None, "same", None),
+        Value("int values", {"qa": [1] * n}, "same", {"qa": [1.0] * n}),
+        Value("n+1 values", {"qa": [0.1] * (n + 1)}, "bad"),
+        Value("NaN values", {"qa": [np.nan] * n}, "bad"),
+        Value("text values", {"qa": ["x"] * n}, "bad"),
+        Value("name not an identifier", {"1 bad": [0.1] * n}, "bad"),
+        Value("name clashing with an attribute", {"n": [0.1] * n}, "bad"),
+        Value("int key", {1: [0.1] * n}, "bad"),
+        Value("list of pairs", [("qa", [0.1] * n)], "bad"),
+        Value("a string", "qa", "bad"),
+        Value("complex values", {"qa": [1j] * n}, "bad"),
+        Value("1e300 values", {"qa": [1e300] * n}, "either"),
+    ]
+    return items_values(items + junk(skip=("None",)))
+
+
+def _tool_link_values(arm: ad.Robot) -> Kinds:
+    n = arm.n
+    return scalar_values(
+        [0, n - 1], lambda x: "same" if float(x).is_integer() and 0 <= x < n else "bad", none="same", integer=True
+    )
+
+
+def _links_values(arm: ad.Robot, none_ok: bool = True) -> Kinds:
+    links = list(arm.links)
+    forward = [dataclasses.replace(links[0], parent=1), *links[1:]]
+    text_parent = [dataclasses.replace(links[0], parent="base"), *links[1:]]
+    items = [
+        Value("a tuple of the links", tuple(links), "same", links),
+        Value("None (its own)", None, "same" if none_ok else "bad", None if none_ok else NOTHING),
+        Value("empty list", [], "bad"),
+        Value("a Link not in a list", links[0], "bad"),
+        Value("ints", [1, 2], "bad"),
+        Value("a string", "links", "bad"),
+        Value("the same link twice", [links[0], links[0]], "bad"),
+        Value("a parent after its child", forward, "bad", names=("parent",)),
+        Value("a parent given as text", text_parent, "bad", names=("parent",)),
+        Value("None among the links", [*links[:-1], None], "bad"),
+    ]
+    items.append(Value("a generator of the links", (link for link in links), "either", links))
+    return items_values(items + junk(skip=("None",)))
+
+
+def variant_targets() -> list[Target]:
+    com = np.array([0.01, 0.0, 0.02])
+    payload = {
+        "mass": Arg(lambda arm: 0.5, lambda arm: scalar_values([0.5, 2.0], non_negative), names=("payload",)),
+        "com": Arg(
+            lambda arm: com,
+            lambda arm: state_values(com, batch=False, bounded=False),
+            names=("centre of mass", "center of mass", "payload"),
+        ),
+        "inertia": Arg(lambda arm: None, lambda arm: inertia_values(), names=("payload",)),
+    }
+
+    def label(default: str) -> Arg:
+        return Arg(
+            lambda arm: default,
+            lambda arm: choice_values(["x", "a b"], [], [None, 1, b"x", "", "é" * 50], "either"),
+        )
+
+    replace = {
+        "name": label("renamed"),
+        "description": label(""),
+        "gravity": gravity_arg(),
+        "base": Arg(lambda arm: None, lambda arm: transform_values()),
+        "tool": Arg(lambda arm: None, lambda arm: transform_values()),
+        "tool_link": Arg(lambda arm: arm.n - 1, _tool_link_values),
+        "configurations": Arg(lambda arm: None, _configurations_values, names=("configuration",)),
+        "links": Arg(lambda arm: None, _links_values, names=("link", "Link", "joint")),
+    }
+    configuration_names = Arg(
+        lambda arm: next(iter(arm.configurations)),
+        lambda arm: choice_values(list(arm.configurations), ["nope", "QZ", ""], [np.str_("qz")]),
+        names=("configuration",),
+    )
+    configured = [item for item in ARMS if item[1].configurations]
+    return [
+        _method("with_payload", payload),
+        _method("replace", replace),
+        _method("with_gravity", {"gravity": gravity_arg()}),
+        _method("configuration", {"name": configuration_names}, configured),
+    ]
+
+
+DH_ROWS = [
+    {"a": 1.0, "mass": 1.0, "com": [-0.5, 0.0, 0.0], "inertia": [0.01, 0.02, 0.02], "B": 0.1, "Tc": (0.2, -0.2)},
+    {"kind": "P", "alpha": 0.3, "theta": 0.1, "d": 0.2, "mass": 0.5, "Jm": 1e-4, "G": 50.0, "qlim": (0.0, 1.0)},
+]
+DH_KEY_NAMES = {
+    "mass": ("mass",),
+    "com": ("com", "centre of mass", "center of mass"),
+    "inertia": ("inertia",),
+    "Jm": ("Jm", "motor inertia"),
+    "G": ("G", "gear ratio"),
+    "B": ("B", "viscous"),
+    "Tc": ("Tc", "Coulomb"),
+    "qlim": ("qlim", "limits"),
+    "kind": ("kind",),
+    "name": ("name",),
+    "a": ("a",),
+    "alpha": ("alpha",),
+    "d": ("d",),
+    "theta": ("theta",),
+    "strict": ("strict",),
+}
+
+
+def _dh_key_kinds(key: str) -> Kinds:
+    """The kinds of value for one key of a DH row."""
+    if key in ("mass", "Jm", "B"):
+        return scalar_values([0.5], non_negative)
+    if key == "G":
+        return scalar_values([2.0, -3.0], lambda x: "bad" if x == 0 or not np.isfinite(x) else finite(x))
+    if key in ("a", "alpha", "d", "theta"):
+        return scalar_values([0.5, -0.2], finite)
+    if key == "com":
+        return state_values(np.array([0.1, 0.0, 0.0]), batch=False, bounded=False)
+    if key == "inertia":
+        return inertia_values()
+    if key in ("Tc", "qlim"):
+        return state_values(np.array((0.2, -0.1) if key == "Tc" else (-1.0, 1.0)), batch=False, bounded=False)
+    if key == "kind":
+        return choice_values(["R", "P", "revolute", "prismatic", "r"], ["X", "", "RP", "fixed"])
+    if key == "name":
+        return choice_values(["j", "joint 7"], [], [None, 1, b"j", ""], "either")
+    return choice_values([True, False], [], ["no", 0, None], "either")
+
+
+@st.composite
+def _dh_row_value(draw: st.DrawFn, key: str, kind: st.SearchStrategy[Value]) -> Value:
+    """A DH table with one entry of one row replaced by a value of the given kind."""
+    value = draw(kind)
+    index = draw(st.integers(0, 1))
+    pair = value.reference if isinstance(value.reference, np.ndarray) and value.reference.shape == (2,) else None
+    broken = pair is not None and (
+        (key == "Tc" and not pair[0] >= 0 >= pair[1]) or (key == "qlim" and pair[0] > pair[1])
+    )
+    if broken and value.verdict == "same":
+        value.verdict = "bad"
+    rows = copy.deepcopy(DH_ROWS)
+    rows[index][key] = value.value
+    reference = NOTHING
+    if value.reference is not NOTHING:
+        reference = copy.deepcopy(DH_ROWS)
+        reference[index][key] = value.reference
+    names = (*DH_KEY_NAMES[key], *value.names)
+    return Value(f"row {index} {key}: {value.label}", rows, value.verdict, reference, names=names)
+
+
+def dh_table_values() -> Kinds:
+    """DH tables with one entry of one row replaced, or tables that are no table at all."""
+    rows = copy.deepcopy(DH_ROWS)
+    items = [
+        Value("tuple of rows", tuple(rows), "same", copy.deepcopy(DH_ROWS)),
+        Value("empty table", [], "bad"),
+        Value("a row not in a list", rows[0], "bad"),
+        Value("None as a row", [rows[0], None], "bad"),
+        Value("a string", "RP", "bad"),
+        Value("rows as lists", [list(r.items()) for r in rows], "bad"),
+        Value("unknown key", [rows[0], {**rows[1], "mass2": 1.0}], "bad", names=("mass2", "key")),
+        Value("empty rows (massless)", [{}, {}], "same", [{}, {}]),
+    ]
+    kinds = items_values(items + junk())
+    kinds.append(lazy(lambda: Value("generator of rows", (dict(r) for r in DH_ROWS), "either", DH_ROWS)))
+    return kinds + [_dh_row_value(key, kind) for key in DH_KEY_NAMES for kind in _dh_key_kinds(key)]
+
+
+def _object_values(valid: object, kind: type, callable_ok: bool = False) -> Kinds:
+    items = [Value(f"a {kind.__name__}", valid, "same", valid), Value("a Robot", ARMS[0][1], "bad")]
+    items += [Value(v.label, v.value, "either" if callable_ok and callable(v.value) else "bad") for v in junk()]
+    return items_values(items)
+
+
+def axis_values() -> Kinds:
+    z = np.array([0.0, 0.0, 1.0])
+    diagonal = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    items = [
+        Value("list", [0.0, 0.0, 1.0], "same", z),
+        Value("int array", np.array([0, 0, 1]), "same", z),
+        Value("float32", z.astype(np.float32), "same", z),
+        Value("diagonal unit", diagonal, "same", diagonal),
+        Value("column (3, 1)", z[:, None], "either", z),
+        Value("length 2", [0.0, 0.0, 2.0], "bad"),
+        Value("zero", [0.0, 0.0, 0.0], "bad"),
+        Value("NaN", [np.nan, 0.0, 1.0], "bad"),
+        Value("inf", [np.inf, 0.0, 0.0], "bad"),
+        Value("two values", [0.0, 1.0], "bad"),
+        Value("four values", [0.0, 0.0, 1.0, 0.0], "bad"),
+        Value("complex", [0.0, 0.0, 1.0 + 0j], "bad"),
+        Value("text", ["0", "0", "x"], "bad"),
+        Value("nearly unit (1 + 1e-12)", [0.0, 0.0, 1.0 + 1e-12], "either", z),
+    ]
+    return items_values(items + junk())
+
+
+def constructor_targets() -> list[Target]:
+    joint = ad.Joint()
+    inertial = ad.Inertial(1.0, [0.1, 0, 0], [0.01, 0.02, 0.02], "l")
+    no_arm = [("-", None)]
+    names = Arg(lambda arm: "x", lambda arm: choice_values(["x", "joint 1"], [], [None, 7, b"x", "", "\x00"], "either"))
+    strict = Arg(lambda arm: True, lambda arm: choice_values([True, False], [], ["no", 0, None], "either"))
+    planar = ARMS[0][1]
+
+    def vector(v: tuple | list, **options: object) -> Arg:
+        return Arg(lambda arm: v, lambda arm: state_values(np.array(v), batch=False, bounded=False), **options)
+
+    robot_args = {
+        "links": Arg(
+            lambda arm: list(planar.links), lambda arm: _links_values(planar, False), names=("link", "Link", "joint")
+        ),
+        "name": names,
+        "gravity": gravity_arg(),
+        "base": Arg(lambda arm: None, lambda arm: transform_values()),
+        "tool": Arg(lambda arm: None, lambda arm: transform_values()),
+        "tool_link": Arg(lambda arm: None, lambda arm: _tool_link_values(planar)),
+        "configurations": Arg(lambda arm: None, lambda arm: _configurations_values(planar), names=("configuration",)),
+        "description": names,
+    }
+    dh_args = {
+        "table": Arg(lambda arm: copy.deepcopy(DH_ROWS), lambda arm: dh_table_values(), names=("row", "joint")),
+        "convention": Arg(
+            lambda arm: "standard",
+            lambda arm: choice_values(["standard", "modified"], ["Standard", "craig", "", b"standard"]),
+        ),
+        "gravity": gravity_arg(),
+        "name": names,
+    }
+    inertial_args = {
+        "mass": Arg(lambda arm: 1.0, lambda arm: scalar_values([1.0, 0.0], non_negative)),
+        "com": vector([0.1, 0.0, 0.0], names=("centre of mass", "center of mass")),
+        "inertia": Arg(lambda arm: [0.01, 0.02, 0.02], lambda arm: inertia_values()),
+        "name": names,
+        "strict": strict,
+    }
+    joint_args = {
+        "kind": Arg(
+            lambda arm: "revolute",
+            lambda arm: choice_values(["R", "P", "continuous", "Prismatic"], ["X", "", "fixed", "rp"]),
+        ),
+        "placement": Arg(lambda arm: np.eye(4), lambda arm: transform_values(none_ok=False)),
+        "axis": Arg(lambda arm: [0.0, 0.0, 1.0], lambda arm: axis_values()),
+        "frame_offset": Arg(lambda arm: np.eye(4), lambda arm: transform_values(none_ok=False)),
+        "name": names,
+    }
+    link_args = {
+        "name": names,
+        "joint": Arg(lambda arm: joint, lambda arm: _object_values(joint, ad.Joint)),
+        "inertial": Arg(lambda arm: inertial, lambda arm: _object_values(inertial, ad.Inertial)),
+        "parent": Arg(
+            lambda arm: -1,
+            lambda arm: scalar_values(
+                [-1, 0], lambda x: "same" if x.is_integer() and x >= -1 else "either", integer=True
+            ),
+        ),
+        "viscous": Arg(lambda arm: 0.1, lambda arm: scalar_values([0.1, 0.0], non_negative)),
+        "coulomb": vector((0.2, -0.1), names=("Coulomb",)),
+        "motor_inertia": Arg(
+            lambda arm: 1e-4, lambda arm: scalar_values([1e-4, 0.0], non_negative), names=("motor inertia",)
+        ),
+        "gear_ratio": Arg(
+            lambda arm: 10.0,
+            lambda arm: scalar_values([10.0, -5.0], lambda x: "bad" if x == 0 else finite(x)),
+            names=("gear ratio",),
+        ),
+        "limits": vector((-1.0, 1.0), names=("limit",)),
+    }
+    return [
+        Target("Robot.from_dh", lambda arm, **kw: ad.Robot.from_dh(**kw), dh_args, no_arm),
+        Target("Robot(links, ...)", lambda arm, **kw: ad.Robot(**kw), robot_args, no_arm),
+        Target("Inertial", lambda arm, **kw: ad.Inertial(**kw), inertial_args, no_arm),
+        Target("Joint", lambda arm, **kw: ad.Joint(**kw), joint_args, no_arm),
+        Target("Link", lambda arm, **kw: ad.Link(**kw), link_args, no_arm),
+    ]
+
+
+# ----- the built-in models -------------------------------------------------------------------
+
+MODEL_NAMES = {"m1": ("mass",), "m2": ("mass",), "m": ("mass",), "a1": ("length",), "a2": ("length",)}
+MODEL_NAMES |= {"g": ("gravity",), "J": ("inertia",)}
+
+
+def model_targets() -> list[Target]:
+    no_arm = [("-", None)]
+
+    def parameters(**defaults: tuple[float, Callable]) -> dict[str, Arg]:
+        args = {
+            key: Arg(lambda arm, v=value: v, lambda arm, v=value, r=rule: scalar_values([v], r), names=MODEL_NAMES[key])
+            for key, (value, rule) in defaults.items()
+        }
+        args["symbolic"] = Arg(
+            lambda arm: False, lambda arm: choice_values([False, True], [], ["yes", 1, None], "either"), alone=True
+        )
+        return args
+
+    names = choice_values(
+        ad.models.names(),
+        ["", "nosuch", " puma560", "names", "load", "__init__", "puma560\x00", "Robot"],
+        ["PUMA560", np.str_("scara")],
+    )
+    fixed = (ad.models.puma560, ad.models.stanford, ad.models.scara, ad.models.names)
+    return [
+        Target(
+            "models.load",
+            lambda arm, **kw: ad.models.load(**kw),
+            {"name": Arg(lambda arm: "scara", lambda arm: names, names=("arm",))},
+            no_arm,
+        ),
+        Target(
+            "models.two_link_planar",
+            lambda arm, **kw: ad.models.two_link_planar(**kw),
+            parameters(
+                m1=(1.0, non_negative), m2=(2.0, non_negative), a1=(1.0, finite), a2=(0.5, finite), g=(9.8, finite)
+            ),
+            no_arm,
+        ),
+        Target(
+            "models.polar_rp",
+            lambda arm, **kw: ad.models.polar_rp(**kw),
+            parameters(m=(1.0, non_negative), g=(9.8, finite)),
+            no_arm,
+        ),
+        Target(
+            "models.cylindrical",
+            lambda arm, **kw: ad.models.cylindrical(**kw),
+            parameters(J=(1.0, non_negative), m1=(1.0, non_negative), m2=(2.0, non_negative), g=(9.8, finite)),
+            no_arm,
+        ),
+        Target("models.puma560, stanford, scara, names", lambda arm: [f() for f in fixed], {}, no_arm),
+    ]
+
+
+# ----- URDF files -----------------------------------------------------------------------------
+
+URDF = """<?xml version="1.0"?>
+<robot name="{robot_name}">
+  <link name="base"/>
+  <link name="l1">
+    <inertial><origin xyz="{l1_com}" rpy="0 0 0"/><mass value="{l1_mass}"/>
+      <inertia ixx="{l1_ixx}" ixy="{l1_ixy}" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial>
+  </link>
+  <link name="l2">
+    <inertial><origin xyz="0.2 0 0" rpy="0 0 0"/><mass value="0.5"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+  </link>
+  <joint name="j1" type="{j1_type}">
+    <parent link="{j1_parent}"/><child link="l1"/>
+    <origin xyz="{j1_xyz}" rpy="{j1_rpy}"/><axis xyz="{j1_axis}"/>
+    <limit lower="{j1_lower}" upper="{j1_upper}" effort="10" velocity="1"/>
+    <dynamics damping="{j1_damping}" friction="{j1_friction}"/>
+  </joint>
+  <joint name="j2" type="revolute">
+    <parent link="l1"/><child link="{j2_child}"/>
+    <origin xyz="0.5 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="10" velocity="1"/>
+  </joint>
+</robot>
+"""
+SLOTS = {
+    "robot_name": "fuzz",
+    "l1_com": "0.1 0 0",
+    "l1_mass": "1.0",
+    "l1_ixx": "0.02",
+    "l1_ixy": "0",
+    "j1_type": "revolute",
+    "j1_parent": "base",
+    "j1_xyz": "0 0 0.1",
+    "j1_rpy": "0 0 0",
+    "j1_axis": "0 0 1",
+    "j1_lower": "-1",
+    "j1_upper": "1",
+    "j1_damping": "0.1",
+    "j1_friction": "0.05",
+    "j2_child": "l2",
+}
+NUMBER_TOKENS = {
+    "nan": "bad",
+    "inf": "bad",
+    "-inf": "bad",
+    "abc": "bad",
+    "": "either",
+    "1 2": "bad",
+    "0x10": "bad",
+    "-1": "either",
+    "1e300": "either",
+    "1e16": "either",
+    "-0": "either",
+    "1_000": "either",
+    "\u0661": "either",
+    "1e-320": "either",
+}
+VECTOR_TOKENS = {
+    "nan 0 0": "bad",
+    "0 inf 0": "bad",
+    "1 2": "bad",
+    "1 2 3 4": "bad",
+    "a b c": "bad",
+    "0,0,1": "bad",
+    "": "either",
+    "0 0 0": "either",
+    "1e300 0 0": "either",
+    "1e16 0 1": "either",
+    "0 0 1e-320": "either",
+}
+SLOT_TOKENS = {
+    "j1_type": {
+        "floating": "bad",
+        "planar": "bad",
+        "spherical": "bad",
+        "": "bad",
+        "REVOLUTE": "bad",
+        "prismatic": "either",
+        "continuous": "either",
+        "fixed": "either",
+    },
+    "j1_parent": {"l2": "bad", "nosuch": "bad", "l1": "bad", "": "bad"},
+    "j2_child": {"l1": "bad", "base": "bad", "nosuch": "bad"},
+    "robot_name": {
+        "": "bad",
+        "<": "bad",
+        '"': "bad",
+        "&#0;": "bad",
+        "&amp;": "either",
+        "\u540d": "either",
+        "x" * 100_000: "either",
+    },
+}
+SECRET = "SECRET-TOKEN-4711"
+_FILES = [0]
+
+
+def _write(content: str | bytes, suffix: str = ".urdf") -> Path:
+    _FILES[0] += 1
+    path = SCRATCH / f"case{_FILES[0]}{suffix}"
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content, encoding="utf-8")
+    return path
+
+
+def _urdf(**changes: str) -> str:
+    return URDF.format(**(SLOTS | changes))
+
+
+def _no_secret(robot: object) -> str | None:
+    return f"read an external entity into the model: name {robot.name!r}" if SECRET in robot.name else None
+
+
+def _structural(risky: bool) -> list[tuple[str, Callable[[], str | bytes], str]]:
+    """(label, content maker, verdict) for whole files."""
+    good = _urdf()
+    secret = SCRATCH / "secret.txt"
+    secret.write_text(SECRET)
+    chain = "".join(
+        f'<link name="c{i}"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>'
+        f'<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+        f'<joint name="k{i}" type="revolute"><parent link="{"base" if i == 0 else f"c{i - 1}"}"/>'
+        f'<child link="c{i}"/><origin xyz="0.1 0 0"/><axis xyz="0 0 1"/></joint>'
+        for i in range(150)
+    )
+    if risky:
+        laughs = "".join(f'<!ENTITY l{i} "{("&l" + str(i - 1) + ";") * 10}">' for i in range(1, 12))
+        blowup = "x" * 50_000
+        return [
+            (
+                "billion laughs",
+                lambda: f'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY l0 "ha">{laughs}]><robot name="&l11;"/>',
+                "bad",
+            ),
+            (
+                "quadratic blowup",
+                lambda: f'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "{blowup}">]><robot name="{"&a;" * 50_000}"/>',
+                "bad",
+            ),
+        ]
+    return [
+        ("empty file", lambda: "", "bad"),
+        ("binary junk", lambda: bytes(range(256)) * 8, "bad"),
+        ("NUL bytes in XML", lambda: good.replace('<link name="base"/>', '<link name="base"/>\x00'), "bad"),
+        ("latin-1 bytes", lambda: good.replace("fuzz", "f\u00fc").encode("latin-1"), "either"),
+        ("UTF-16 with BOM", lambda: good.encode("utf-16"), "either"),
+        ("UTF-8 BOM", lambda: b"\xef\xbb\xbf" + good.encode(), "either"),
+        ("truncated", lambda: good[: len(good) // 2], "bad"),
+        ("html root", lambda: "<html><body>no robot</body></html>", "bad"),
+        ("robot without a name", lambda: good.replace(' name="fuzz"', ""), "bad"),
+        (
+            "link defined twice",
+            lambda: good.replace('<link name="base"/>', '<link name="base"/><link name="l2"/>'),
+            "bad",
+        ),
+        ("no joints", lambda: '<robot name="r"><link name="base"/></robot>', "bad"),
+        ("two roots", lambda: good.replace('<link name="base"/>', '<link name="base"/><link name="orphan"/>'), "bad"),
+        (
+            "external entity (XXE)",
+            lambda: good.replace(
+                '<?xml version="1.0"?>', f'<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY s SYSTEM "{secret}">]>'
+            ).replace('name="fuzz"', 'name="&s;"'),
+            "either",
+        ),
+        (
+            "external DTD",
+            lambda: good.replace(
+                '<?xml version="1.0"?>', '<?xml version="1.0"?><!DOCTYPE robot SYSTEM "http://127.0.0.1:9/x.dtd">'
+            ),
+            "either",
+        ),
+        ("long chain (150 joints)", lambda: f'<robot name="chain"><link name="base"/>{chain}</robot>', "either"),
+        (
+            "mimic joint",
+            lambda: good.replace('<axis xyz="0 1 0"/>', '<axis xyz="0 1 0"/><mimic joint="j1"/>'),
+            "either",
+        ),
+        ("comment only", lambda: "<!-- nothing -->", "bad"),
+        (
+            "massless file",
+            lambda: good.replace('value="1.0"', 'value="0"').replace('value="0.5"', 'value="0"'),
+            "either",
+        ),
+    ]
+
+
+def _slot_value(slot: str, token: str, verdict: str) -> Value:
+    path = _write(_urdf(**{slot: token}))
+    return Value(f"{slot}={token[:12]!r}", path, verdict, names=(path.name, "path"))
+
+
+def _file_value(label: str, make: Callable[[], str | bytes], verdict: str) -> Value:
+    path = _write(make())
+    return Value(label, path, verdict, names=(path.name, "path"), check=_no_secret if "XXE" in label else None)
+
+
+def urdf_values(risky: bool = False) -> Kinds:
+    """Paths to URDF files: the valid template with one attribute replaced (every slot, every
+    token), whole hostile files, and paths that are no file."""
+    kinds = [lazy(lambda a=item: _file_value(*a)) for item in _structural(risky)]
+    if risky:
+        return kinds
+    for slot in SLOTS:
+        tokens = SLOT_TOKENS.get(slot) or (
+            VECTOR_TOKENS if slot in ("l1_com", "j1_xyz", "j1_rpy", "j1_axis") else NUMBER_TOKENS
+        )
+        for token, verdict in tokens.items():
+            verdict = "bad" if slot == "j1_axis" and token in ("", "0 0 0") else verdict
+            kinds.append(lazy(lambda a=(slot, token, verdict): _slot_value(*a)))
+    good = _write(_urdf())
+    items = [
+        Value("str path", str(good), "same", good),
+        Value("missing file", SCRATCH / "missing.urdf", "bad", names=("missing.urdf",)),
+        Value("a folder", SCRATCH, "bad", names=(SCRATCH.name,)),
+        Value("path with NUL", str(good) + "\x00", "bad", names=(good.name, "path")),
+        Value("bytes path", bytes(good), "either", good),
+        Value("file URL", good.as_uri(), "bad", names=("file:",)),
+        Value("/dev/null", Path("/dev/null"), "bad", names=("null",)),
+        Value("int", 3, "bad"),
+    ]
+    return kinds + items_values(items + junk())
+
+
+def urdf_targets(risky: bool = False) -> list[Target]:
+    good = _write(_urdf())
+    gravity = np.array([0.0, 0.0, -9.81])
+    args = {
+        "path": Arg(lambda arm: good, lambda arm: urdf_values(risky)),
+        "strict": Arg(lambda arm: True, lambda arm: choice_values([True, False], [], ["no", 0, None], "either")),
+        "gravity": Arg(lambda arm: gravity, lambda arm: state_values(gravity, batch=False, bounded=False)),
+    }
+    if risky:
+        args = {"path": args["path"]}
+    return [Target("load_urdf" + (" (XML bombs)" if risky else ""), lambda arm, **kw: ad.load_urdf(**kw), args)]
+
+
+# ----- identification, parameterization ------------------------------------------------------
+
+_SAMPLES: dict[int, dict[str, np.ndarray]] = {}
+
+
+def samples(arm: ad.Robot) -> dict[str, np.ndarray]:
+    """Well-exciting samples (40 states) with their torques."""
+    if id(arm) not in _SAMPLES:
+        rng = np.random.default_rng(1)
+        lower, upper = arm.qlim
+        low, high = np.where(np.isfinite(lower), lower, -np.pi), np.where(np.isfinite(upper), upper, np.pi)
+        q = rng.uniform(low, high, (40, arm.n))
+        qd, qdd = rng.uniform(-2, 2, (2, 40, arm.n))
+        _SAMPLES[id(arm)] = {"q": q, "qd": qd, "qdd": qdd, "tau": arm.inverse_dynamics(q, qd, qdd)}
+    return {k: v.copy() for k, v in _SAMPLES[id(arm)].items()}
+
+
+DRIVES = Arg(lambda arm: True, lambda arm: choice_values([True, False, np.True_], [], ["no", 0, 1, None]))
+
+
+def _count(low: int, high: int) -> Callable[[float], str]:
+    """A rule for a count: at least ``low``; above ``high`` it may be refused."""
+
+    def rule(x: float) -> str:
+        if not np.isfinite(x) or x < low:
+            return "bad"
+        return "same" if x.is_integer() and x <= high else "either"
+
+    return rule
+
+
+def parameterization_targets() -> list[Target]:
+    sample_args = {
+        k: Arg(
+            lambda arm, k=k: samples(arm)[k],
+            lambda arm, k=k: state_values(samples(arm)[k], batch=False, bounded=k == "q"),
+            sample=10,
+        )
+        for k in ("q", "qd", "qdd", "tau")
+    }
+    base_args = {
+        "robot": _robot_arg(),
+        "samples": Arg(lambda arm: 30, lambda arm: scalar_values([30, 12], _count(1, 10**4), integer=True)),
+        "seed": Arg(lambda arm: 0, lambda arm: scalar_values([0, 5], _count(0, 10**9), integer=True)),
+        "tolerance": Arg(
+            lambda arm: 1e-9, lambda arm: scalar_values([1e-9, 0.5], lambda x: "same" if 0 < x < 1 else "bad")
+        ),
+        "drives": DRIVES,
+    }
+    return [
+        Target(
+            "identify",
+            lambda arm, **kw: ad.identify(**kw),
+            {"robot": _robot_arg(), **sample_args, "drives": DRIVES},
+            [ARMS[0]],
+            combos=4,
+        ),
+        Target("base_parameters", lambda arm, **kw: ad.base_parameters(**kw), base_args, SMALL_ARMS),
+        Target(
+            "dynamics.regressor.parameters",
+            lambda arm, **kw: parameterization.parameters(**kw),
+            {"robot": _robot_arg()},
+            ARMS,
+        ),
+    ]
+
+
+# ----- armdyn.kinematics and armdyn.lagrange as free functions --------------------------------
+
+
+def _frames_values(arm: ad.Robot) -> Kinds:
+    """Values for the joint frames (..., n, 4, 4) that joint_axes takes."""
+    frames = kinematics.joint_frames(arm, states(arm)["q"])[1]
+    nan, big = frames.copy(), frames.copy()
+    nan[0, 0, 3] = np.nan
+    big[0, 0, 3] = 1e300
+    items = [
+        Value("the frames", frames, "same", frames),
+        Value("nested lists", frames.tolist(), "same", frames),
+        Value("a batch of 2", np.stack([frames, frames]), "same", np.stack([frames, frames])),
+        Value("read-only", fv._readonly(frames), "same", frames),
+        Value("one frame fewer", frames[:-1], "bad"),
+        Value("one frame (4, 4)", frames[0], "bad"),
+        Value("3x3 frames", frames[:, :3, :3], "bad"),
+        Value("NaN entry", nan, "bad"),
+        Value("1e300 entry", big, "either"),
+        Value("complex frames", frames + 0j, "either", frames, real_part=True),
+        Value("text", np.full(frames.shape, "x"), "bad"),
+    ]
+    return items_values(items + junk())
+
+
+def module_targets() -> list[Target]:
+    robot = _robot_arg()
+    q = _state_arg("q", complex_ok=True)
+    qd = _state_arg("qd", complex_ok=True)
+    qdd = _state_arg("qdd", complex_ok=True)
+    value = Arg(lambda arm: states(arm)["q"], lambda arm: state_values(states(arm)["q"], complex_ok=True), names=("q",))
+    targets = []
+    for name, args in (
+        ("joint_frames", {"q": q}),
+        ("link_transforms", {"q": q}),
+        ("tool_pose", {"q": q}),
+        ("twist_generators", {"q": q}),
+        ("link_transform_derivatives", {"q": q}),
+        ("jacobian", {"q": q, "frame": FRAME, "link": LINK}),
+        ("jacobian_dot", {"q": q, "qd": qd, "frame": FRAME, "link": LINK}),
+        ("as_state", {"value": value}),
+        ("joint_axes", {"joints": Arg(lambda arm: kinematics.joint_frames(arm, states(arm)["q"])[1], _frames_values)}),
+    ):
+        function = getattr(kinematics, name)
+        targets.append(
+            Target(f"kinematics.{name}", lambda arm, f=function, **kw: f(**kw), {"robot": robot, **args}, ARMS)
+        )
+    three = np.array([0.1, 0.2, 0.3])
+    targets += [
+        Target(
+            "kinematics.skew",
+            lambda arm, **kw: kinematics.skew(**kw),
+            {"v": Arg(lambda arm: three, lambda arm: state_values(three, complex_ok=True))},
+        ),
+        Target(
+            "kinematics.joint_motion",
+            lambda arm, **kw: kinematics.joint_motion(**kw),
+            {
+                "revolute": Arg(lambda arm: True, lambda arm: choice_values([True, False, np.False_], [1, "yes"])),
+                "axis": Arg(lambda arm: [0.0, 0.0, 1.0], lambda arm: axis_values()),
+                "q": Arg(
+                    lambda arm: 0.3,
+                    lambda arm: scalar_values([0.3, -1.0], finite, complex_verdict="either", arrays_ok=True),
+                ),
+            },
+        ),
+    ]
+    lagrange = {
+        "pseudo_inertias": {},
+        "inertia_matrix": {"q": q},
+        "second_derivatives": {"q": q},
+        "inertia_matrix_partials": {"q": q},
+        "inertia_matrix_dot": {"q": q, "qd": qd},
+        "christoffel_symbols": {"q": q},
+        "coriolis_matrix": {"q": q, "qd": qd},
+        "coriolis_vector": {"q": q, "qd": qd},
+        "potential_energy": {"q": q},
+        "gravity_vector": {"q": q},
+        "kinetic_energy": {"q": q, "qd": qd},
+        "friction": {"qd": qd},
+        "inverse_dynamics": {"q": q, "qd": qd, "qdd": qdd},
+    }
+    for name, args in lagrange.items():
+        function = getattr(ad.lagrange, name)
+        targets.append(
+            Target(f"lagrange.{name}", lambda arm, f=function, **kw: f(**kw), {"robot": robot, **args}, ARMS)
+        )
+    return targets
+
+
+# ----- controllers, trajectories, state-variable forms, properties ----------------------------
+
+
+def _gain_values(arm: ad.Robot) -> Kinds:
+    n = arm.n
+    extra = [
+        ("per joint", [5.0] * n, "same"),
+        ("n+1 values", [5.0] * (n + 1), "bad"),
+        ("negative entry", [5.0] * (n - 1) + [-1.0], "bad"),
+        ("NaN entry", [5.0] * (n - 1) + [np.nan], "bad"),
+        ("matrix (n, n)", np.eye(n) * 5.0, "bad"),
+    ]
+    return scalar_values([5.0, 0.0], non_negative, extra=extra)
+
+
+def control_targets() -> list[Target]:
+    def law(kind: str) -> Callable:
+        def call(arm: ad.Robot, kp: object, kv: object, ki: object, q: object, qd: object) -> np.ndarray:
+            controller = {
+                "ComputedTorque": lambda: control.ComputedTorque(kp, kv, ki, model=arm),
+                "PDGravity": lambda: control.PDGravity(kp, kv, model=arm),
+                "PID": lambda: control.PID(kp, kv, ki),
+            }[kind]()
+            s = states(arm)
+            return controller(0.0, q, qd, s["q"] * 0.9, s["qd"] * 0.5, s["qdd"], s["q"] * 0.1)
+
+        return call
+
+    gain = Arg(lambda arm: 5.0, _gain_values)
+    state = {"q": _state_arg("q", bounded=False), "qd": _state_arg("qd")}  # the laws need no sine of q
+    targets = [
+        Target(
+            "control.ComputedTorque(...)(t, q, qd, ...)",
+            law("ComputedTorque"),
+            {"kp": gain, "kv": gain, "ki": gain, **state},
+            SMALL_ARMS,
+        ),
+        Target(
+            "control.PID(...)(t, q, qd, ...)", law("PID"), {"kp": gain, "kv": gain, "ki": gain, **state}, SMALL_ARMS
+        ),
+        Target(
+            "control.PDGravity(...)(t, q, qd, ...)",
+            law("PDGravity"),
+            {"kp": gain, "kv": gain, "ki": Arg(lambda arm: 0.0, None), **state},
+            SMALL_ARMS,
+        ),
+    ]
+    pid = control.PID(5.0, 1.0)
+    wrapped = Arg(lambda arm: pid, lambda arm: _object_values(pid, control.PID, True), names=("controller",))
+    limit = scalar_values([10.0, np.inf], lambda x: "same" if x > 0 and not np.isnan(x) else "bad")
+    targets += [
+        Target(
+            "control.Saturated",
+            lambda arm, **kw: control.Saturated(**kw),
+            {"controller": wrapped, "limit": Arg(lambda arm: 10.0, lambda arm: limit, names=("torque limit",))},
+            view=lambda saturated: np.minimum(np.atleast_1d(np.asarray(saturated.limit, dtype=float)), 1e308),
+        ),
+        Target(
+            "control.Digital",
+            lambda arm, **kw: control.Digital(**kw),
+            {
+                "controller": wrapped,
+                "period": Arg(lambda arm: 0.01, lambda arm: scalar_values([0.01], positive), names=("sample period",)),
+            },
+        ),
+    ]
+
+    def sinusoid(arm: object, amplitude: object, frequency: object, phase: object, offset: object, t: object) -> tuple:
+        return trajectories.Sinusoid(amplitude, frequency, phase, offset)(t, 3)
+
+    def quintic(arm: object, q0: object, q1: object, t0: object, t1: object, t: object) -> tuple:
+        return trajectories.Quintic(q0, q1, t0, t1)(t, 3)
+
+    three = np.array([0.1, 0.2, 0.3])
+    vector = Arg(lambda arm: three, lambda arm: state_values(three, batch=False, bounded=False, scalar_ok=True))
+    time_arg = Arg(
+        lambda arm: 0.3,
+        lambda arm: scalar_values([0.3, 0.0], lambda x: "either" if np.isinf(x) else finite(x), arrays_ok=True),
+    )
+    t0 = Arg(lambda arm: 0.0, lambda arm: scalar_values([0.0, -1.0], lambda x: "bad" if x >= 1 else finite(x)))
+    t1 = Arg(lambda arm: 1.0, lambda arm: scalar_values([1.0, 2.0], lambda x: "bad" if x <= 0 else finite(x)))
+    targets += [
+        Target(
+            "trajectories.Sinusoid(...)(t)",
+            sinusoid,
+            {"amplitude": vector, "frequency": vector, "phase": vector, "offset": vector, "t": time_arg},
+        ),
+        Target(
+            "trajectories.Quintic(...)(t)", quintic, {"q0": vector, "q1": vector, "t0": t0, "t1": t1, "t": time_arg}
+        ),
+    ]
+    return targets
+
+
+def statespace_targets() -> list[Target]:
+    arm_arg = _robot_arg(robot_only=True)
+
+    def x(arm: ad.Robot) -> np.ndarray:
+        s = states(arm)
+        return np.concatenate([s["q"], s["qd"]])
+
+    x_arg = Arg(x, lambda arm: state_values(x(arm)), state=True)
+
+    def jacobian_values(arm: ad.Robot) -> Kinds:
+        n = arm.n
+        return items_values(
+            [
+                Value("None", None, "same", None),
+                Value(
+                    "identity callable", lambda q: np.broadcast_to(np.eye(n), (*np.shape(q)[:-1], n, n)), "same", None
+                ),
+                Value("returns NaN", lambda q: np.full((n, n), np.nan), "bad"),
+                Value("returns (n, n+1)", lambda q: np.zeros((n, n + 1)), "bad"),
+                Value("returns a vector", lambda q: np.zeros(n), "bad"),
+                Value("returns text", lambda q: "J", "bad"),
+                Value("returns None", lambda q: None, "bad"),
+                Value("not callable", np.eye(n), "bad"),
+                Value("a string", "jacobian", "bad"),
+            ]
+        )
+
+    def jdot_values(arm: ad.Robot) -> Kinds:
+        return items_values(
+            [
+                Value("None", None, "same", None),
+                Value("zeros without output_jacobian", lambda q, qd: np.zeros(arm.n), "bad"),
+                Value("not callable", 3.0, "bad"),
+            ]
+        )
+
+    n_values = scalar_values([2, 6], lambda x: "same" if x.is_integer() and 1 <= x <= 100 else "bad", integer=True)
+    state = _state_arg
+    return [
+        Target(
+            "statespace.state_derivative",
+            lambda _, /, **kw: statespace.state_derivative(**kw),
+            {"arm": arm_arg, "x": x_arg, "tau": state("tau")},
+            ARMS,
+        ),
+        Target(
+            "statespace.drift_and_input",
+            lambda _, /, **kw: statespace.drift_and_input(**kw),
+            {"arm": arm_arg, "x": x_arg},
+            ARMS,
+        ),
+        Target(
+            "statespace.brunovsky",
+            lambda _, /, **kw: statespace.brunovsky(**kw),
+            {"n": Arg(lambda arm: 2, lambda arm: n_values)},
+        ),
+        Target(
+            "statespace.linearizing_torque",
+            lambda _, /, **kw: statespace.linearizing_torque(**kw),
+            {
+                "arm": arm_arg,
+                "q": state("q"),
+                "qd": state("qd"),
+                "u": state("qdd"),
+                "output_jacobian": Arg(lambda arm: None, jacobian_values),
+                "output_jacobian_dot_qd": Arg(lambda arm: None, jdot_values),
+            },
+            ARMS,
+        ),
+        Target(
+            "statespace.hamiltonian",
+            lambda _, /, **kw: statespace.hamiltonian(**kw),
+            {"arm": arm_arg, "q": state("q"), "p": state("p")},
+            ARMS,
+        ),
+        Target(
+            "statespace.hamiltonian_rates",
+            lambda _, /, **kw: statespace.hamiltonian_rates(**kw),
+            {"arm": arm_arg, "q": state("q"), "p": state("p"), "tau": state("tau")},
+            ARMS,
+        ),
+        Target(
+            "statespace.linearize",
+            lambda _, /, **kw: statespace.linearize(**kw),
+            {"arm": arm_arg, "q0": _one_state("q"), "qd0": _one_state("qd"), "tau0": _one_state("tau")},
+            SMALL_ARMS,
+        ),
+    ]
+
+
+def _limits_values(arm: ad.Robot) -> Kinds:
+    pairs = np.array([[-1.0, 1.0]] * arm.n)
+    pairs[np.array(arm.kinds) == "prismatic"] = [0.2, 1.0]
+    extra = [Value("None", None, "same", None), Value("lower > upper", pairs[:, ::-1].copy(), "bad")]
+    return items_values(extra) + none_is_valid(state_values(pairs, batch=False, bounded=False))
+
+
+def properties_targets() -> list[Target]:
+    robot = _robot_arg(robot_only=True)
+    only = Arg(
+        lambda arm: "gravity",
+        lambda arm: choice_values(
+            ["gravity", ("inertia",), ["friction", "gravity"]], ["nope", (), [1], b"gravity", {"gravity": 1}, "Gravity"]
+        ),
+    )
+    limits = Arg(lambda arm: None, _limits_values, names=("limits",), sample=25)
+    check_args = {
+        "robot": robot,
+        "samples": Arg(lambda arm: 6, lambda arm: scalar_values([6, 4], _count(4, 50), integer=True)),
+        "seed": Arg(lambda arm: 0, lambda arm: scalar_values([0, 3], _count(0, 10**6), integer=True)),
+        "limits": limits,
+        "only": only,
+    }
+    span = Arg(lambda arm: 1.0, lambda arm: scalar_values([1.0, 0.5], positive))
+    return [
+        Target("properties.check", lambda arm, **kw: properties.check(**kw), check_args, SMALL_ARMS, combos=10),
+        Target(
+            "properties.joint_ranges",
+            lambda arm, **kw: properties.joint_ranges(**kw),
+            {"robot": _robot_arg(True, symbolic_ok=True), "limits": limits, "prismatic_span": span},
+            ARMS,
+        ),
+    ]
+
+
+# ----- risky cases, for child interpreters ----------------------------------------------------
+
+
+def _closed_forms() -> list[Target]:
+    form = ad.symbolic.derive(ad.models.two_link_planar()).compile()
+    arms = [("two_link_planar closed form", ad.models.two_link_planar())]
+    shapes = {
+        "M": (("q",), MATRIX),
+        "Vm": (("q", "qd"), MATRIX),
+        "G": (("q",), VECTOR),
+        "tau": (("q", "qd", "qdd"), VECTOR),
+    }
+    targets = []
+    for name, (names, shape) in shapes.items():
+        args = {k: _state_arg(k) for k in names}
+        args["out"] = _out_arg(shape, risky=True)
+        function = getattr(form, name)
+        targets.append(Target(f"compiled closed form {name}", lambda arm, f=function, **kw: f(**kw), args, arms))
+    return targets
+
+
+def _huge(arm: ad.Robot, key: str, first: bool, states_: int) -> Kinds:
+    """Huge batches as stride-0 views (no memory of their own): the call must refuse them or cope."""
+    base = states(arm)[key]
+    if not first:
+        return items_values(
+            [
+                Value(
+                    "(1, 10**5, n) by broadcasting: 10**10 states with the first",
+                    np.broadcast_to(base, (1, 10**5, arm.n)),
+                    "either",
+                )
+            ]
+        )
+    return items_values(
+        [
+            Value("10**5 states (stride-0 view)", np.broadcast_to(base, (10**5, arm.n)), "either"),
+            Value(f"{states_:.0e} states (stride-0 view)", np.broadcast_to(base, (states_, arm.n)), "either"),
+            Value("(10**5, 1, n) by broadcasting", np.broadcast_to(base, (10**5, 1, arm.n)), "either"),
+        ]
+    )
+
+
+def _call_method(name: str, arm: ad.Robot, **kwargs: object) -> object:
+    return getattr(arm, name)(**kwargs)
+
+
+def _kernel_outs() -> list[Target]:
+    """The compiled kernels' one-state entries with every kind of out= buffer, and huge batches."""
+    targets = []
+    for name, (names, shape) in DYNAMICS.items():
+        if shape is None:
+            continue
+        args = {k: Arg(lambda arm, k=k: states(arm)[k], None) for k in names}
+        args["out"] = _out_arg(shape, risky=True)
+        call = functools.partial(_call_method, name)
+        targets.append(Target(f"Robot.{name} out=", call, args, ARMS, sweeps=2))
+
+        if name not in ("inverse_dynamics", "forward_dynamics", "inertia_matrix", "coriolis_matrix"):
+            continue
+        size = 10**9 if name == "inverse_dynamics" else 10**6  # checking 10**9 states alone takes seconds
+        big = {
+            k: Arg(lambda arm, k=k: states(arm)[k], lambda arm, k=k, i=i, m=size: _huge(arm, k, i == 0, m))
+            for i, k in enumerate(names)
+        }
+        targets.append(Target(f"Robot.{name} huge batch", call, big, [ARMS[0]], combos=1))
+    return targets
+
+
+def _simulation_targets() -> list[Target]:
+    def controllers(arm: ad.Robot) -> Kinds:
+        n = arm.n
+        symbolic = ad.models.two_link_planar(symbolic=True)
+        return items_values(
+            [
+                Value("PID with per-joint gains", control.PID([10.0] * n, 2.0), "same", control.PID(10.0, 2.0)),
+                Value("None", None, "either"),
+                Value("ComputedTorque", control.ComputedTorque(100.0, 20.0), "either"),
+                Value("PDGravity", control.PDGravity(10.0, 2.0), "either"),
+                Value("PID kp NaN", control.PID(np.nan, 2.0), "bad", names=("kp",)),
+                Value("PID kp negative", control.PID(-1.0, 2.0), "bad", names=("kp",)),
+                Value("PID kv n+1 values", control.PID(1.0, [2.0] * (n + 1)), "bad", names=("kv",)),
+                Value("PID kp text", control.PID("high", 2.0), "bad", names=("kp",)),
+                Value("PID kp 1e300", control.PID(1e300, 2.0), "either", names=("kp",)),
+                Value("ComputedTorque ki inf", control.ComputedTorque(1.0, 1.0, np.inf), "bad", names=("ki",)),
+                Value(
+                    "ComputedTorque with a model of other joints",
+                    control.ComputedTorque(1.0, 1.0, model=ARMS[2][1] if n != 6 else ARMS[0][1]),
+                    "bad",
+                    names=("model",),
+                ),
+                Value(
+                    "ComputedTorque with a symbolic model",
+                    control.ComputedTorque(1.0, 1.0, model=symbolic),
+                    "bad",
+                    names=("model", "symbolic"),
+                ),
+                Value(
+                    "Digital period 1.5 dt", control.Digital(control.PID(1.0, 1.0), 0.0015), "bad", names=("period",)
+                ),
+                Value(
+                    "Saturated, n+1 limits",
+                    control.Saturated(control.PID(1.0, 1.0), [1.0] * (n + 1)),
+                    "bad",
+                    names=("limit",),
+                ),
+                Value("a callable returning NaN", lambda *a: np.full(n, np.nan), "bad"),
+                Value("a callable returning n+1 values", lambda *a: np.zeros(n + 1), "bad"),
+                Value("a string", "pid", "bad"),
+                Value("a number", 3.0, "bad"),
+                Value("the PID class", control.PID, "bad"),
+            ]
+        )
+
+    def trajectory_values(arm: ad.Robot) -> Kinds:
+        n = arm.n
+        return items_values(
+            [
+                Value("None", None, "same", None),
+                Value("Sinusoid", trajectories.Sinusoid(0.1, 0.5), "either"),
+                Value("Quintic", trajectories.Quintic(0.0, 0.1, 0.0, 0.01), "either"),
+                Value("Sinusoid amplitude NaN", trajectories.Sinusoid(np.nan, 0.5), "bad", names=("amplitude",)),
+                Value(
+                    "Sinusoid n+1 amplitudes",
+                    trajectories.Sinusoid([0.1] * (n + 1), 0.5),
+                    "bad",
+                    names=("amplitude", "Sinusoid"),
+                ),
+                Value("Sinusoid text frequency", trajectories.Sinusoid(0.1, "fast"), "bad", names=("frequency",)),
+                Value("Quintic q1 inf", trajectories.Quintic(0.0, np.inf), "bad", names=("q1", "q0/q1")),
+                Value("a callable returning n+1 values", lambda t: (np.zeros(n + 1),) * 3, "bad"),
+                Value("a callable returning NaN", lambda t: (np.full(n, np.nan),) * 3, "bad"),
+                Value("a string", "sine", "bad"),
+                Value("a number", 1.0, "bad"),
+            ]
+        )
+
+    def events(arm: ad.Robot) -> Kinds:
+        other = ARMS[2][1] if arm.n != 6 else ARMS[0][1]
+        return items_values(
+            [
+                Value("same arm at t = 0", [(0.0, arm)], "same", ()),
+                Value("same arm after the end", [(1e300, arm)], "same", ()),
+                Value("payload at 0.005 s", [(0.005, arm.with_payload(0.5))], "either"),
+                Value("NaN time", [(np.nan, arm)], "bad"),
+                Value("negative time", [(-1.0, arm)], "bad"),
+                Value("text time", [("0.5", arm)], "bad"),
+                Value("other joints", [(0.5, other)], "bad"),
+                Value("a pair not in a list", (0.5, arm), "bad"),
+                Value("a lone time", [0.5], "bad"),
+                Value("a number", 5, "bad"),
+                Value("a string", "later", "bad"),
+                Value("a dict", {0.5: arm}, "bad"),
+                Value("None", None, "bad"),
+            ]
+        )
+
+    def disturbance(arm: ad.Robot) -> Kinds:
+        n = arm.n
+        return items_values(
+            [
+                Value("callable", lambda t, q, qd: np.zeros(n), "same", None),
+                Value("callable returning NaN", lambda t, q, qd: np.full(n, np.nan), "bad"),
+            ]
+        ) + none_is_valid(state_values(np.full(n, 0.5), batch=False, bounded=False, scalar_ok=True))
+
+    seconds = scalar_values([0.01, 0.02], positive, extra=[("1e9 s", 1e9, "either")])
+    step = scalar_values([1e-3, 2e-3], positive, extra=[("1e-12 s", 1e-12, "either")])
+    args = {
+        "controller": Arg(lambda arm: control.PID(10.0, 2.0), controllers, names=("diverged",)),
+        "trajectory": Arg(lambda arm: None, trajectory_values),
+        "t_final": Arg(lambda arm: 0.01, lambda arm: seconds),
+        "dt": Arg(lambda arm: 1e-3, lambda arm: step),
+        "method": Arg(
+            lambda arm: "rk4",
+            lambda arm: choice_values(
+                ["rk4", "rk45", "rk23", "dop853", "radau", "bdf", "lsoda"],
+                ["euler", "", "RK4 "],
+                ["RK45", "Radau", np.str_("rk4")],
+            ),
+        ),
+        "q0": _one_state("q", none_ok=True),
+        "qd0": _one_state("qd", none_ok=True, names=("diverged",)),
+        "disturbance": Arg(lambda arm: None, disturbance, names=("diverged",)),
+        "events": Arg(lambda arm: (), events, names=("event",)),
+        "coulomb_smoothing": Arg(
+            lambda arm: "auto",
+            lambda arm: choice_values(["auto"], ["AUTO", "none", ""]) + scalar_values([0.0, 1e-3], non_negative),
+        ),
+        "progress": Arg(lambda arm: None, lambda arm: choice_values([None], ["bar", 3], [print])),
+    }
+    return [Target("simulate", lambda arm, **kw: ad.simulate(arm, **kw), args, [ARMS[0], ARMS[2], ARMS[4]])]
+
+
+def _risky_other() -> list[Target]:
+    arm = ARMS[0][1]
+    huge_n = items_values([Value(f"n = {k}", k, "either") for k in (10**5, 10**9, 2**62)])
+    count = items_values([Value(f"samples = {k}", k, "either") for k in (10**12, 2**62)])
+    argv = [
+        ["simulate", "two_link_planar", "--t-final", "1e9"],
+        ["simulate", "two_link_planar", "--dt", "1e-12"],
+        ["simulate", "two_link_planar", "--t-final", "1e6", "--dt", "1e-3"],
+        ["check", "two_link_planar", "--samples", "1000000000000"],
+        ["identify", "two_link_planar", "/dev/zero"],
+    ]
+    commands = items_values([Value(" ".join(a), a, "either") for a in argv])
+    return [
+        Target(
+            "statespace.brunovsky (huge n)",
+            lambda _, **kw: statespace.brunovsky(**kw),
+            {"n": Arg(lambda a: 2, lambda a: huge_n)},
+        ),
+        Target(
+            "properties.check (huge samples)",
+            lambda _, **kw: properties.check(arm, only="gravity", **kw),
+            {"samples": Arg(lambda a: 6, lambda a: count)},
+        ),
+        Target(
+            "base_parameters (huge samples)",
+            lambda _, **kw: ad.base_parameters(arm, **kw),
+            {"samples": Arg(lambda a: 6, lambda a: count)},
+        ),
+        *urdf_targets(risky=True),
+        Target(
+            "armdyn CLI (enormous runs)",
+            lambda _, argv: _command(argv),
+            {"argv": Arg(lambda a: [], lambda a: commands)},
+        ),
+    ]
+
+
+RISKY: dict[str, Callable[[], list[Target]]] = {
+    "kernels with out= and huge batches": _kernel_outs,
+    "compiled closed forms": _closed_forms,
+    "simulate": _simulation_targets,
+    "huge sizes, XML bombs, enormous CLI runs": _risky_other,
+}
+
+
+def _run_child(group: str, skip: int = 0) -> tuple[subprocess.Popen, float, Path]:
+    """Start a child interpreter on a group of risky cases; its output goes to files in its folder."""
+    folder = Path(tempfile.mkdtemp(prefix="child-", dir=SCRATCH))
+    code = f"from tests.fuzz_values import child_main; child_main({group!r}, {skip})"
+    with (folder / "stdout").open("w") as out, (folder / "stderr").open("w") as err:
+        process = subprocess.Popen(
+            [sys.executable, "-c", code],
+            cwd=ROOT,
+            stdout=out,
+            stderr=err,
+            env=os.environ | {"ARMDYN_FUZZ_SCRATCH": str(folder), "NUMBA_NUM_THREADS": "1"},
+        )
+    return process, time.monotonic(), folder
+
+
+_CHILDREN: dict[str, tuple[subprocess.Popen, float, Path]] = {}
+
+
+def _start_children() -> None:
+    """Start every group of risky cases at once, each in its own child (they run while the
+    in-process cases do; the test of each group collects it)."""
+    for group in RISKY:
+        if group not in _CHILDREN:
+            _CHILDREN[group] = _run_child(group)
+
+
+def _collect(group: str) -> tuple[int, list[dict]]:
+    """Wait for a group's child; restart it past a crash (at most three times)."""
+    failures: list[dict] = []
+    count = 0
+    process, started, folder = _CHILDREN.pop(group, None) or _run_child(group)
+    for _ in range(4):
+        try:
+            process.wait(timeout=max(1.0, CHILD_TIMEOUT - (time.monotonic() - started)))
+            timed_out = False
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+            timed_out = True
+        output = (folder / "stdout").read_text(errors="replace")
+        stderr = (folder / "stderr").read_text(errors="replace")
+        last, finished = None, False
+        for line in output.splitlines():
+            word, _, rest = line.partition(" ")
+            if word == "CASE":
+                index, _, label = rest.partition(" ")
+                last = (int(index), label)
+                count = max(count, int(index))
+            elif word == "FAIL":
+                failures.append(json.loads(rest))
+            elif word == "DONE":
+                finished = True
+                count = max(count, int(rest))
+        if finished and process.returncode == 0:
+            break
+        where = f"case {last[0]}: {last[1]}" if last else "before the first case"
+        kind = "timed out" if timed_out else f"crashed the interpreter (exit status {process.returncode})"
+        detail = " ".join(stderr.strip().splitlines()[-3:])[-300:]
+        failures.append(
+            {
+                "target": group,
+                "arm": "-",
+                "args": [],
+                "labels": where,
+                "culprit": where,
+                "kind": kind,
+                "detail": detail,
+                "repro": f"{group}, {where}",
+            }
+        )
+        if last is None or timed_out:
+            break
+        process, started, folder = _run_child(group, last[0])
+    return count, failures
+
+
+# ----- the command line -----------------------------------------------------------------------
+
+
+class CommandLineFailure(Exception):  # noqa: N818 (a failure of the rule, not an error of the test)
+    """A command's outcome broke the CLI rule (see ``_cli_problem``)."""
+
+
+def _command(argv: list[str]) -> str:
+    """Run a command in a scratch folder: its output when it succeeded; a ModelError with its
+    error line when it refused the arguments cleanly; a CommandLineFailure otherwise."""
+    with tempfile.TemporaryDirectory(dir=SCRATCH) as folder, contextlib.chdir(folder):
+        result = CliRunner().invoke(app, argv, catch_exceptions=True)
+    problem = _cli_problem(result)
+    if problem:
+        raise CommandLineFailure(problem)
+    if result.exit_code != 0:
+        raise ad.ModelError(f"argv refused: {result.stderr.strip()}")
+    return result.stdout
+
+
+def _cli_problem(result: object) -> str:
+    text = result.stdout + result.stderr
+    if "Traceback" in text:
+        return "printed a traceback"
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        return f"raised {type(result.exception).__name__}: {result.exception}"
+    if result.exit_code == 0:
+        return "printed NaN" if re.search(r"\bnan\b", result.stdout, re.IGNORECASE) else ""
+    errors = [line for line in result.stderr.splitlines() if line.strip() and not line.startswith("warning: ")]
+    if result.exit_code != 2:
+        return f"exit code {result.exit_code}: {' | '.join(errors)[:200]}"
+    if len(errors) != 1 or not errors[0].startswith("error: "):
+        return f"not one 'error: ...' line on stderr: {errors[:3]}"
+    if "internal error" in errors[0]:
+        return errors[0]
+    return ""
+
+
+def _csv_files() -> dict[str, tuple[str | bytes, str]]:
+    """Sample files for 'identify two_link_planar': (content, verdict) by label."""
+    data = samples(ARMS[0][1])
+    header = [f"{p}{i + 1}" for p in ("q", "qd", "qdd", "tau") for i in range(2)]
+    rows = np.hstack([data[k] for k in ("q", "qd", "qdd", "tau")]).tolist()
+
+    def csv(rows: list, header: list[str]) -> str:
+        return "\n".join([",".join(header), *(",".join(str(x) for x in row) for row in rows)]) + "\n"
+
+    good = csv(rows, header)
+    return {
+        "valid": (good, "either"),
+        "empty": ("", "bad"),
+        "header only": (",".join(header) + "\n", "bad"),
+        "binary": (bytes(range(256)) * 4, "bad"),
+        "NUL bytes": (good.replace(",", "\x00", 3), "bad"),
+        "latin-1": (good.replace("q1", "q\u00e91").encode("latin-1"), "bad"),
+        "ragged row": (good + "1,2\n", "bad"),
+        "text cell": (good + ",".join(["x"] * 8) + "\n", "bad"),
+        "nan cell": (good + ",".join(["nan"] * 8) + "\n", "bad"),
+        "inf cell": (good + ",".join(["inf"] * 8) + "\n", "bad"),
+        "1e308 cells": (good + ",".join(["1e308"] * 8) + "\n", "either"),
+        "missing columns": (csv([r[:6] for r in rows], header[:6]), "bad"),
+        "one sample": (csv(rows[:1], header), "bad"),
+        "all zeros (no excitation)": (csv([[0.0] * 8] * 20, header), "bad"),
+        "semicolons": (good.replace(",", ";"), "bad"),
+        "BOM": (b"\xef\xbb\xbf" + good.encode(), "either"),
+        "duplicate header": (csv([r + r[:1] for r in rows], [*header, "q1"]), "either"),
+    }
+
+
+NAMES = {
+    "two_link_planar": "either",
+    "": "bad",
+    "nosuch": "bad",
+    "names": "bad",
+    "load": "bad",
+    "__init__": "bad",
+    "../two_link_planar": "bad",
+    "two_link_planar\x00": "bad",
+    "-": "bad",
+}
+NUMBERS = {
+    "nan": "bad",
+    "abc": "bad",
+    "": "bad",
+    "-inf": "bad",
+    "0x10": "bad",
+    "inf": "either",
+    "-1": "either",
+    "0": "either",
+    "1e300": "either",
+    "1e-300": "either",
+}
+INTEGERS = {
+    "abc": "bad",
+    "": "bad",
+    "4.5": "bad",
+    "nan": "bad",
+    "-1": "either",
+    "0": "either",
+    "5": "either",
+    "99999999999999999999999": "either",
+}
+STRINGS = {
+    "": "bad",
+    "nosuch": "bad",
+    "nan": "bad",
+    "1,nan": "bad",
+    "1,2,3,4,5,6,7,8,9": "bad",
+    ",": "bad",
+    "-1": "either",
+    "1e300": "either",
+    "0.5": "either",
+}
+PATHS = {
+    "missing/x.csv": "bad",
+    ".": "either",
+    "/proc/nope/x.csv": "bad",
+    "/dev/full": "bad",
+    "x\x00y.csv": "bad",
+    "": "either",
+    "out.csv": "either",
+    "out.png": "either",
+    "out.xyz": "either",
+}
+BASE = {  # command: its cheapest valid arguments (the CSV added for identify)
+    "models": [],
+    "show": ["two_link_planar"],
+    "derive": ["two_link_planar", "--code", "c"],
+    "check": ["two_link_planar", "--samples", "4"],
+    "identify": ["two_link_planar"],
+    "simulate": ["two_link_planar", "--t-final", "0.02"],
+    "demo": None,
+}
+
+
+def _csv_files() -> dict[str, tuple[str | bytes, str]]:
+    """Sample files for 'identify two_link_planar': (content, verdict) by label."""
+    data = samples(ARMS[0][1])
+    header = [f"{p}{i + 1}" for p in ("q", "qd", "qdd", "tau") for i in range(2)]
+    rows = np.hstack([data[k] for k in ("q", "qd", "qdd", "tau")]).tolist()
+
+    def csv(rows: list, header: list[str]) -> str:
+        return "\n".join([",".join(header), *(",".join(str(x) for x in row) for row in rows)]) + "\n"
+
+    good = csv(rows, header)
+    return {
+        "valid": (good, "either"),
+        "empty": ("", "bad"),
+        "header only": (",".join(header) + "\n", "bad"),
+        "binary": (bytes(range(256)) * 4, "bad"),
+        "NUL bytes": (good.replace(",", "\x00", 3), "bad"),
+        "latin-1": (good.replace("q1", "q\u00e91").encode("latin-1"), "bad"),
+        "ragged row": (good + "1,2\n", "bad"),
+        "text cell": (good + ",".join(["x"] * 8) + "\n", "bad"),
+        "nan cell": (good + ",".join(["nan"] * 8) + "\n", "bad"),
+        "inf cell": (good + ",".join(["inf"] * 8) + "\n", "bad"),
+        "1e308 cells": (good + ",".join(["1e308"] * 8) + "\n", "either"),
+        "missing columns": (csv([r[:6] for r in rows], header[:6]), "bad"),
+        "one sample": (csv(rows[:1], header), "bad"),
+        "all zeros (no excitation)": (csv([[0.0] * 8] * 20, header), "bad"),
+        "semicolons": (good.replace(",", ";"), "bad"),
+        "BOM": (b"\xef\xbb\xbf" + good.encode(), "either"),
+        "duplicate header": (csv([r + r[:1] for r in rows], [*header, "q1"]), "either"),
+    }
+
+
+def _with_files(label: str, argv: list, verdict: str) -> Value:
+    """A command line whose placeholders become files written now: ("csv", label) a CSV file of
+    _csv_files, ("urdf", slot, token) a URDF file with one attribute replaced."""
+    csv_files = _csv_files()
+    line = []
+    for item in argv:
+        if isinstance(item, tuple) and item[0] == "csv":
+            special = {"missing file": "missing.csv", "a folder": "."}
+            line.append(special.get(item[1]) or str(_write(csv_files[item[1]][0], ".csv")))
+        elif isinstance(item, tuple):
+            line.append(str(_write(_urdf(**({item[1]: item[2]} if item[1] else {})))))
+        else:
+            line.append(item)
+    return Value(label, line, verdict)
+
+
+def _tokens(command: str, parameter: object) -> dict[str, str]:
+    """The tokens to try for an option, by its name and type."""
+    if command == "demo":  # only bad folders: a valid one runs the whole demo, seconds each
+        return {"missing/out": "bad", "/proc/nope/out": "bad", "x\x00y": "bad", "/dev/null": "bad"}
+    if parameter.name in ("output", "plot", "csv"):
+        return PATHS
+    annotation = parameter.type_descriptor.annotation
+    return INTEGERS if annotation is int else NUMBERS if annotation is float else STRINGS
+
+
+def cli_targets() -> list[Target]:
+    """One target per command of the app (found from the typer app itself): each argument and
+    option in turn made hostile on the command's cheapest valid line."""
+    import typer
+
+    group = typer.main.get_command(app)
+    targets = []
+    for command, definition in group.commands.items():
+        base = BASE.get(command, ["two_link_planar"])
+        line = [command, *(base or [])] + ([("csv", "valid")] if command == "identify" else [])
+        items: list[tuple[str, list, str]] = [(f"{command} --help", [command, "--help"], "either")]
+        items.append((f"{command} --bogus", [*line, "--bogus"], "bad"))
+        for parameter in definition.params:
+            if parameter.param_type_name == "argument":
+                position = 1 if parameter.name != "csv" else 2
+                tokens: dict = dict(NAMES) if parameter.name == "name" else {}
+                if parameter.name == "name":
+                    tokens |= {("urdf", "", ""): "either", ("urdf", "j1_type", "floating"): "bad"}
+                    tokens |= {("urdf", "l1_mass", "nan"): "bad", ("urdf", "robot_name", ""): "bad"}
+                if parameter.name == "csv":
+                    tokens = {("csv", label): verdict for label, (_, verdict) in _csv_files().items()}
+                    tokens |= {("csv", "missing file"): "bad", ("csv", "a folder"): "bad"}
+                for token, verdict in tokens.items():
+                    if base is None or (verdict == "either" and command == "demo"):
+                        continue
+                    argv = [*line[:position], token, *line[position + 1 :]]
+                    items.append((f"{command} <{parameter.name}> {token!r}"[:80], argv, verdict))
+                items.append((f"{command} without <{parameter.name}>", line[:position], "bad"))
+                continue
+            option = parameter.opts[0]
+            if parameter.is_flag:
+                for flag in (*parameter.opts, *parameter.secondary_opts):
+                    items.append((f"{command} {flag}", [*line, flag], "either"))
+                items.append((f"{command} {option}=yes", [*line, f"{option}=yes"], "bad"))
+                continue
+            for token, verdict in _tokens(command, parameter).items():
+                rest = list(line)
+                if option in rest:
+                    index = rest.index(option)
+                    rest[index : index + 2] = []
+                items.append((f"{command} {option} {token!r}", [*rest, option, token], verdict))
+            items.append((f"{command} {option} (no value)", [*line, option], "bad"))
+        kinds = [lazy(lambda a=item: _with_files(*a)) for item in items]
+        sample = {"simulate": 70, "check": 20, "derive": 35, "identify": 25}.get(command)
+        targets.append(
+            Target(
+                f"armdyn {command}",
+                lambda _, argv: _command(argv),
+                {"argv": Arg(lambda a: ["models"], lambda a, k=kinds: k, sample=sample)},
+            )
+        )
+    app_level = items_values(
+        [
+            Value("armdyn --version", ["--version"], "either"),
+            Value("armdyn nosuch", ["nosuch"], "bad"),
+            Value("armdyn --bogus", ["--bogus"], "bad"),
+            Value("armdyn --progress models", ["--progress", "models"], "either"),
+        ]
+    )
+    targets.append(Target("armdyn", lambda _, argv: _command(argv), {"argv": Arg(lambda a: [], lambda a: app_level)}))
+    return targets
+
+
+# ----- the tests ------------------------------------------------------------------------------
+
+TARGETS = [
+    *dynamics_targets(),
+    *kinematics_targets(),
+    *variant_targets(),
+    *constructor_targets(),
+    *model_targets(),
+    *urdf_targets(),
+    *parameterization_targets(),
+    *module_targets(),
+    *control_targets(),
+    *statespace_targets(),
+    *properties_targets(),
+    *cli_targets(),
+]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def summary(request: pytest.FixtureRequest) -> Iterator[None]:
+    """Start the child interpreters first; at the end, count the cases tried on one line.
+
+    The compiled batch kernels run on one thread meanwhile: the cases are tiny batches, for which
+    starting a parallel region costs milliseconds (more when the children are busy), and the
+    results do not depend on the number of threads."""
+    import numba
+
+    start = time.perf_counter()
+    if any(item.name.startswith("test_risky") for item in request.session.items):
+        _start_children()
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(threads)
+    for process, _, _ in _CHILDREN.values():  # groups not collected (deselected): stop them
+        process.kill()
+        process.wait()
+    _CHILDREN.clear()
+    classes = {(f["kind"], f.get("culprit", "")) for f in fv.FAILURES}
+    line = (
+        f"fuzz: {fv.COUNT[0] + CHILD_COUNT[0]} cases tried ({CHILD_COUNT[0]} in child interpreters), "
+        f"{len(fv.FAILURES)} failing in {len(classes)} classes, {time.perf_counter() - start:.1f} s"
+    )
+    report = os.environ.get("ARMDYN_FUZZ_REPORT")  # a file for every failure, grouped into classes (and as JSON)
+    if report:
+        Path(report).write_text(line + "\n" + fv.grouped(fv.FAILURES) + "\n", encoding="utf-8")
+        Path(report).with_suffix(".json").write_text(json.dumps(fv.FAILURES, indent=1, default=str))
+    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line("")
+        reporter.write_line(line)
+    else:
+        print(line)
+    shutil.rmtree(SCRATCH, ignore_errors=True)
+
+
+@pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
+def test_hostile_values(target: Target) -> None:
+    failures = fv.fuzz(target)
+    assert not failures, f"{len(failures)} failing cases:\n" + fv.grouped(failures)
+
+
+@pytest.mark.parametrize("group", list(RISKY))
+def test_risky_cases_in_a_child_interpreter(group: str) -> None:
+    count, failures = _collect(group)
+    CHILD_COUNT[0] += count
+    fv.FAILURES.extend(failures)
+    assert count > 0, "the child interpreter tried no case"
+    assert not failures, f"{len(failures)} failing cases:\n" + fv.grouped(failures)
