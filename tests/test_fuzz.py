@@ -19,11 +19,18 @@ bad ``out=`` buffers, huge batches, simulations and commands asked for enormous 
 bombs) run in child interpreters with a memory limit (``RISKY``), started at the beginning
 and collected at the end; a crash fails the test, naming the case, and the child is restarted
 after it. Each test reports every class of failure it found with a reproduction each; the
-last line of the module's output counts the cases tried.
+last line of the module's output counts the cases tried. ARMDYN_FUZZ_REPORT=file writes every
+failure there, grouped into classes (and file.json, one record per case).
+
+Each target is swept: every parameter gets every kind of value its Arg lists, on an arm
+hypothesis picks, then a few cases corrupt two parameters at once (fuzz_values.fuzz);
+hypothesis runs derandomized, so a run is reproducible. The commands are found from the typer
+app itself, so a new command or option is fuzzed without a change here.
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import copy
 import dataclasses
@@ -75,6 +82,8 @@ CHILD_TIMEOUT = 110.0  # seconds for one child interpreter
 CHILD_COUNT = [0]  # cases tried in child interpreters
 # files written for the cases (removed at the end); a child interpreter is given a folder inside the parent's
 SCRATCH = Path(os.environ.get("ARMDYN_FUZZ_SCRATCH") or tempfile.mkdtemp(prefix="armdyn-fuzz-"))
+if "ARMDYN_FUZZ_SCRATCH" not in os.environ:
+    atexit.register(shutil.rmtree, SCRATCH, ignore_errors=True)
 
 
 def junk(verdict: str = "bad", skip: tuple[str, ...] = (), **names: tuple[str, ...]) -> list[Value]:
@@ -1420,6 +1429,10 @@ def _simulation_targets() -> list[Target]:
             ]
         ) + none_is_valid(state_values(np.full(n, 0.5), batch=False, bounded=False, scalar_ok=True))
 
+    progress = items_values(
+        [Value("None", None, "same", None), Value("print", print, "either"), Value("a string", "bar", "bad")]
+        + [Value(v.label, v.value, "either" if callable(v.value) else "bad") for v in junk(skip=("None",))]
+    )
     seconds = scalar_values([0.01, 0.02], positive, extra=[("1e9 s", 1e9, "either")])
     step = scalar_values([1e-3, 2e-3], positive, extra=[("1e-12 s", 1e-12, "either")])
     args = {
@@ -1443,7 +1456,7 @@ def _simulation_targets() -> list[Target]:
             lambda arm: "auto",
             lambda arm: choice_values(["auto"], ["AUTO", "none", ""]) + scalar_values([0.0, 1e-3], non_negative),
         ),
-        "progress": Arg(lambda arm: None, lambda arm: choice_values([None], ["bar", 3], [print])),
+        "progress": Arg(lambda arm: None, lambda arm: progress),
     }
     return [Target("simulate", lambda arm, **kw: ad.simulate(arm, **kw), args, [ARMS[0], ARMS[2], ARMS[4]])]
 

@@ -65,9 +65,9 @@ class _Activity:
         self._task: Any = None  # the Progress task
 
     def _console(self) -> Console | None:
-        if self.mode is False:
+        if self.mode is False or (self.mode is None and not sys.stderr.isatty()):
             return None
-        display = Console(stderr=True, force_terminal=True if self.mode else None)
+        display = Console(file=sys.stderr, force_terminal=True if self.mode else None)
         return display if display.is_terminal else None
 
     def _text(self) -> str:
@@ -192,6 +192,7 @@ class _Group(TyperGroup):
                     return super().invoke(ctx)
                 finally:
                     _activity.stop()
+                    _activity.mode = None  # the next command (in this process) decides afresh
             except (typer.Exit, typer.Abort, typer.TyperException, BrokenPipeError):
                 raise  # typer's own: exits and usage errors (handled in main), a closed pipe (exits quietly)
             except Exception as error:
