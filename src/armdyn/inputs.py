@@ -131,3 +131,12 @@ def vector(value: object, name: str) -> np.ndarray:
     if array.ndim != 1 or not np.all(np.isfinite(array)):
         raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}")
     return array
+
+
+def integer(value: object, name: str, minimum: int) -> int:
+    """An int (or NumPy integer, not a bool) of at least ``minimum``, or an error naming it."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+    if value < minimum:
+        raise ModelError(f"{name} must be at least {minimum}, got {value}")
+    return int(value)

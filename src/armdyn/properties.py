@@ -29,15 +29,6 @@ def _check_robot(robot: object) -> None:
         raise TypeError(f"robot must be an armdyn Robot, got {type(robot).__name__}")
 
 
-def _integer(value: object, name: str, minimum: int) -> int:
-    """An int (or NumPy integer, not a bool) of at least ``minimum``, or an error naming it."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
-    if value < minimum:
-        raise ModelError(f"{name} must be at least {minimum}, got {value}")
-    return int(value)
-
-
 def _groups(only: object) -> set[str]:
     """The groups named by ``only``: None for all, one name, or a sequence of names."""
     if only is None:
@@ -412,8 +403,8 @@ def check(
         is neither a string nor a sequence of them.
     """
     _check_robot(robot)
-    samples = _integer(samples, "samples", 4)
-    seed = _integer(seed, "seed", 0)
+    samples = inputs.integer(samples, "samples", 4)
+    seed = inputs.integer(seed, "seed", 0)
     groups = _groups(only)
     n = robot.n
     ranges = joint_ranges(robot, limits)

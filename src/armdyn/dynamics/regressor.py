@@ -89,15 +89,6 @@ def _check_arm(robot: object, numeric: bool = True) -> None:
         )
 
 
-def _integer(value: object, name: str, minimum: int) -> int:
-    """An int (or NumPy integer, not a bool) of at least ``minimum``, or an error naming it."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
-    if value < minimum:
-        raise ModelError(f"{name} must be at least {minimum}, got {value}")
-    return int(value)
-
-
 def _flag(value: object, name: str) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{name} must be True or False, got {value!r} ({type(value).__name__})")
@@ -452,8 +443,8 @@ def base_parameters(
     from scipy.linalg import qr
 
     _check_arm(robot)
-    samples = _integer(samples, "samples", 1)
-    seed = _integer(seed, "seed", 0)
+    samples = inputs.integer(samples, "samples", 1)
+    seed = inputs.integer(seed, "seed", 0)
     drives = _flag(drives, "drives")
     tolerance = inputs.vector(tolerance, "tolerance")
     if tolerance.shape != (1,) or not 0 < tolerance[0] < 1:
