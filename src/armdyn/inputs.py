@@ -102,6 +102,8 @@ def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
     try:
         if np.iscomplexobj(f_ext):
             raise TypeError("complex")
+        if getattr(f_ext, "dtype", None) is not None and f_ext.dtype.kind not in "biuf":
+            raise TypeError("not numbers")
         wrench = np.asarray(f_ext, dtype=float)
     except (TypeError, ValueError, ArithmeticError):
         raise ModelError("f_ext must be a wrench [force; moment] of 6 real numbers") from None
@@ -140,3 +142,48 @@ def integer(value: object, name: str, minimum: int) -> int:
     if value < minimum:
         raise ModelError(f"{name} must be at least {minimum}, got {value}")
     return int(value)
+
+
+def numbers(value: object, name: str, shape: tuple[int, ...] | None = None, where: str = "") -> np.ndarray:
+    """A finite real float array (of ``shape`` when given), every value below LARGEST_STATE in
+    magnitude, or a ModelError naming the argument. For model parameters: lengths, masses,
+    inertias, limits, gains, gravity."""
+    expected = "a number" if shape == () else f"an array of numbers of shape {shape}" if shape else "numbers"
+    if value is None or isinstance(value, (str, bytes, dict, set)):
+        raise ModelError(f"{name} must be {expected}{where}, got {_shown(value)}")
+    try:
+        if np.iscomplexobj(value):
+            raise ModelError(f"{name} must be real{where}; it is complex")
+        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biuf":
+            raise TypeError(f"{name} holds {value.dtype} values")
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError, ArithmeticError) as error:
+        if isinstance(error, ModelError):
+            raise
+        raise ModelError(f"{name} must be {expected}{where}, got {_shown(value)}") from None
+    if shape is not None and array.shape != shape:
+        raise ModelError(f"{name} must be {expected}{where}, got shape {array.shape}")
+    if array.size and not _finite(array):
+        raise ModelError(f"{name} must be finite{where} (it holds NaN or infinity)")
+    if array.size and np.abs(array).max() >= LARGEST_STATE:
+        raise ModelError(
+            f"{name} holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: beyond the range the "
+            "dynamics are computed in (products of such values overflow)"
+        )
+    return array
+
+
+def number(value: object, name: str, where: str = "", minimum: float | None = None) -> float:
+    """A finite real number (at least ``minimum`` when given) as a float, or a ModelError naming it."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ModelError(f"{name} must be a number{where}, got {value!r}")
+    result = float(numbers(value, name, (), where))
+    if minimum is not None and result < minimum:
+        raise ModelError(f"{name} must be at least {minimum:g}{where}, got {result:g}")
+    return result
+
+
+def _shown(value: object, width: int = 60) -> str:
+    """A value's repr for a message, shortened to ``width`` characters."""
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
+
+TITLE_WIDTH = 100  # characters per title line: a 9 inch figure at 10 points holds about 110
 
 
 def units(kinds: list[str], revolute: str, prismatic: str) -> str:
@@ -51,8 +54,10 @@ def plot_result(result: object, path: str | Path | None = None, title: str | Non
     handles = [Line2D([], [], color=colours[i % len(colours)], label=names[i]) for i in range(n)]
     if result.q_d is not None:
         handles += [Line2D([], [], color="0.3", label="actual"), Line2D([], [], color="0.3", ls="--", label="desired")]
-    fig.legend(handles=handles, loc="outside right upper", fontsize=8, frameon=False)
-    fig.suptitle(title or _title(result), fontsize=10)
+    # an axes legend anchored outside the top plot: constrained layout makes room for it beside the
+    # data, and it stays below the title (a figure legend shares the title's top edge)
+    axes[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
     if path is not None:
         fig.savefig(path, dpi=150)
         plt.close(fig)
