@@ -7,6 +7,9 @@ C-contiguous float64 array of exactly the result's shape.
 
 from __future__ import annotations
 
+import functools
+import math
+import os
 from collections.abc import Sequence
 
 import numpy as np
@@ -72,6 +75,8 @@ def batch_states(
         shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
         raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
     shape = (*batch, n)
+    copies = sum(a.shape != shape or not a.flags.c_contiguous for a in arrays)
+    affordable(copies * math.prod(shape) * 8, f"a batch of {math.prod(batch):,} states{where}")
     flat = [
         np.require(np.asarray(a if a.shape == shape else np.broadcast_to(a, shape)), np.float64, ["C", "W"]).reshape(
             -1, n
@@ -84,6 +89,7 @@ def batch_states(
 def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
     """``out`` checked against the result's shape, or a new array when out is None."""
     if out is None:
+        affordable(math.prod(shape) * 8, f"a result of shape {shape}")
         return np.empty(shape)
     if not (
         isinstance(out, np.ndarray)
@@ -95,6 +101,27 @@ def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
         got = getattr(out, "shape", type(out).__name__)
         raise ModelError(f"out must be a writable C-contiguous float64 array of shape {shape}, got {got}")
     return out
+
+
+@functools.cache
+def physical_memory() -> int | None:
+    """The machine's physical memory in bytes, or None where the system does not say."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def affordable(nbytes: int, what: str) -> None:
+    """A ModelError, before anything is allocated, when ``what`` needs more bytes than the
+    machine's physical memory: an allocation the system grants lazily would otherwise fail
+    later, or take the process down, when it is filled."""
+    memory = physical_memory()
+    if memory is not None and nbytes > memory:
+        raise ModelError(
+            f"{what} needs {nbytes / 2**30:,.1f} GiB, more than this machine's {memory / 2**30:,.1f} GiB of memory: "
+            "split it into smaller batches"
+        )
 
 
 def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
@@ -135,12 +162,15 @@ def vector(value: object, name: str) -> np.ndarray:
     return array
 
 
-def integer(value: object, name: str, minimum: int) -> int:
-    """An int (or NumPy integer, not a bool) of at least ``minimum``, or an error naming it."""
+def integer(value: object, name: str, minimum: int, maximum: int | None = None, why: str = "") -> int:
+    """An int (or NumPy integer, not a bool) from ``minimum`` to ``maximum``, or an error naming
+    it (``why`` says what the maximum protects)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+        raise TypeError(f"{name} must be an integer, got {_shown(value)} ({type(value).__name__})")
     if value < minimum:
-        raise ModelError(f"{name} must be at least {minimum}, got {value}")
+        raise ModelError(f"{name} must be at least {minimum}, got {_shown(value)}")
+    if maximum is not None and value > maximum:
+        raise ModelError(f"{name} must be at most {maximum:,}{why}, got {_shown(value)}")
     return int(value)
 
 

@@ -17,12 +17,13 @@ from armdyn.model import ArmModel
 FRAMES = ("base", "tool")
 
 
-def _check_arm(robot: object) -> None:
-    """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot) with numbers."""
+def check_arm(robot: object, numeric: bool = True, hint: str = "") -> None:
+    """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot), with numbers
+    for parameters when ``numeric``; ``hint`` is added to the symbolic case's message."""
     if not isinstance(robot, ArmModel):
         raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
-    if robot.is_symbolic:
-        raise TypeError(f"robot '{robot.name}' has symbolic (SymPy) parameters; numeric kinematics need numbers")
+    if numeric and robot.is_symbolic:
+        raise TypeError(f"robot '{robot.name}' has symbolic (SymPy) parameters; numbers are needed here{hint}")
 
 
 def _numbers(value: object, name: str) -> np.ndarray:
@@ -38,7 +39,7 @@ def _numbers(value: object, name: str) -> np.ndarray:
     return array
 
 
-def _link_index(robot: ArmModel, link: object) -> int:
+def link_index(robot: ArmModel, link: object) -> int:
     """The tool link for None, else ``link`` checked as an integer index of a link of the arm."""
     if link is None:
         return robot.tool_link
@@ -51,7 +52,8 @@ def _link_index(robot: ArmModel, link: object) -> int:
     return int(link)
 
 
-def _check_frame(frame: object) -> None:
+def check_frame(frame: object) -> None:
+    """A ModelError unless ``frame`` is "base" or "tool"."""
     if not (isinstance(frame, str) and frame in FRAMES):
         raise ModelError(f"frame must be 'base' or 'tool', got {frame!r}")
 
@@ -82,8 +84,42 @@ def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
     TypeError
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
-    _check_arm(robot)
+    check_arm(robot)
     return inputs.state(value, robot.n, name, f" for '{robot.name}'", complex_ok=True)
+
+
+def as_states(robot: ArmModel, q: object, **rates: object) -> tuple[np.ndarray, ...]:
+    """q and the named rates (qd, qdd) checked as by ``as_state``, and their batch shapes
+    checked to broadcast together.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+    **rates : array_like
+        Further states by name (``qd=...``, ``qdd=...``), each (n,) or (..., n).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        q and the rates in the order given, each as ``as_state`` returns it (not broadcast).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a state is not numbers of shape (..., n), holds NaN or infinity, or when the batch
+        shapes do not broadcast together (the message names each argument's shape).
+    """
+    arrays = (as_state(robot, q), *(as_state(robot, value, name) for name, value in rates.items()))
+    try:
+        np.broadcast_shapes(*(array.shape[:-1] for array in arrays))
+    except ValueError:
+        names = ("q", *rates)
+        shapes = ", ".join(f"{name} {array.shape}" for name, array in zip(names, arrays, strict=True))
+        raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
+    return arrays
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -278,7 +314,7 @@ def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndar
     TypeError
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
-    _check_arm(robot)
+    check_arm(robot)
     joints = _numbers(joints, "joints")
     if joints.ndim < 3 or joints.shape[-3:] != (robot.n, 4, 4):
         raise ModelError(f"joints must have shape (..., {robot.n}, 4, 4) for '{robot.name}', got {joints.shape}")
@@ -293,7 +329,7 @@ def _joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.nda
 def _target(robot: ArmModel, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Which link, its pose (tool applied for the tool link), and the joint axes/origins."""
     links, joints = joint_frames(robot, q)
-    index = _link_index(robot, link)
+    index = link_index(robot, link)
     pose = links[..., index, :, :] @ robot.tool if link is None else links[..., index, :, :]
     z, o = _joint_axes(robot, joints)
     return index, pose, z, o
@@ -346,7 +382,7 @@ def jacobian(robot: ArmModel, q: np.ndarray, frame: str = "base", link: int | No
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    _check_frame(frame)
+    check_frame(frame)
     index, pose, z, o = _target(robot, q, link)
     jac = _columns(robot, z, o, pose[..., :3, 3], robot.ancestors[index])
     return _expressed(jac, pose, frame)
@@ -392,8 +428,8 @@ def jacobian_dot(
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    _check_frame(frame)
-    qd = as_state(robot, qd, "qd")
+    check_frame(frame)
+    q, qd = as_states(robot, q, qd=qd)
     index, pose, z, o = _target(robot, q, link)
     revolute = np.array([kind == "revolute" for kind in robot.kinds])
     strict = robot.ancestors & ~np.eye(robot.n, dtype=bool)

@@ -361,6 +361,11 @@ def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequ
     return report.bounds["mu1"], report.bounds["mu2"]
 
 
+MAX_SAMPLES = 1_000_000
+"""The most random configurations ``check`` samples: beyond it a check takes minutes and the
+sampled extremes no longer change."""
+
+
 def check(
     robot: Robot,
     samples: int = 300,
@@ -378,7 +383,7 @@ def check(
     robot : Robot
         The arm.
     samples : int, optional
-        Number of random joint configurations (default 300, at least 4).
+        Number of random joint configurations (default 300, from 4 to MAX_SAMPLES = 1,000,000).
     seed : int, optional
         Seed of the random generator (default 0).
     limits : sequence of (float, float), optional
@@ -395,15 +400,15 @@ def check(
     Raises
     ------
     armdyn.ModelError
-        When ``samples`` is below 4, ``seed`` is negative, ``limits`` is not n finite
-        (lower, upper) pairs with lower <= upper, ``only`` is empty or names a group not in
+        When ``samples`` is below 4 or above MAX_SAMPLES, ``seed`` is negative, ``limits`` is not
+        n finite (lower, upper) pairs with lower <= upper, ``only`` is empty or names a group not in
         GROUPS (the message lists them), or when the arm has symbolic parameters.
     TypeError
         When ``robot`` is not a Robot, ``samples`` or ``seed`` is not an integer, or ``only``
         is neither a string nor a sequence of them.
     """
     _check_robot(robot)
-    samples = inputs.integer(samples, "samples", 4)
+    samples = inputs.integer(samples, "samples", 4, MAX_SAMPLES, " (each sample is evaluated and refined)")
     seed = inputs.integer(seed, "seed", 0)
     groups = _groups(only)
     n = robot.n

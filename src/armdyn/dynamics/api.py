@@ -1,4 +1,4 @@
-"""The dynamics of an arm as free functions: one state or a batch, with ``out=``.
+"""The dynamics and kinematics of an arm as free functions: one state or a batch, with ``out=``.
 
 Every function takes the arm first (a Robot: an ArmModel with its packed model), then
 states of shape (n,) for one state or (..., n) for a batch, and returns the matching
@@ -20,7 +20,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba.core.errors import NumbaError
 
-from armdyn import inputs
+from armdyn import inputs, kinematics
+from armdyn.dynamics import frames
 from armdyn.dynamics.aba import aba_batch, aba_one
 from armdyn.dynamics.coriolis import coriolis_batch, coriolis_one
 from armdyn.dynamics.crba import crba_batch, crba_one
@@ -494,3 +495,181 @@ def inertia_matrix_dot(arm: Robot, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
     """
     Vm = coriolis_matrix(arm, q, qd)
     return Vm + np.swapaxes(Vm, -1, -2)
+
+
+# ----- kinematics, compiled (armdyn.kinematics holds the NumPy reference) -----------------------
+_FRAMES = {"base": frames.WORLD, "tool": frames.LOCAL}
+
+
+def _target(arm: Robot, link: object) -> int:
+    """frames.TOOL for None, else the checked link index."""
+    return frames.TOOL if link is None else kinematics.link_index(arm, link)
+
+
+def _frame(frame: object) -> int:
+    kinematics.check_frame(frame)
+    return _FRAMES[frame]
+
+
+def link_transforms(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """T_i(q), the world pose of every link frame (Appendix A), compiled.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        T_i, (..., n, 4, 4): base @ the chain of placements, joint motions and frame offsets.
+
+    Raises
+    ------
+    ModelError
+        When q is invalid (see inverse_dynamics) or ``out`` does not fit.
+    """
+    result = _empty((arm.n, 4, 4)) if out is None else out
+    try:
+        if frames.transforms_one(arm.packed, q, result) == 0:
+            return result
+    except _NOT_ONE_STATE:
+        pass
+    return _batch(arm, frames.transforms_batch, ("q",), (q,), out, (arm.n, 4, 4))
+
+
+def tool_pose(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
+    """The tool's world pose T_k(q) @ tool (k the tool link), compiled.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        The pose, (..., 4, 4).
+
+    Raises
+    ------
+    ModelError
+        When q is invalid (see inverse_dynamics) or ``out`` does not fit.
+    """
+    result = _empty((4, 4)) if out is None else out
+    try:
+        if frames.pose_one(arm.packed, q, frames.TOOL, result) == 0:
+            return result
+    except _NOT_ONE_STATE:
+        pass
+    return _batch(arm, _with_target(frames.pose_batch, frames.TOOL), ("q",), (q,), out, (4, 4))
+
+
+def jacobian(
+    arm: Robot, q: ArrayLike, frame: str = "base", link: int | None = None, out: np.ndarray | None = None
+) -> np.ndarray:
+    """The geometric Jacobian J(q), [v; w] = J qd with the linear rows first, compiled.
+
+    Column j is [z_j x (p - o_j); z_j] for a revolute joint and [z_j; 0] for a prismatic one
+    (Appendix A), zero for joints that do not move the point p.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+    frame : str, optional
+        "base" (default): rows in world axes; "tool": rows in the axes of the target frame.
+    link : int, optional
+        The link whose frame origin is the point (and whose axes "tool" means); default
+        (None) the tool.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        J, (..., 6, n).
+
+    Raises
+    ------
+    ModelError
+        When q is invalid (see inverse_dynamics), ``out`` does not fit, ``frame`` is not
+        "base" or "tool", or ``link`` is not None or an integer index of a link.
+    """
+    result = _empty((6, arm.n)) if out is None else out
+    target, axes = _target(arm, link), _frame(frame)
+    try:
+        if frames.jacobian_one(arm.packed, q, target, axes, result) == 0:
+            return result
+    except _NOT_ONE_STATE:
+        pass
+    kernel = _with_target(frames.jacobian_batch, target, axes)
+    return _batch(arm, kernel, ("q",), (q,), out, (6, arm.n))
+
+
+def jacobian_dot(
+    arm: Robot,
+    q: ArrayLike,
+    qd: ArrayLike,
+    frame: str = "base",
+    link: int | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """dJ/dt, the time derivative of ``jacobian`` (same point and axes), compiled.
+
+    For a revolute column, d/dt [z x (p - o); z] = [zdot x (p - o) + z x (pdot - odot); zdot],
+    for a prismatic one [zdot; 0], with zdot = w_parent x z; in the target's axes,
+    d/dt (R^T J) = R^T (dJ/dt - [w]x J). Jdot qd is the acceleration of the point (and of the
+    frame's rotation) at qdd = 0, the term task-space dynamics need.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast.
+    frame : str, optional
+        "base" (default) or "tool", as for ``jacobian``.
+    link : int, optional
+        The link whose frame origin is the point; default (None) the tool.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        dJ/dt, (..., 6, n).
+
+    Raises
+    ------
+    ModelError
+        As for ``jacobian``, and when qd is invalid.
+    """
+    result = _empty((6, arm.n)) if out is None else out
+    target, axes = _target(arm, link), _frame(frame)
+    try:
+        if frames.jacobian_dot_one(arm.packed, q, qd, target, axes, result) == 0:
+            return result
+    except _NOT_ONE_STATE:
+        pass
+    kernel = _with_target(frames.jacobian_dot_batch, target, axes)
+    return _batch(arm, kernel, ("q", "qd"), (q, qd), out, (6, arm.n))
+
+
+def _with_target(kernel: Callable, *options: int) -> Callable:
+    """A batch kernel with its trailing integer options (target, frame) bound."""
+
+    def call(model: np.ndarray, *arrays: np.ndarray) -> None:
+        kernel(model, *arrays[:-1], *options, arrays[-1])
+
+    return call

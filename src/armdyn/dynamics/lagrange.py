@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armdyn.kinematics import as_state, link_transform_derivatives, twist_generators
+from armdyn.kinematics import as_state, as_states, check_arm, link_transform_derivatives, twist_generators
 from armdyn.model import ArmModel
 
 
@@ -31,8 +31,9 @@ def pseudo_inertias(robot: ArmModel) -> np.ndarray:
     Raises
     ------
     TypeError
-        When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
+        When ``robot`` is not an arm, or has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
+    check_arm(robot)
     return np.stack([link.inertial.pseudo_inertia() for link in robot.links]).astype(float)
 
 
@@ -155,13 +156,12 @@ def inertia_matrix_dot(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.nda
     Raises
     ------
     armdyn.ModelError
-        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
-    ValueError
-        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, or when
+        their batch shapes do not broadcast together.
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    qd = as_state(robot, qd, "qd")
+    q, qd = as_states(robot, q, qd=qd)
     return np.einsum("...ljk,...l->...jk", inertia_matrix_partials(robot, q), qd)
 
 
@@ -211,13 +211,12 @@ def coriolis_matrix(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarra
     Raises
     ------
     armdyn.ModelError
-        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
-    ValueError
-        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, or when
+        their batch shapes do not broadcast together.
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    qd = as_state(robot, qd, "qd")
+    q, qd = as_states(robot, q, qd=qd)
     return np.einsum("...ijk,...i->...kj", christoffel_symbols(robot, q), qd)
 
 
@@ -240,13 +239,12 @@ def coriolis_vector(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarra
     Raises
     ------
     armdyn.ModelError
-        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
-    ValueError
-        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, or when
+        their batch shapes do not broadcast together.
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    qd = as_state(robot, qd, "qd")
+    q, qd = as_states(robot, q, qd=qd)
     return np.einsum("...kj,...j->...k", coriolis_matrix(robot, q, qd), qd)
 
 
@@ -326,13 +324,12 @@ def kinetic_energy(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray
     Raises
     ------
     armdyn.ModelError
-        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
-    ValueError
-        When the batch shapes of ``q`` and ``qd`` do not broadcast together.
+        When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, or when
+        their batch shapes do not broadcast together.
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    qd = as_state(robot, qd, "qd")
+    q, qd = as_states(robot, q, qd=qd)
     return 0.5 * np.einsum("...j,...jk,...k->...", qd, inertia_matrix(robot, q), qd)
 
 
@@ -386,13 +383,12 @@ def inverse_dynamics(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.nda
     Raises
     ------
     armdyn.ModelError
-        When ``q``, ``qd`` or ``qdd`` is not numbers of shape (..., n) or holds NaN or infinity.
-    ValueError
-        When the batch shapes of the states do not broadcast together.
+        When ``q``, ``qd`` or ``qdd`` is not numbers of shape (..., n) or holds NaN or infinity,
+        or when their batch shapes do not broadcast together.
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    qdd = as_state(robot, qdd, "qdd")
+    q, qd, qdd = as_states(robot, q, qd=qd, qdd=qdd)
     return (
         np.einsum("...jk,...k->...j", inertia_matrix(robot, q), qdd)
         + coriolis_vector(robot, q, qd)

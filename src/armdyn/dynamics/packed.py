@@ -32,7 +32,8 @@ PIVOT_RELATIVE = 1e-12  # an articulated inertia below this times the arm's iner
 PARENT, KIND, ROTATION, POSITION = 0, 1, 2, 11
 MASS, FIRST_MOMENT, INERTIA = 14, 15, 18  # INERTIA: Ixx Ixy Ixz Iyy Iyz Izz about the body origin
 ARMATURE, VISCOUS, COULOMB_POS, COULOMB_NEG = 24, 25, 26, 27
-STRIDE = 28
+LINK_ROTATION, LINK_POSITION = 28, 37  # the link frame (DH or URDF) in the body frame, for kinematics
+STRIDE = 40
 REVOLUTE_KIND, PRISMATIC_KIND = 0.0, 1.0
 
 # Workspace layouts, per joint and fixed (each kernel's docstring says what its record holds).
@@ -111,6 +112,8 @@ def pack(robot: ArmModel) -> np.ndarray:
         record[ARMATURE] = armature[i]
         record[VISCOUS] = viscous[i]
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
+        record[LINK_ROTATION : LINK_ROTATION + 9] = link_in_body[i][:3, :3].ravel()
+        record[LINK_POSITION : LINK_POSITION + 3] = link_in_body[i][:3, 3]
     buffer[PIVOT_FLOOR] = PIVOT_RELATIVE * inertia_scale(robot)
     return buffer
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from armdyn import inputs
 from armdyn.errors import ModelError
-from armdyn.kinematics import joint_axes, joint_frames
+from armdyn.kinematics import check_arm, joint_axes, joint_frames
 from armdyn.model import ArmModel
 
 BODY_PARAMETERS = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
@@ -79,14 +79,12 @@ class FrictionMisfitWarning(UserWarning):
     estimates are biased (leave those samples out with ``identify``'s velocity_band)."""
 
 
+MAX_BASE_SAMPLES = 100_000
+"""The most random states ``base_parameters`` stacks (for a 7-joint arm, 0.7 GB of regressor)."""
+
+
 def _check_arm(robot: object, numeric: bool = True) -> None:
-    if not isinstance(robot, ArmModel):
-        raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
-    if numeric and robot.is_symbolic:
-        raise TypeError(
-            f"robot '{robot.name}' has symbolic (SymPy) parameters; numbers are needed here "
-            "(ClosedForm.W and ClosedForm.phi give the parameterization symbolically)"
-        )
+    check_arm(robot, numeric, " (ClosedForm.W and ClosedForm.phi give the parameterization symbolically)")
 
 
 def _flag(value: object, name: str) -> bool:
@@ -417,7 +415,8 @@ def base_parameters(
     robot : ArmModel
         The arm.
     samples : int, optional
-        Number of random states stacked (default 200, at least 1).
+        Number of random states stacked (default 200, from 1 to MAX_BASE_SAMPLES = 100,000:
+        the stacked regressor holds samples x n rows).
     seed : int, optional
         Seed of the random generator (default 0).
     tolerance : float, optional
@@ -434,7 +433,7 @@ def base_parameters(
     Raises
     ------
     armdyn.ModelError
-        When ``samples`` is below 1, ``seed`` is negative, or ``tolerance`` is not a number
+        When ``samples`` is below 1 or above MAX_BASE_SAMPLES, ``seed`` is negative, or ``tolerance`` is not a number
         in (0, 1).
     TypeError
         When ``robot`` is not an arm (an ArmModel) or has symbolic (SymPy) parameters, when
@@ -443,7 +442,9 @@ def base_parameters(
     from scipy.linalg import qr
 
     _check_arm(robot)
-    samples = inputs.integer(samples, "samples", 1)
+    samples = inputs.integer(
+        samples, "samples", 1, MAX_BASE_SAMPLES, " (the stacked regressor grows with it; a few hundred suffice)"
+    )
     seed = inputs.integer(seed, "seed", 0)
     drives = _flag(drives, "drives")
     tolerance = inputs.vector(tolerance, "tolerance")
