@@ -32,6 +32,7 @@ from armdyn.dynamics.spatial import (
     dot6,
     joint_transform,
     motion_cross,
+    one_state,
     rigid_times,
     states_status,
     world_motion_subspace,
@@ -161,7 +162,7 @@ def aba_core(
     return -1
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR))
 def aba_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> int:
     """qdd for one state; the status of states_status, 4 when qdd has the wrong length, or
     SINGULAR_STATUS when M(q) is singular."""

@@ -31,6 +31,7 @@ from armdyn.dynamics.spatial import (
     inertia_apply,
     joint_transform,
     motion_cross,
+    one_state,
     states_status,
     world_motion_subspace,
     world_pose,
@@ -150,7 +151,7 @@ def coriolis_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.nda
                 work[BC + 12 * parent + k] += work[bc + k]
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, MATRIX), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, MATRIX))
 def coriolis_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> int:
     """Vm(q, qd) for one state; the status of states_status, or 4 when C is not (n, n)."""
     n = int(model[N_JOINTS])

@@ -32,6 +32,7 @@ from armdyn.dynamics.spatial import (
     add_inertia_to_parent,
     force_to_parent,
     joint_transform,
+    one_state,
     states_status,
 )
 
@@ -108,7 +109,7 @@ def mass_matrix_and_bias(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd:
     crba_from_transforms(model, work, 0, RNEA_JOINT, RNEA_JOINT * n + RNEA_FIXED, M)
 
 
-@njit(types.int64(MODEL, VECTOR, MATRIX), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, MATRIX))
 def crba_one(model: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
     """M(q) for one state; the status of states_status, or 4 when M is not (n, n)."""
     n = int(model[N_JOINTS])

@@ -30,6 +30,7 @@ from armdyn.dynamics.spatial import (
     inertia_times,
     joint_transform,
     motion_to_child,
+    one_state,
     states_status,
     world_pose,
 )
@@ -68,7 +69,7 @@ def energy_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarr
     out[1] = potential
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR))
 def energy_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """(K, P) for one state into out (2,); the status of states_status, or 4 when out is not (2,)."""
     status = states_status(model, q, qd, qd, 2)

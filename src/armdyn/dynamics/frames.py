@@ -27,7 +27,16 @@ from armdyn.dynamics.packed import (
     TOOL_LINK,
     TOOL_ROTATION,
 )
-from armdyn.dynamics.spatial import MATRIX, MODEL, NUMBA_OPTIONS, VECTOR, joint_transform, states_status, world_pose
+from armdyn.dynamics.spatial import (
+    MATRIX,
+    MODEL,
+    NUMBA_OPTIONS,
+    VECTOR,
+    joint_transform,
+    one_state,
+    states_status,
+    world_pose,
+)
 
 TOOL, WORLD, LOCAL = -1, 0, 1
 POSE = 12  # a world pose in the workspace: R (9, row-major) and p (3)
@@ -274,7 +283,7 @@ def target_status(model: np.ndarray, target: int, frame: int) -> int:
     return 0 if frame in (WORLD, LOCAL) else 6
 
 
-@njit(types.int64(MODEL, VECTOR, ARRAY3), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, ARRAY3))
 def transforms_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     """Every link frame's world pose for one state; a status (spatial.states_status, 4: out)."""
     n = int(model[N_JOINTS])
@@ -286,7 +295,7 @@ def transforms_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     return status
 
 
-@njit(types.int64(MODEL, VECTOR, types.int64, MATRIX), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, types.int64, MATRIX))
 def pose_one(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -> int:
     """The target's world pose for one state; a status."""
     status = states_status(model, q, q, q, 1)
@@ -299,7 +308,7 @@ def pose_one(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -> 
     return status
 
 
-@njit(types.int64(MODEL, VECTOR, types.int64, types.int64, MATRIX), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, types.int64, types.int64, MATRIX))
 def jacobian_one(model: np.ndarray, q: np.ndarray, target: int, frame: int, out: np.ndarray) -> int:
     """The target's Jacobian for one state; a status."""
     n = int(model[N_JOINTS])
@@ -313,7 +322,7 @@ def jacobian_one(model: np.ndarray, q: np.ndarray, target: int, frame: int, out:
     return status
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, types.int64, types.int64, MATRIX), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, types.int64, types.int64, MATRIX))
 def jacobian_dot_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, target: int, frame: int, out: np.ndarray) -> int:
     """dJ/dt of the target's Jacobian for one state; a status."""
     n = int(model[N_JOINTS])

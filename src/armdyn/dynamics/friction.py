@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit, prange, types
 
 from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, N_JOINTS, STRIDE, VISCOUS
-from armdyn.dynamics.spatial import MODEL, NUMBA_OPTIONS, VECTOR, states_status
+from armdyn.dynamics.spatial import MODEL, NUMBA_OPTIONS, VECTOR, one_state, states_status
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -50,7 +50,7 @@ def friction_core(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
         out[i] = joint_friction(model, i, qd[i])
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR))
 def friction_one(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """F(qd) for one state; the status of states_status, or 4 when out has the wrong length."""
     status = states_status(model, qd, qd, qd, 1)

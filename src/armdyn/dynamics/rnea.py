@@ -45,6 +45,7 @@ from armdyn.dynamics.spatial import (
     force_to_parent,
     joint_transform,
     newton_euler_step,
+    one_state,
     sin_cos,
     states_status,
 )
@@ -185,19 +186,19 @@ def rnea_checked(
     return status
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR))
 def inverse_dynamics_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, tau: np.ndarray) -> int:
     """tau = M qdd + Vm qd + F + G for one state."""
     return rnea_checked(model, q, qd, qdd, INVERSE_DYNAMICS, 3, tau)
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR))
 def nonlinear_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """N = Vm qd + F + G for one state."""
     return rnea_checked(model, q, qd, qd, NONLINEAR, 2, out)
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR))
 def coriolis_vector_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
     """V = Vm qd for one state."""
     return rnea_checked(model, q, qd, qd, CORIOLIS, 2, out)
@@ -254,7 +255,7 @@ def gravity_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, G: np.ndarr
             add_force_to_parent(work, o, work, o + 15, work, GRAVITY_JOINT * parent + 15)
 
 
-@njit(types.int64(MODEL, VECTOR, VECTOR), **NUMBA_OPTIONS)
+@one_state(types.int64(MODEL, VECTOR, VECTOR))
 def gravity_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     """G(q) for one state, by its own lean recursion."""
     status = states_status(model, q, q, q, 1)

@@ -14,8 +14,12 @@ all are inlined into their callers.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from types import MethodType
+
 import numpy as np
 from numba import njit, types
+from numba.core.dispatcher import Dispatcher
 
 from armdyn.dynamics.packed import FIRST_MOMENT, HEADER, INERTIA, KIND, MASS, N_JOINTS, POSITION, ROTATION, STRIDE
 from armdyn.inputs import LARGEST_STATE
@@ -28,6 +32,34 @@ NUMBA_OPTIONS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy"
 MODEL = types.float64[::1]
 VECTOR = types.float64[::1]
 MATRIX = types.float64[:, ::1]
+
+
+def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
+    """``njit(signature)`` compiled (or loaded from the cache) at the kernel's first call, not at
+    import: importing armdyn then costs no compilation, and a program pays only for the kernels
+    it calls.
+
+    With the signature compiled, compilation is disabled, so a call with any other argument
+    types raises TypeError as with an explicit signature (the api's fast path relies on it).
+    Numba calls ``_compile_for_args`` only when no compiled version matches the arguments;
+    here it compiles the one signature and hands the call back to the dispatcher, which then
+    runs it or raises TypeError.
+    """
+
+    def decorate(function: Callable) -> Dispatcher:
+        dispatcher = njit(**NUMBA_OPTIONS)(function)
+
+        def compile_signature(self: Dispatcher, *args: object, **kwargs: object) -> Dispatcher:
+            if self._can_compile:
+                self.compile(signature)
+                self.disable_compile()
+            return self
+
+        dispatcher._compile_for_args = MethodType(compile_signature, dispatcher)
+        return dispatcher
+
+    return decorate
+
 
 # pi/2 split in three parts for an exact range reduction (Cody and Waite), and the
 # minimax coefficients of sin and cos on [-pi/4, pi/4] (Moshier, Cephes sin.c).
