@@ -4,6 +4,7 @@ from armdyn import kinematics
 from armdyn import models as models
 from armdyn.dynamics import lagrange
 from armdyn.dynamics.regressor import base_parameters, identify
+from armdyn.dynamics.threads import set_threads, threads
 from armdyn.errors import ModelError
 from armdyn.model import ArmModel, Inertial, Joint, Link
 from armdyn.robot import Robot
@@ -49,4 +50,6 @@ __all__ = [
     "lagrange",
     "load_urdf",
     "models",
+    "set_threads",
+    "threads",
 ]
