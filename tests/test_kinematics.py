@@ -10,12 +10,15 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
 import armdyn as ad
 from armdyn import ModelError, Robot
 from armdyn.model.joint import rot_x, rot_z, trans
 from tests.conftest import URDFS, pinocchio_pair
+from tests.strategies import random_robot, random_transform
 
 STEP = 1e-6
 
@@ -515,3 +518,56 @@ def test_public_helpers_still_compute() -> None:
     _, joints = ad.kinematics.joint_frames(arm, arm.qn)
     z, o = ad.kinematics.joint_axes(arm, joints)
     assert z.shape == o.shape == (6, 3)
+
+
+# ----- the compiled kinematics against the NumPy reference ------------------------------------------
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), n=st.integers(1, 7), base=st.booleans())
+def test_compiled_kinematics_equal_the_numpy_reference(seed: int, n: int, base: bool) -> None:
+    """Every link pose, the tool pose, and the Jacobian and its derivative of the tool and of each
+    link, in world and local axes, on random trees with a base and a tool: to 1e-13."""
+    from armdyn import kinematics
+    from armdyn.dynamics import api
+
+    arm = random_robot(seed, n)
+    if base:
+        arm = arm.replace(base=random_transform(np.random.default_rng(seed + 1)))
+    rng = np.random.default_rng(seed)
+    q, qd = rng.uniform(-3, 3, arm.n), rng.uniform(-3, 3, arm.n)
+    assert_allclose(api.link_transforms(arm, q), kinematics.link_transforms(arm, q), rtol=0, atol=1e-13)
+    assert_allclose(api.tool_pose(arm, q), kinematics.tool_pose(arm, q), rtol=0, atol=1e-13)
+    for link in (None, *range(arm.n)):
+        for frame in ("base", "tool"):
+            expected = kinematics.jacobian(arm, q, frame, link)
+            assert_allclose(api.jacobian(arm, q, frame, link), expected, rtol=0, atol=1e-13)
+            expected = kinematics.jacobian_dot(arm, q, qd, frame, link)
+            assert_allclose(api.jacobian_dot(arm, q, qd, frame, link), expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "puma560", "polar_rp"])
+def test_compiled_kinematics_batches_and_out(name: str) -> None:
+    """A batch is one compiled call equal to the one-state calls; out= receives the result."""
+    from armdyn.dynamics import api
+
+    arm = ARMS[name]()
+    rng = np.random.default_rng(3)
+    q, qd = rng.uniform(-2, 2, (3, 2, arm.n)), rng.uniform(-2, 2, (2, arm.n))
+    cases = [
+        (api.link_transforms, (q,), {}, (arm.n, 4, 4)),
+        (api.tool_pose, (q,), {}, (4, 4)),
+        (api.jacobian, (q,), {"frame": "tool", "link": arm.n - 1}, (6, arm.n)),
+        (api.jacobian_dot, (q, qd), {"frame": "base"}, (6, arm.n)),
+    ]
+    for function, states, options, shape in cases:
+        batch = function(arm, *states, **options)
+        assert batch.shape == (3, 2, *shape)
+        for index in np.ndindex(3, 2):
+            one = function(arm, *(s[index[-s.ndim + 1 :]] if s.ndim == 2 else s[index] for s in states), **options)
+            assert_array_equal(batch[index], one)
+        out = np.empty((3, 2, *shape))
+        assert function(arm, *states, **options, out=out) is out
+        assert_array_equal(out, batch)
+        with pytest.raises(ModelError, match="out must be"):
+            function(
+                arm, *(s[0, 0] if s.ndim == 3 else s[0] for s in states), **options, out=np.empty(shape[::-1] + (1,))
+            )
