@@ -248,7 +248,14 @@ def test_figures_name_the_controller_keep_legends_off_the_data_and_carry_units()
     result = simulate(arm, ComputedTorque(100, 20), Sinusoid(0.1, 0.5, offset=arm.qn), t_final=0.1, q0=arm.qn)
     figure = result.plot()
     assert "computed torque (kp = 100, kv = 20)" in figure._suptitle.get_text()
-    assert all(axis.get_legend() is None for axis in figure.axes) and len(figure.legends) == 1
+    legends = [axis.get_legend() for axis in figure.axes if axis.get_legend() is not None]
+    assert len(legends) == 1 and not figure.legends  # one legend, beside the top plot
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    box, data = legends[0].get_window_extent(renderer), figure.axes[0].get_window_extent(renderer)
+    assert box.x0 >= data.x1  # right of the plotting area, never over the data
+    title = figure._suptitle.get_window_extent(renderer)
+    assert title.x0 >= 0 and title.x1 <= figure.bbox.x1  # the title fits the figure (wrapped)
     labels = [axis.get_ylabel() for axis in figure.axes]
     assert labels == ["joint position (rad)", "error q_d - q (rad)", "torque (N m)"]
     polar = simulate(ad.models.polar_rp(), PDGravity([100, 100], [20, 20]), t_final=0.05, q0=[0.0, 1.0])

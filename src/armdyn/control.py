@@ -18,17 +18,21 @@ whole run is one Numba call. Gains are scalars or per joint.
 from __future__ import annotations
 
 import inspect
+import math
+import reprlib
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
+from armdyn import inputs
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.rnea import gravity_core
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
-from armdyn.inputs import gains as _gains
+from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 
 NO_CONTROL, COMPUTED_TORQUE, PD_GRAVITY, PID_JOINT = 0, 1, 2, 3
@@ -52,6 +56,81 @@ def call(controller: object, args: tuple, plant: Robot | None, coulomb_smoothing
     if coulomb_smoothing is not None and accepts(controller, "coulomb_smoothing"):
         extra["coulomb_smoothing"] = coulomb_smoothing
     return controller(*args, **extra)
+
+
+def _states(names: Sequence[str], values: Sequence[object], n: int, where: str) -> list[np.ndarray]:
+    """The states a law uses, checked by inputs.batch_states and broadcast to their common shape
+    (..., n); an error names the argument. One state of float64 arrays, as simulate's Python loop
+    passes them, is taken as it is after one vectorized test (NaN fails it), since the full check
+    costs more than the law itself."""
+    if all(_plain(v, n) for v in values) and np.abs(np.concatenate(values)).max() < LARGEST_STATE:
+        return list(values)
+    batch, flat = inputs.batch_states(names, values, n, where)
+    return [a.reshape(*batch, n) for a in flat]
+
+
+def _plain(value: object, n: int) -> bool:
+    """Whether ``value`` is a plain float64 array of shape (n,) (not a subclass, native order)."""
+    return type(value) is np.ndarray and value.shape == (n,) and value.dtype == np.float64
+
+
+def _joints(names: Sequence[str], values: Sequence[object]) -> int:
+    """n for a law without an arm (PID): the last axis its states share, or a ModelError naming
+    their shapes (an argument that is no array at all is named by ``_states``)."""
+    shapes = {}
+    for name, value in zip(names, values, strict=True):
+        try:
+            shape = np.shape(value)
+        except (TypeError, ValueError):  # a ragged list: named by _states
+            continue
+        if shape:
+            shapes[name] = shape
+    widths = {shape[-1] for shape in shapes.values()}
+    if len(widths) == 1 and min(widths) > 0:
+        return widths.pop()
+    listed = ", ".join(f"{name} {shape}" for name, shape in shapes.items()) or "no arrays"
+    raise ModelError(f"the states given to PID must all have shape (n,) or (..., n) for one n >= 1, got {listed}")
+
+
+def _gain(value: object, name: str, n: int) -> float | np.ndarray:
+    """A gain checked by inputs.gains; a plain non-negative float or int (the usual gain) is returned
+    as it is, skipping that costlier check: it multiplies exactly as the array of n copies would (an
+    int up to 2**53 converts to float64 exactly)."""
+    if (type(value) is float and 0.0 <= value < math.inf) or (type(value) is int and 0 <= value <= 2**53):
+        return value
+    return inputs.gains(value, name, n)
+
+
+def _arm_of(controller: object, plant: object) -> Robot:
+    """The arm a model-based law computes with: its own model, else the plant simulate gives."""
+    name, arm = ("model", controller.model) if controller.model is not None else ("plant", plant)
+    kind = type(controller).__name__
+    if arm is None:
+        raise ModelError(f"{kind} needs a model of the arm (model=...) outside simulate()")
+    if not isinstance(arm, Robot):
+        raise TypeError(f"{kind}'s {name} must be an armdyn Robot, got {type(arm).__name__}")
+    return arm
+
+
+def _smoothing(value: object, n: int) -> np.ndarray:
+    """coulomb_smoothing: eps >= 0 per joint (or one for all), as (n,) or a scalar array."""
+    if _plain(value, n) and value.min() >= 0.0 and value.max() < math.inf:  # NaN fails
+        return value
+    eps = inputs.vector(value, "coulomb_smoothing")
+    if eps.shape[0] not in (1, n) or np.any(eps < 0):
+        raise ModelError(f"coulomb_smoothing must be eps >= 0 (rad/s) for every joint or one per joint ({n}), "
+                         f"got {reprlib.repr(value)}")  # fmt: skip
+    return eps
+
+
+def _where(controller: object, arm: Robot | None = None) -> str:
+    """Where a state error happened, for its message."""
+    return f" for {type(controller).__name__}" + (f" on '{arm.name}'" if arm is not None else "")
+
+
+def _times_matrix(M: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """M u for one state (as before, for bitwise equal torques) or per state of a batch."""
+    return M @ u if u.ndim == 1 else (M @ u[..., None])[..., 0]
 
 
 @dataclass
@@ -86,20 +165,25 @@ class ComputedTorque:
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, q_d: np.ndarray, qd_d: np.ndarray,
                  qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None,
                  coulomb_smoothing: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-        """tau for one state. ``coulomb_smoothing`` (eps per joint, given by simulate) compensates the
-        model's Coulomb friction with the smoothed law the simulated plant follows, as the compiled
-        law does; without it the exact sign law."""
-        arm = self.model or plant
-        if arm is None:
-            raise ModelError("ComputedTorque needs a model of the arm (model=...) outside simulate()")
+        """tau for one state (n,) or a batch (..., n) of the states' common batch shape.
+
+        ``coulomb_smoothing`` (eps per joint, given by simulate) compensates the model's Coulomb
+        friction with the smoothed law the simulated plant follows, as the compiled law does;
+        without it the exact sign law. ``t`` is not used. A state that is not numbers of shape
+        (..., n), holds NaN or infinity, or does not broadcast with the others is a ModelError
+        naming it."""
+        arm = _arm_of(self, plant)
         n = arm.n
-        u = qdd_d + _gains(self.kv, "kv", n) * (qd_d - qd) + _gains(self.kp, "kp", n) * (q_d - q)
-        u = u + _gains(self.ki, "ki", n) * e_int
+        names = ("q", "qd", "q_d", "qd_d", "qdd_d", "e_int")
+        q, qd, q_d, qd_d, qdd_d, e_int = _states(names, (q, qd, q_d, qd_d, qdd_d, e_int), n, _where(self, arm))
+        u = qdd_d + _gain(self.kv, "kv", n) * (qd_d - qd) + _gain(self.kp, "kp", n) * (q_d - q)
+        u = u + _gain(self.ki, "ki", n) * e_int
         N = arm.nonlinear_terms(q, qd)
         if coulomb_smoothing is not None:
-            table = arm.coulomb_friction
-            N = N - coulomb_vector(table, qd) + smooth_coulomb_vector(table, coulomb_smoothing, qd)
-        return arm.inertia_matrix(q) @ u + N
+            eps, table = _smoothing(coulomb_smoothing, n), arm.coulomb_friction
+            with np.errstate(over="ignore"):  # qd / a tiny eps overflows to inf, where tanh is exactly +-1
+                N = N - coulomb_vector(table, qd) + smooth_coulomb_vector(table, eps, qd)
+        return _times_matrix(arm.inertia_matrix(q), u) + N
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -138,11 +222,13 @@ class PDGravity:
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, q_d: np.ndarray, qd_d: np.ndarray,
                  qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None,
                  coulomb_smoothing: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-        arm = self.model or plant
-        if arm is None:
-            raise ModelError("PDGravity needs a model of the arm (model=...) outside simulate()")
+        """tau for one state (n,) or a batch (..., n); ``t``, ``qdd_d`` and ``e_int`` are not used.
+        A state that is not numbers of shape (..., n), holds NaN or infinity, or does not
+        broadcast with the others is a ModelError naming it."""
+        arm = _arm_of(self, plant)
         n = arm.n
-        return _gains(self.kp, "kp", n) * (q_d - q) + _gains(self.kv, "kv", n) * (qd_d - qd) + arm.gravity_vector(q)
+        q, qd, q_d, qd_d = _states(("q", "qd", "q_d", "qd_d"), (q, qd, q_d, qd_d), n, _where(self, arm))
+        return _gain(self.kp, "kp", n) * (q_d - q) + _gain(self.kv, "kv", n) * (qd_d - qd) + arm.gravity_vector(q)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -170,9 +256,14 @@ class PID:
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, q_d: np.ndarray, qd_d: np.ndarray,
                  qdd_d: np.ndarray, e_int: np.ndarray, plant: Robot | None = None,
                  coulomb_smoothing: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-        n = q.shape[-1]
+        """tau for one state (n,) or a batch (..., n), n taken from the states (they must agree);
+        ``t`` and ``qdd_d`` are not used. A state that is not numbers of shape (..., n), holds NaN
+        or infinity, or does not broadcast with the others is a ModelError naming it."""
+        names, values = ("q", "qd", "q_d", "qd_d", "e_int"), (q, qd, q_d, qd_d, e_int)
+        n = _joints(names, values)
+        q, qd, q_d, qd_d, e_int = _states(names, values, n, _where(self))
         e, edot = q_d - q, qd_d - qd
-        return _gains(self.kp, "kp", n) * e + _gains(self.kv, "kv", n) * edot + _gains(self.ki, "ki", n) * e_int
+        return _gain(self.kp, "kp", n) * e + _gain(self.kv, "kv", n) * edot + _gain(self.ki, "ki", n) * e_int
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -192,8 +283,10 @@ class Digital:
     period: float
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.period, (int, float, np.number)) and np.isfinite(self.period) and self.period > 0):
-            raise ModelError(f"a Digital controller needs a positive, finite sample period, got {self.period!r}")
+        period = inputs.number(self.period, "period", " (the sample period of a Digital controller)")
+        if not period > 0:
+            raise ModelError(f"a Digital controller needs a positive sample period, got period = {period!r}")
+        self.period = period  # a float, whatever number was given (simulate divides it by dt)
         if not callable(self.controller):
             raise ModelError(f"Digital needs a controller (a callable), got {type(self.controller).__name__}")
 
@@ -219,12 +312,7 @@ class Saturated:
     limit: object = field(default=np.inf)
 
     def __post_init__(self) -> None:
-        try:
-            limit = np.atleast_1d(np.asarray(self.limit, dtype=float))
-        except (TypeError, ValueError):
-            raise ModelError(f"a torque limit must be a positive number or one per joint, got {self.limit!r}") from None
-        if limit.ndim != 1 or np.any(np.isnan(limit)) or np.any(limit <= 0):
-            raise ModelError(f"a torque limit must be positive (inf for none), got {self.limit!r}")
+        _torque_limit(self.limit)
         if not callable(self.controller):
             raise ModelError(f"Saturated needs a controller (a callable), got {type(self.controller).__name__}")
 
@@ -237,9 +325,30 @@ class Saturated:
         return spec
 
     def __call__(self, *args: object, plant: Robot | None = None, coulomb_smoothing: object = None) -> np.ndarray:
+        """The controller's torques clipped to +-limit; a limit per joint must match their number."""
         tau = call(self.controller, args, plant, coulomb_smoothing)
-        limit = np.asarray(self.limit, dtype=float)
+        limit = _torque_limit(self.limit)
+        if limit.ndim and limit.shape[0] != 1 and np.shape(tau)[-1:] != limit.shape:
+            raise ModelError(f"the torque limit has {limit.shape[0]} values, one per joint, but the controller "
+                             f"gives torques of shape {np.shape(tau)}")  # fmt: skip
         return np.clip(tau, -limit, limit)
+
+
+def _torque_limit(value: object) -> np.ndarray:
+    """A Saturated limit as a float array: a positive number or one per joint (inf for none)."""
+    try:
+        if np.iscomplexobj(value):
+            raise TypeError("complex")
+        limit = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, ArithmeticError):  # OverflowError: an int beyond float
+        raise ModelError(
+            f"a torque limit must be a positive number or one per joint, got {reprlib.repr(value)}"
+        ) from None
+    if limit.ndim > 1 or not limit.size or np.any(np.isnan(limit)) or np.any(limit <= 0):
+        raise ModelError(
+            f"a torque limit must be positive (inf for none), one or one per joint, got {reprlib.repr(value)}"
+        )
+    return limit
 
 
 @njit(**NUMBA_OPTIONS)
@@ -273,7 +382,7 @@ def describe(controller: object) -> str:
     if isinstance(controller, ComputedTorque | PDGravity | PID):
         gains = [f"kp = {_short(controller.kp)}", f"kv = {_short(controller.kv)}"]
         ki = getattr(controller, "ki", 0.0)
-        if np.any(np.asarray(ki, dtype=float) != 0):
+        if _nonzero(ki):
             gains.append(f"ki = {_short(ki)}")
         model = getattr(controller, "model", None)
         belief = f", model '{model.name}'" if model is not None else ""
@@ -282,8 +391,22 @@ def describe(controller: object) -> str:
     return getattr(controller, "__name__", type(controller).__name__)
 
 
+def _nonzero(value: object) -> bool:
+    """Whether a gain is worth naming: not zero (or not numbers, which the controller refuses when run)."""
+    try:
+        return bool(np.any(np.asarray(value, dtype=float) != 0))
+    except (TypeError, ValueError, ArithmeticError):
+        return True
+
+
 def _short(value: object) -> str:
-    array = np.atleast_1d(np.asarray(value, dtype=float))
+    """A gain or limit for a title: one number when all joints share it."""
+    try:
+        array = np.atleast_1d(np.asarray(value, dtype=float))
+    except (TypeError, ValueError, ArithmeticError):  # not numbers: the controller refuses it when run
+        return reprlib.repr(value)
+    if array.ndim != 1 or not array.size:
+        return reprlib.repr(value)
     if np.all(array == array[0]):
         return f"{array[0]:g}"
     return "[" + ", ".join(f"{v:g}" for v in array) + "]"

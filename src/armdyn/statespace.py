@@ -59,9 +59,14 @@ def _matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.einsum("...ij,...j->...i", A, x)
 
 
-def _split(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
+def _x(arm: Robot, x: object) -> np.ndarray:
+    """The arm checked, then the state x = [q; qd] as a finite float array (..., 2 n)."""
     _check_arm(arm)
-    x = inputs.state(x, 2 * arm.n, "x", f" for '{arm.name}' (x = [q; qd])")
+    return inputs.state(x, 2 * arm.n, "x", f" for '{arm.name}' (x = [q; qd])")
+
+
+def _split(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
+    x = _x(arm, x)
     return x[..., : arm.n], x[..., arm.n :]
 
 
@@ -85,13 +90,16 @@ def state_derivative(arm: Robot, x: object, tau: object) -> np.ndarray:
     Raises
     ------
     armdyn.ModelError
-        When ``x`` is not numbers of shape (..., 2 n) or holds NaN or infinity, or when
-        ``tau`` is rejected by ``forward_dynamics`` (not numbers of shape (..., n), NaN or
-        infinity, a batch shape that does not broadcast, symbolic parameters).
+        When ``x`` is not numbers of shape (..., 2 n) or holds NaN or infinity, when ``tau``
+        is not numbers of shape (..., n) or holds NaN or infinity, when the batch shapes of x
+        and tau do not broadcast, or when the arm has symbolic parameters.
     TypeError
         When ``arm`` is not a Robot.
     """
-    q, qd = _split(arm, x)
+    x = _x(arm, x)
+    # checked here so that a mismatch names x, not the q and qd forward_dynamics is given
+    _broadcast(("x", x), ("tau", inputs.state(tau, arm.n, "tau", _where(arm))))
+    q, qd = x[..., : arm.n], x[..., arm.n :]
     qdd = arm.forward_dynamics(q, qd, tau)
     return np.concatenate([np.broadcast_to(qd, qdd.shape), qdd], -1)
 

@@ -5,6 +5,6 @@ Importing this package first installs the cache locator of armdyn's compiled ker
 the batch threads (threads.py) before the OpenMP runtime starts.
 """
 
-from armdyn.dynamics import cache, threads
+from armdyn.dynamics import cache, threads  # noqa: F401 - threads sets the idle policy on import
 
 cache.install()
