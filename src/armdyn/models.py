@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import reprlib
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -17,7 +18,7 @@ import numpy as np
 
 from armdyn.errors import ModelError
 from armdyn.model.arm import Link
-from armdyn.model.inertial import Inertial
+from armdyn.model.inertial import Inertial, parameter
 from armdyn.model.joint import Joint
 from armdyn.robot import Robot
 
@@ -40,6 +41,15 @@ def _symbols(names: str) -> tuple:
     import sympy
 
     return sympy.symbols(names, positive=True)
+
+
+def _checked(arm: str, masses: dict[str, object], others: dict[str, object]) -> list[object]:
+    """The parameters of a book example, in order (masses first): SymPy expressions as given,
+    numbers as finite real floats, masses (and inertias) >= 0; else a ModelError naming the
+    parameter and what it is."""
+    what = {"m": "mass", "J": "inertia", "a": "length", "g": "gravity"}
+    values = [parameter(v, f"{what[k[0]]} {k}", arm, minimum=0.0) for k, v in masses.items()]
+    return values + [parameter(v, f"{what[k[0]]} {k}", arm) for k, v in others.items()]
 
 
 def _planar_gravity(g: object) -> list[object]:
@@ -75,10 +85,12 @@ def two_link_planar(
     Raises
     ------
     armdyn.ModelError
-        When a mass is negative or a parameter is not finite.
+        When a mass is negative or a parameter is neither a finite real number nor a SymPy
+        expression (the message names it).
     """
     if symbolic:
         m1, m2, a1, a2, g = _symbols("m1 m2 a1 a2 g")
+    m1, m2, a1, a2, g = _checked("two_link_planar", {"m1": m1, "m2": m2}, {"a1": a1, "a2": a2, "g": g})
     table = [
         {"a": a1, "mass": m1, "name": "theta1"},
         {"a": a2, "mass": m2, "name": "theta2"},
@@ -118,11 +130,13 @@ def polar_rp(m: object = 1.0, g: object = 9.8, symbolic: bool = False) -> Robot:
     Raises
     ------
     armdyn.ModelError
-        When a mass is negative or a parameter is not finite.
+        When a mass is negative or a parameter is neither a finite real number nor a SymPy
+        expression (the message names it).
     """
     if symbolic:
         (m,) = _symbols("m,")
         (g,) = _symbols("g,")
+    m, g = _checked("polar_rp", {"m": m}, {"g": g})
     links = [
         Link("theta", Joint("revolute", name="theta"), Inertial(0.0, name="theta")),
         Link(
@@ -169,11 +183,13 @@ def cylindrical(J: object = 1.0, m1: object = 1.0, m2: object = 1.0, g: object =
     Raises
     ------
     armdyn.ModelError
-        When a mass or J is negative or a parameter is not finite.
+        When a mass or J is negative or a parameter is neither a finite real number nor a
+        SymPy expression (the message names it).
     """
     if symbolic:
         J, m1, m2, g = _symbols("J m1 m2 g")
-    disc = np.diag([J / 2, J / 2, J]) if not symbolic else np.array([[J / 2, 0, 0], [0, J / 2, 0], [0, 0, J]])
+    J, m1, m2, g = _checked("cylindrical", {"J": J, "m1": m1, "m2": m2}, {"g": g})
+    disc = np.array([[J / 2, 0, 0], [0, J / 2, 0], [0, 0, J]])  # float, or object with a SymPy J
     links = [
         Link("theta", Joint("revolute", name="theta"), Inertial(0, np.zeros(3), disc, "theta")),
         Link("h", Joint("prismatic", name="h"), Inertial(m1, name="h"), parent=0),
@@ -185,7 +201,7 @@ def cylindrical(J: object = 1.0, m1: object = 1.0, m2: object = 1.0, g: object =
             limits=(0.0, np.inf),
         ),
     ]
-    gravity = [0, 0, -g] if symbolic else [0.0, 0.0, -float(g)]
+    gravity = [0, 0, -g]
     return Robot(
         links,
         name="cylindrical",
@@ -356,7 +372,11 @@ def load(name: str) -> Robot:
     ------
     armdyn.ModelError
         When no built-in arm has that name.
+    TypeError
+        When ``name`` is not a string.
     """
+    if not isinstance(name, str):
+        raise TypeError(f"the name of a built-in arm must be a str, got {reprlib.repr(name)} ({type(name).__name__})")
     try:
         return _CATALOG[name.lower()]()
     except KeyError:

@@ -7,6 +7,7 @@ are free functions of an ArmModel; armdyn.robot.Robot joins the two for users).
 from __future__ import annotations
 
 import dataclasses
+import reprlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -14,10 +15,13 @@ from typing import Any
 import numpy as np
 
 from armdyn.errors import ModelError
-from armdyn.model.inertial import Inertial, inertia_from_vector
-from armdyn.model.joint import Joint, check_rigid, dh_joint
+from armdyn.model.inertial import Inertial, parameter_array, real_array, real_number, whole_number
+from armdyn.model.joint import Joint, check_rigid, dh_joint, dh_parameters
 
 _NO_LIMITS = (-np.inf, np.inf)
+_DH_KEYS = frozenset(
+    {"kind", "a", "alpha", "d", "theta", "mass", "com", "inertia", "Jm", "G", "B", "Tc", "qlim", "name"}
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,8 +58,13 @@ class Link:
     Raises
     ------
     armdyn.ModelError
-        When B, Jm or G is not finite, Tc is not two finite numbers, a sign rule is broken
-        (B >= 0, Tc+ >= 0 >= Tc-, Jm >= 0, G != 0), or the limits have lower > upper or NaN.
+        When ``joint`` is not a Joint or ``inertial`` not an Inertial, B, Jm or G is not a
+        finite real number, Tc is not two finite real numbers, a sign rule is broken (B >= 0,
+        Tc+ >= 0 >= Tc-, Jm >= 0, G != 0), the limits are not two real numbers (infinite for
+        none) with lower <= upper, or ``parent`` is below -1; the message names the argument
+        and the link. Numbers of 1e15 or more in magnitude are refused.
+    TypeError
+        When ``parent`` is not an integer.
     """
 
     name: str
@@ -70,28 +79,25 @@ class Link:
 
     def __post_init__(self) -> None:
         where = f"link '{self.name}'"
-        if not np.isfinite(self.viscous) or self.viscous < 0:
-            raise ModelError(f"{where}: viscous friction must be finite and >= 0 (dissipative), got {self.viscous}")
-        coulomb = tuple(float(c) for c in np.asarray(self.coulomb, dtype=float).reshape(-1))
-        if len(coulomb) != 2 or not all(np.isfinite(coulomb)):
-            raise ModelError(f"{where}: Coulomb friction must be two finite numbers (Tc+, Tc-), got {self.coulomb}")
-        if coulomb[0] < 0 or coulomb[1] > 0:
-            raise ModelError(
-                f"{where}: Coulomb friction must be Tc+ >= 0 (positive velocity) and Tc- <= 0 "
-                f"(negative velocity), got {coulomb}"
-            )
-        if not np.isfinite(self.motor_inertia) or self.motor_inertia < 0:
-            raise ModelError(f"{where}: motor inertia Jm must be finite and >= 0, got {self.motor_inertia}")
-        if not np.isfinite(self.gear_ratio) or self.gear_ratio == 0:
-            raise ModelError(f"{where}: gear ratio G must be finite and non-zero, got {self.gear_ratio}")
-        lower, upper = (float(v) for v in self.limits)
-        if np.isnan(lower) or np.isnan(upper) or lower > upper:
-            raise ModelError(f"{where}: joint limits must satisfy lower <= upper, got {self.limits}")
-        object.__setattr__(self, "coulomb", coulomb)
-        object.__setattr__(self, "viscous", float(self.viscous))
-        object.__setattr__(self, "motor_inertia", float(self.motor_inertia))
-        object.__setattr__(self, "gear_ratio", float(self.gear_ratio))
-        object.__setattr__(self, "limits", (lower, upper))
+        if not isinstance(self.joint, Joint):
+            raise ModelError(f"{where}: joint must be a Joint, got {reprlib.repr(self.joint)}")
+        if not isinstance(self.inertial, Inertial):
+            raise ModelError(f"{where}: inertial must be an Inertial, got {reprlib.repr(self.inertial)}")
+        object.__setattr__(self, "parent", whole_number(self.parent, "parent", where, -1))
+        viscous = real_number(self.viscous, "viscous friction B", where)
+        if viscous < 0:
+            raise ModelError(f"{where}: viscous friction must be finite and >= 0 (dissipative), got {viscous:g}")
+        object.__setattr__(self, "viscous", viscous)
+        object.__setattr__(self, "coulomb", _coulomb(self.coulomb, where))
+        motor_inertia = real_number(self.motor_inertia, "motor inertia Jm", where)
+        if motor_inertia < 0:
+            raise ModelError(f"{where}: motor inertia Jm must be finite and >= 0, got {motor_inertia:g}")
+        object.__setattr__(self, "motor_inertia", motor_inertia)
+        gear_ratio = real_number(self.gear_ratio, "gear ratio G", where)
+        if gear_ratio == 0:
+            raise ModelError(f"{where}: gear ratio G must be finite and non-zero, got {gear_ratio:g}")
+        object.__setattr__(self, "gear_ratio", gear_ratio)
+        object.__setattr__(self, "limits", _limits(self.limits, where))
 
     @property
     def kind(self) -> str:
@@ -141,10 +147,14 @@ class ArmModel:
     Raises
     ------
     armdyn.ModelError
-        When there is no link, an item is not a Link, a parent index does not name an
-        earlier link (or -1), two joints share a name, gravity is not a finite 3-vector,
-        base or tool is not a finite 4x4 transform, ``tool_link`` is not a link index, or a
-        configuration does not have n values.
+        When ``links`` is not a sequence of Links or is empty, a parent index does not name
+        an earlier link (or -1), two joints share a name, gravity is not a 3-vector of finite
+        real numbers (or SymPy expressions), base or tool is not a finite real 4x4 rigid
+        transform, ``tool_link`` is not a link index, ``configurations`` is not a mapping of
+        identifiers to n finite real values each, or a name clashes with an attribute; the
+        message names the argument. Numbers of 1e15 or more in magnitude are refused.
+    TypeError
+        When ``tool_link`` is not an integer.
     """
 
     def __init__(
@@ -160,45 +170,20 @@ class ArmModel:
         dh: Mapping[str, Any] | None = None,
         description: str = "",
     ) -> None:
-        self._links = tuple(links)
+        where = f"robot '{name}'"
+        self._links = _checked_links(links, where)
         self.n = len(self._links)  # a plain attribute: read in every compiled call
         self.name = name
         self.description = description
-        if not self._links:
-            raise ModelError(f"robot '{name}': an arm needs at least one joint")
-        names = [link.name for link in self._links]
-        for index, link in enumerate(self._links):
-            if not isinstance(link, Link):
-                raise ModelError(f"robot '{name}': item {index} is not a Link")
-            if not -1 <= link.parent < index:
-                raise ModelError(
-                    f"link '{link.name}': parent index {link.parent} must name an earlier link (or -1 for the base)"
-                )
-            if names.count(link.name) > 1:
-                raise ModelError(f"link '{link.name}': joint names must be unique")
-        gravity_array = np.array(list(gravity), dtype=object)
-        if gravity_array.shape != (3,):
-            raise ModelError(f"robot '{name}': gravity must be a 3-vector, got {gravity}")
-        if not any(hasattr(g, "free_symbols") for g in gravity_array):
-            gravity_array = gravity_array.astype(float)
-            if not np.all(np.isfinite(gravity_array)):
-                raise ModelError(f"robot '{name}': gravity must be finite")
-        self._gravity = _frozen(gravity_array)
-        self._base = _frozen(_transform(base, f"robot '{name}': base"))
-        self._tool = _frozen(_transform(tool, f"robot '{name}': tool"))
-        self._tool_link = self.n - 1 if tool_link is None else int(tool_link)
-        if not 0 <= self._tool_link < self.n:
-            raise ModelError(f"robot '{name}': tool_link {tool_link} is not a link index (0..{self.n - 1})")
-        self._configurations = {}
-        for key, value in (configurations or {}).items():
-            vector = np.array(value, dtype=float)
-            if vector.shape != (self.n,):
-                raise ModelError(f"robot '{name}': configuration '{key}' must have {self.n} values, got {vector.shape}")
-            self._configurations[key] = _frozen(vector)
+        self._gravity = _frozen(_gravity(gravity, where))
+        self._base = _frozen(_transform(base, "base", where))
+        self._tool = _frozen(_transform(tool, "tool", where))
+        self._tool_link = _tool_link(tool_link, self.n, where)
+        self._configurations = _configurations(configurations, self.n, where)
         self._dh = dict(dh) if dh else None
         for key, vector in self._configurations.items():  # also as attributes, read only: arm.qn
-            if not key.isidentifier() or hasattr(self, key):
-                raise ModelError(f"robot '{name}': configuration name '{key}' is not free for an attribute")
+            if hasattr(self, key):
+                raise ModelError(f"{where}: configuration name '{key}' is not free for an attribute")
             setattr(self, key, vector)
         self._parents = _frozen(np.array([link.parent for link in self._links], dtype=int))
         self._ancestors = _frozen(_ancestor_table(self._parents))
@@ -245,27 +230,30 @@ class ArmModel:
         Raises
         ------
         armdyn.ModelError
-            When a row has an unknown key, an unknown joint kind, or invalid mass
-            properties, friction, motor or limits (see Inertial and Link); when
-            ``convention`` is neither 'standard' nor 'modified'; and as the constructor.
+            When ``table`` is not a sequence of mappings, a row has an unknown key, an unknown
+            joint kind, a DH parameter that is neither a finite real number nor a SymPy
+            expression, or invalid mass properties, friction, motor or limits (see Inertial
+            and Link; the message names the key's quantity and the link); when ``convention``
+            is neither 'standard' nor 'modified'; and as the constructor.
         """
+        if not isinstance(convention, str) or convention not in ("standard", "modified"):
+            raise ModelError(f"DH convention must be 'standard' or 'modified', got {reprlib.repr(convention)}")
         links = []
         rows = []
-        for index, row in enumerate(table):
-            known = {"kind", "a", "alpha", "d", "theta", "mass", "com", "inertia", "Jm", "G", "B", "Tc", "qlim", "name"}
-            unknown = set(row) - known - {"strict"}
+        for index, row in enumerate(_dh_rows(table)):
             name = str(row.get("name", f"joint{index + 1}"))
+            where = f"link '{name}'"
+            unknown = set(row) - _DH_KEYS - {"strict"}
             if unknown:
-                raise ModelError(f"link '{name}': unknown DH row keys {sorted(unknown)} (known: {sorted(known)})")
-            kind = row.get("kind", "R")
-            a, alpha, d, theta = (row.get(key, 0.0) for key in ("a", "alpha", "d", "theta"))
-            joint = dh_joint(kind, a, alpha, d, theta, convention, name)
+                raise ModelError(f"{where}: unknown DH row keys {sorted(unknown, key=str)} (known: {sorted(_DH_KEYS)})")
+            a, alpha, d, theta = dh_parameters(*(row.get(key, 0.0) for key in ("a", "alpha", "d", "theta")), where)
+            joint = dh_joint(row.get("kind", "R"), a, alpha, d, theta, convention, name)
             inertial = Inertial(
                 row.get("mass", 0.0),
                 row.get("com", np.zeros(3)),
-                inertia_from_vector(row.get("inertia", np.zeros(3))),
+                row.get("inertia", np.zeros(3)),
                 name,
-                strict=row.get("strict", True),
+                row.get("strict", True),
             )
             links.append(
                 Link(
@@ -274,10 +262,10 @@ class ArmModel:
                     inertial,
                     parent=index - 1,
                     viscous=row.get("B", 0.0),
-                    coulomb=tuple(row.get("Tc", (0.0, 0.0))),
+                    coulomb=row.get("Tc", (0.0, 0.0)),
                     motor_inertia=row.get("Jm", 0.0),
                     gear_ratio=row.get("G", 1.0),
-                    limits=tuple(row.get("qlim", _NO_LIMITS)),
+                    limits=row.get("qlim", _NO_LIMITS),
                 )
             )
             rows.append({"kind": joint.kind, "a": a, "alpha": alpha, "d": d, "theta": theta})
@@ -611,7 +599,11 @@ class ArmModel:
         ------
         armdyn.ModelError
             When the arm has no configuration of that name.
+        TypeError
+            When ``name`` is not a string.
         """
+        if not isinstance(name, str):
+            raise TypeError(f"a configuration name must be a str, got {reprlib.repr(name)} ({type(name).__name__})")
         try:
             return self._configurations[name].copy()
         except KeyError:
@@ -624,14 +616,119 @@ class ArmModel:
         return f"{type(self).__name__}('{self.name}', n={self.n}, joints={kinds})"
 
 
-def _transform(value: np.ndarray | None, where: str) -> np.ndarray:
+def _dh_rows(table: object) -> tuple[Mapping[str, Any], ...]:
+    """The rows of a DH table, each a mapping."""
+    if table is None or isinstance(table, (str, bytes, Mapping, set, frozenset)) or not isinstance(table, Iterable):
+        raise ModelError(f"a DH table must be a sequence of rows, one mapping per joint, got {reprlib.repr(table)}")
+    rows = tuple(table)
+    for index, row in enumerate(rows):
+        if not isinstance(row, Mapping):
+            raise ModelError(
+                f"DH table row {index + 1} must be a mapping of DH keys (a, alpha, d, theta, ...), "
+                f"got {reprlib.repr(row)}"
+            )
+    return rows
+
+
+def _checked_links(links: object, where: str) -> tuple[Link, ...]:
+    """The links as a tuple: at least one, each a Link after its parent, joint names unique."""
+    if (
+        links is None
+        or isinstance(links, (Link, str, bytes, Mapping, set, frozenset))
+        or not isinstance(links, Iterable)
+    ):
+        raise ModelError(f"{where}: links must be a sequence of Link objects, got {reprlib.repr(links)}")
+    items = tuple(links)
+    if not items:
+        raise ModelError(f"{where}: an arm needs at least one joint")
+    names: list[object] = []  # a list: a name need not be hashable
+    for index, link in enumerate(items):
+        if not isinstance(link, Link):
+            raise ModelError(f"{where}: links[{index}] is not a Link, got {reprlib.repr(link)}")
+        parent = link.parent  # a Link checked it; this guards one changed behind its back
+        if isinstance(parent, bool) or not isinstance(parent, (int, np.integer)) or not -1 <= parent < index:
+            raise ModelError(
+                f"link '{link.name}': parent index {parent!r} must name an earlier link (or -1 for the base)"
+            )
+        if link.name in names:
+            raise ModelError(f"link '{link.name}': joint names must be unique")
+        names.append(link.name)
+    return items
+
+
+def _gravity(value: object, where: str) -> np.ndarray:
+    """Gravity as a 3-vector: finite real floats, or an object array holding SymPy expressions."""
+    gravity = parameter_array(value, "gravity", where)
+    if gravity.shape != (3,):
+        raise ModelError(f"{where}: gravity must be a 3-vector, got shape {gravity.shape}")
+    return gravity
+
+
+def _transform(value: object, key: str, where: str) -> np.ndarray:
+    """A base or tool pose: the identity for None, else a finite real 4x4 rigid transform."""
     if value is None:
         return np.eye(4)
-    array = np.array(value, dtype=float)
-    if array.shape != (4, 4) or not np.all(np.isfinite(array)):
-        raise ModelError(f"{where} must be a finite 4x4 homogeneous transform, got shape {array.shape}")
-    check_rigid(array, where)
+    array = real_array(value, key, where)
+    if array.shape != (4, 4):
+        raise ModelError(f"{where}: {key} must be a finite 4x4 homogeneous transform, got shape {array.shape}")
+    check_rigid(array, f"{where}: {key}")
     return array
+
+
+def _tool_link(value: object, n: int, where: str) -> int:
+    """The index of the link carrying the tool: the last link for None."""
+    if value is None:
+        return n - 1
+    index = whole_number(value, "tool_link", where, 0)
+    if index >= n:
+        raise ModelError(f"{where}: tool_link {index} is not a link index (0..{n - 1})")
+    return index
+
+
+def _configurations(value: object, n: int, where: str) -> dict[str, np.ndarray]:
+    """Named joint vectors: a mapping of identifiers to n finite real values each, read only."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ModelError(
+            f"{where}: configurations must be a mapping of names to {n} joint values, got {reprlib.repr(value)}"
+        )
+    configurations = {}
+    for key, vector in value.items():
+        if not isinstance(key, str) or not key.isidentifier():
+            raise ModelError(f"{where}: configuration name {key!r} is not free for an attribute (not an identifier)")
+        array = real_array(vector, f"configuration '{key}'", where)
+        if array.shape != (n,):
+            raise ModelError(f"{where}: configuration '{key}' must have {n} values, got {array.shape}")
+        configurations[key] = _frozen(array)
+    return configurations
+
+
+def _coulomb(value: object, where: str) -> tuple[float, float]:
+    """Coulomb friction (Tc+, Tc-): two finite real numbers with Tc+ >= 0 >= Tc-."""
+    coulomb = real_array(value, "Coulomb friction Tc", where)
+    if coulomb.shape != (2,):
+        raise ModelError(f"{where}: Coulomb friction must be two finite numbers (Tc+, Tc-), got shape {coulomb.shape}")
+    if coulomb[0] < 0 or coulomb[1] > 0:
+        raise ModelError(
+            f"{where}: Coulomb friction must be Tc+ >= 0 (positive velocity) and Tc- <= 0 "
+            f"(negative velocity), got {tuple(coulomb.tolist())}"
+        )
+    return float(coulomb[0]), float(coulomb[1])
+
+
+def _limits(value: object, where: str) -> tuple[float, float]:
+    """Joint limits (lower, upper): two real numbers, lower <= upper, an infinite one meaning none."""
+    bounds = real_array(value, "joint limits", where, bounds=True)
+    if bounds.shape != (2,):
+        raise ModelError(f"{where}: joint limits must be two numbers (lower, upper), got shape {bounds.shape}")
+    lower, upper = float(bounds[0]), float(bounds[1])
+    if lower > upper or lower == np.inf or upper == -np.inf:  # (inf, inf) would hold the joint nowhere
+        raise ModelError(
+            f"{where}: joint limits must satisfy lower <= upper (lower below +inf, upper above -inf), "
+            f"got ({lower:g}, {upper:g})"
+        )
+    return lower, upper
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:

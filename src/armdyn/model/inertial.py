@@ -2,12 +2,23 @@
 
 BOOK.md section 2 (3.2.20 to 3.2.27). Inertia tensors are given about the centre of
 mass, expressed in the link frame, as URDF and the Robotics Toolbox give them.
+
+The model classes check their parameters with the helpers here (``parameter``,
+``parameter_array``, ``real_array``, ``real_number``, ``whole_number``): a number or array
+that is not a finite real value below 1e15 in magnitude (joint limits: not NaN) is refused
+with a ModelError naming it and the link or joint; SymPy expressions pass unchecked, for
+closed-form work. They
+follow the rules of armdyn.inputs.numbers, number and integer, which the model layer does
+not import (it depends on numpy and armdyn.errors only).
 """
 
 from __future__ import annotations
 
+import reprlib
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 
@@ -15,15 +26,22 @@ from armdyn.errors import ModelError
 
 _RELATIVE_TOLERANCE = 1e-9
 _SMALLEST_LENGTH = 0.01  # m: the least size a link is taken to have when setting the tolerance
+_LARGEST = 1e15  # armdyn.inputs.LARGEST_STATE: products of larger values overflow in the dynamics
+_T = TypeVar("_T")
 
 
 def _is_symbolic(*values: object) -> bool:
-    """True when any value is a SymPy expression (symbolic parameters skip numeric checks)."""
-    return any(np.asarray(v, dtype=object).dtype == object and _has_sympy(v) for v in values)
+    """True when any value is or holds a SymPy expression (symbolic parameters skip numeric checks)."""
+    return any(_has_sympy(v) for v in values)
 
 
 def _has_sympy(value: object) -> bool:
-    items = np.asarray(value, dtype=object).ravel()
+    if isinstance(value, np.ndarray) and value.dtype != object:
+        return False
+    try:
+        items = np.asarray(value, dtype=object).ravel()
+    except (TypeError, ValueError):  # a ragged nest numpy cannot hold: no expression either way
+        return False
     return any(hasattr(item, "free_symbols") and not _is_plain_number(item) for item in items)
 
 
@@ -33,6 +51,100 @@ def _is_plain_number(item: object) -> bool:
     except (TypeError, ValueError):
         return False
     return True
+
+
+def _named(where: str, check: Callable[..., _T], *args: object, **options: object) -> _T:
+    """``check(*args, **options)`` with ``where`` (the link or joint) put before its error message."""
+    try:
+        return check(*args, **options)
+    except (ModelError, TypeError) as error:
+        raise type(error)(f"{where}: {error}") from None
+
+
+def real_array(value: object, name: str, where: str, bounds: bool = False, expected: str = "numbers") -> np.ndarray:
+    """A finite real float array, every value below 1e15 in magnitude, or a ModelError naming
+    ``name`` and ``where``. An object array of plain numbers counts as numbers (a SymPy
+    computation can leave one). ``bounds`` takes values that are only compared, never
+    multiplied (joint limits): +-inf (no bound) and any magnitude (URDF files write 1e16),
+    never NaN. ``expected`` says what was wanted, in the message."""
+    if isinstance(value, np.ndarray) and value.dtype == object:
+        value = value.tolist()
+    return _named(where, _numbers, value, name, bounds, expected)
+
+
+def _numbers(value: object, name: str, bounds: bool, expected: str) -> np.ndarray:
+    """The rule of armdyn.inputs.numbers: no None, text, mapping, set, complex or non-numeric dtype."""
+    if value is None or isinstance(value, (str, bytes, dict, set)):
+        raise ModelError(f"{name} must be {expected}, got {reprlib.repr(value)}")
+    try:
+        if np.iscomplexobj(value):
+            raise ModelError(f"{name} must be real; it is complex")
+        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biuf":
+            raise TypeError(name)
+        with np.errstate(over="raise"):  # a long double beyond float64 raises instead of becoming inf
+            array = np.array(value, dtype=float)
+    except (TypeError, ValueError, ArithmeticError) as error:
+        if isinstance(error, ModelError):
+            raise
+        raise ModelError(f"{name} must be {expected}, got {reprlib.repr(value)}") from None
+    if bounds:
+        if np.isnan(array).any():
+            raise ModelError(f"{name} must not be NaN (an infinite value means none)")
+        return array
+    if array.size and not np.all(np.isfinite(array)):
+        raise ModelError(f"{name} must be finite (it holds NaN or infinity)")
+    if array.size and np.abs(array).max() >= _LARGEST:
+        raise ModelError(
+            f"{name} holds values of {_LARGEST:.0e} or more in magnitude: beyond the range the dynamics are "
+            "computed in (products of such values overflow)"
+        )
+    return array
+
+
+def real_number(value: object, name: str, where: str, minimum: float | None = None) -> float:
+    """A finite real number below 1e15 in magnitude (at least ``minimum`` when given), not a
+    bool, as a float; or a ModelError naming ``name`` and ``where``."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ModelError(f"{where}: {name} must be a number, got {value!r}")
+    array = real_array(value, name, where, expected="a real number")
+    if array.shape != ():
+        raise ModelError(f"{where}: {name} must be a number, got shape {array.shape}")
+    result = float(array)
+    if minimum is not None and result < minimum:
+        raise ModelError(f"{where}: {name} must be at least {minimum:g}, got {result:g}")
+    return result
+
+
+def whole_number(value: object, name: str, where: str, minimum: int) -> int:
+    """An int (or NumPy integer, not a bool) of at least ``minimum``: the rule of armdyn.inputs.integer."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{where}: {name} must be an integer, got {reprlib.repr(value)} ({type(value).__name__})")
+    if value < minimum:
+        raise ModelError(f"{where}: {name} must be at least {minimum}, got {value}")
+    return int(value)
+
+
+def parameter_array(value: object, name: str, where: str) -> np.ndarray:
+    """An array parameter: ``real_array``, or an object array when it holds SymPy expressions
+    (its plain numbers checked all the same)."""
+    if not _is_symbolic(value):
+        return real_array(value, name, where)
+    try:
+        array = np.array(value, dtype=object)
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: {name} must be an array of numbers or SymPy expressions") from None
+    for item in array.ravel():
+        if not _is_symbolic(item):
+            real_number(item, name, where)
+    return array
+
+
+def parameter(value: object, name: str, where: str, minimum: float | None = None) -> object:
+    """A number parameter: a SymPy expression as given, else a finite real float (at least
+    ``minimum`` when given), or a ModelError naming ``name`` and ``where``."""
+    if _is_symbolic(value):
+        return value
+    return real_number(value, name, where, minimum)
 
 
 def inertia_from_vector(values: object) -> np.ndarray:
@@ -53,9 +165,12 @@ def inertia_from_vector(values: object) -> np.ndarray:
     Raises
     ------
     armdyn.ModelError
-        When ``values`` has another shape.
+        When ``values`` has another shape (or is no array at all).
     """
-    array = np.asarray(values)
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # a ragged nest
+        array = np.empty(0)
     if array.shape == (3, 3):
         return array
     if array.shape == (3,):
@@ -103,10 +218,11 @@ class Inertial:
     Raises
     ------
     armdyn.ModelError
-        When the mass is negative or not finite, the centre of mass is not 3 finite numbers,
-        the inertia is not 3, 6 or 3x3 finite values, is not symmetric or not positive
-        semi-definite, or (with ``strict``) its principal moments break the triangle
-        inequality; the message names the link.
+        When the mass is not a finite real number or is negative, the centre of mass is not
+        3 finite real numbers, the inertia is not 3, 6 or 3x3 finite real values, is not
+        symmetric or not positive semi-definite, or (with ``strict``) its principal moments
+        break the triangle inequality; the message names the argument and the link. Numbers
+        of 1e15 or more in magnitude are refused (products of them overflow).
     """
 
     mass: object = 0.0
@@ -116,16 +232,17 @@ class Inertial:
     strict: bool = True
 
     def __post_init__(self) -> None:
-        symbolic = _is_symbolic(self.mass, self.com, self.inertia)
-        dtype = object if symbolic else float
-        try:
-            com = np.array(self.com, dtype=dtype).reshape(3)
-            inertia = np.array(inertia_from_vector(self.inertia), dtype=dtype)
-        except (TypeError, ValueError) as error:
-            if isinstance(error, ModelError):
-                raise ModelError(f"link '{self.name}': {error}") from None
-            raise ModelError(f"link '{self.name}': centre of mass must be 3 numbers ({error})") from None
-        mass = self.mass if symbolic else float(self.mass)
+        where = f"link '{self.name}'"
+        mass = parameter(self.mass, "mass", where)
+        com = parameter_array(self.com, "centre of mass", where)
+        if com.shape != (3,):
+            raise ModelError(f"{where}: centre of mass must be 3 numbers, got shape {com.shape}")
+        inertia = _named(where, inertia_from_vector, parameter_array(self.inertia, "inertia", where))
+        symbolic = _is_symbolic(mass, com, inertia)
+        if not _is_symbolic(mass) and mass < 0:
+            raise ModelError(f"{where}: mass must be non-negative, got {mass}")
+        if symbolic:  # one dtype for the three, so that sums and products stay symbolic
+            com, inertia = com.astype(object), inertia.astype(object)
         object.__setattr__(self, "mass", mass)
         object.__setattr__(self, "com", com)
         object.__setattr__(self, "inertia", inertia)
@@ -140,15 +257,8 @@ class Inertial:
         return self.com.dtype == object
 
     def _validate(self) -> None:
-        name, mass, inertia = self.name, self.mass, self.inertia
-        if not np.isfinite(mass):
-            raise ModelError(f"link '{name}': mass must be finite, got {mass}")
-        if mass < 0:
-            raise ModelError(f"link '{name}': mass must be non-negative, got {mass}")
-        if not np.all(np.isfinite(self.com)):
-            raise ModelError(f"link '{name}': centre of mass must be finite, got {self.com}")
-        if not np.all(np.isfinite(inertia)):
-            raise ModelError(f"link '{name}': inertia must be finite")
+        """The rules of a rigid body for a numeric tensor: symmetric, positive semi-definite, triangle inequality."""
+        name, inertia = self.name, self.inertia
         tolerance = self._tolerance()
         if np.max(np.abs(inertia - inertia.T)) > tolerance:
             raise ModelError(f"link '{name}': inertia tensor is not symmetric:\n{inertia}")

@@ -10,11 +10,13 @@ of the book; Craig (1986) for the modified convention.
 
 from __future__ import annotations
 
+import reprlib
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from armdyn.errors import ModelError
+from armdyn.model.inertial import parameter, parameter_array, real_array
 
 REVOLUTE, PRISMATIC = "revolute", "prismatic"
 _KIND_ALIASES = {"r": REVOLUTE, "revolute": REVOLUTE, "continuous": REVOLUTE, "p": PRISMATIC, "prismatic": PRISMATIC}
@@ -109,8 +111,10 @@ def joint_kind(kind: str, where: str = "joint") -> str:
     Raises
     ------
     armdyn.ModelError
-        When ``kind`` is none of these.
+        When ``kind`` is none of these (or not a string at all).
     """
+    if not isinstance(kind, str):
+        raise ModelError(f"{where}: joint kind must be 'revolute' or 'prismatic', got {reprlib.repr(kind)}")
     try:
         return _KIND_ALIASES[str(kind).lower()]
     except KeyError:
@@ -139,8 +143,9 @@ class Joint:
     Raises
     ------
     armdyn.ModelError
-        When the kind is unknown, ``placement`` or ``frame_offset`` is not a finite 4x4
-        rigid homogeneous transform, or ``axis`` is not a unit 3-vector.
+        When the kind is unknown, ``placement`` or ``frame_offset`` is not a finite real 4x4
+        rigid homogeneous transform (SymPy entries are accepted), or ``axis`` is not a unit
+        3-vector of real numbers; the message names the argument and the joint.
     """
 
     kind: str = REVOLUTE
@@ -150,28 +155,31 @@ class Joint:
     name: str = "joint"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "kind", joint_kind(self.kind, f"joint '{self.name}'"))
+        where = f"joint '{self.name}'"
+        object.__setattr__(self, "kind", joint_kind(self.kind, where))
         for key in ("placement", "frame_offset"):
-            value = np.asarray(getattr(self, key))
-            if value.shape != (4, 4):
-                raise ModelError(f"joint '{self.name}': {key} must be a 4x4 transform, got shape {value.shape}")
-            if value.dtype != object:
-                value = np.array(value, dtype=float)
-                if not np.all(np.isfinite(value)):
-                    raise ModelError(f"joint '{self.name}': {key} must be finite")
-                check_rigid(value, f"joint '{self.name}': {key}")
-                value.setflags(write=False)
-            object.__setattr__(self, key, value)
-        axis = np.array(self.axis, dtype=float).reshape(-1)
+            object.__setattr__(self, key, _pose(getattr(self, key), key, where))
+        axis = real_array(self.axis, "axis", where).reshape(-1)  # a column (3, 1) is that axis
         norm = np.linalg.norm(axis) if axis.shape == (3,) else 0.0
-        if axis.shape != (3,) or not np.isfinite(norm) or abs(norm - 1.0) > 1e-9:
-            raise ModelError(f"joint '{self.name}': axis must be a unit 3-vector, got {self.axis}")
+        if axis.shape != (3,) or abs(norm - 1.0) > 1e-9:
+            raise ModelError(f"{where}: axis must be a unit 3-vector, got {reprlib.repr(self.axis)}")
         axis.setflags(write=False)
         object.__setattr__(self, "axis", axis)
 
     @property
     def is_revolute(self) -> bool:
         return self.kind == REVOLUTE
+
+
+def _pose(value: object, key: str, where: str) -> np.ndarray:
+    """A read-only 4x4 rigid transform (an object array when it holds SymPy expressions)."""
+    pose = parameter_array(value, key, where)
+    if pose.shape != (4, 4):
+        raise ModelError(f"{where}: {key} must be a 4x4 transform, got shape {pose.shape}")
+    if pose.dtype != object:
+        check_rigid(pose, f"{where}: {key}")
+    pose.setflags(write=False)
+    return pose
 
 
 def check_rigid(transform: np.ndarray, where: str) -> None:
@@ -215,16 +223,25 @@ def dh_joint(
     Raises
     ------
     armdyn.ModelError
-        When ``kind`` or ``convention`` is unknown.
+        When ``kind`` or ``convention`` is unknown, or a DH parameter is neither a finite real
+        number nor a SymPy expression.
     """
-    kind = joint_kind(kind, f"joint '{name}'")
+    where = f"joint '{name}'"
+    if not isinstance(convention, str) or convention not in ("standard", "modified"):
+        raise ModelError(f"{where}: DH convention must be 'standard' or 'modified', got {reprlib.repr(convention)}")
+    kind = joint_kind(kind, where)
+    a, alpha, d, theta = dh_parameters(a, alpha, d, theta, where)
     revolute = kind == REVOLUTE
     if convention == "standard":
         placement = trans(z=d) @ rot_z(theta) if revolute else rot_z(theta) @ trans(z=d)
         offset = trans(x=a) @ rot_x(alpha)
-    elif convention == "modified":
+    else:
         placement = rot_x(alpha) @ trans(x=a) @ (trans(z=d) @ rot_z(theta) if revolute else rot_z(theta) @ trans(z=d))
         offset = np.eye(4)
-    else:
-        raise ModelError(f"joint '{name}': DH convention must be 'standard' or 'modified', got '{convention}'")
     return Joint(kind, placement, np.array([0.0, 0.0, 1.0]), offset, name)
+
+
+def dh_parameters(a: object, alpha: object, d: object, theta: object, where: str) -> tuple[object, ...]:
+    """The DH parameters (a, alpha, d, theta) checked: each a finite real float or a SymPy expression."""
+    values = {"a": a, "alpha": alpha, "d": d, "theta": theta}
+    return tuple(parameter(value, f"DH parameter {key}", where) for key, value in values.items())
