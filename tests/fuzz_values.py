@@ -497,7 +497,8 @@ def _scalar_value(
     if kind == "numeric str":
         return Value(kind, repr(x), "either", x)
     if kind == "Fraction":
-        return Value(kind, Fraction(x).limit_denominator(1000), "either", x)
+        fraction = Fraction(x).limit_denominator(1000)
+        return Value(kind, fraction, "either", float(fraction))
     if kind == "Decimal":
         return Value(kind, Decimal(repr(x)), "either", x)
     if kind == "huge python int":

@@ -257,7 +257,8 @@ def inertia_values(valid: tuple = (0.01, 0.02, 0.015)) -> Kinds:
         Value("negative moment", [-0.01, 0.02, 0.015], "bad"),
         Value("not symmetric", [[0.01, 0.005, 0], [0, 0.02, 0], [0, 0, 0.015]], "bad"),
         Value("indefinite", [[0.01, 0.05, 0], [0.05, 0.01, 0], [0, 0, 0.015]], "bad"),
-        Value("triangle inequality broken", [0.01, 0.01, 0.5], "bad", names=("triangle",)),
+        # refused, or accepted with a warning where strict=False says so
+        Value("triangle inequality broken", [0.01, 0.01, 0.5], "either", names=("triangle",)),
         Value("NaN moment", [np.nan, 0.02, 0.015], "bad"),
         Value("inf moment", [np.inf, 0.02, 0.015], "bad"),
         Value("1e300 moments", [1e300, 1e300, 1e300], "either"),
@@ -338,10 +339,41 @@ def _tool_link_values(arm: ad.Robot) -> Kinds:
     )
 
 
+def _pair(value: Value) -> np.ndarray | None:
+    """The value as a pair of real numbers, or None."""
+    try:
+        if np.iscomplexobj(value.value):
+            return None
+        pair = np.asarray(value.value, dtype=float)
+    except (TypeError, ValueError, ArithmeticError):
+        return None
+    return pair if pair.shape == (2,) else None
+
+
+def _as_limits(value: Value) -> Value:
+    """Joint limits: an infinite bound means no limit (valid), but lower must not exceed upper
+    and a limit must leave some room (not both bounds at the same infinity)."""
+    pair = _pair(value)
+    if pair is not None and value.label.endswith("inf entry") and not np.isnan(pair).any():
+        value.verdict = "same" if pair[0] <= pair[1] and pair[0] < np.inf and pair[1] > -np.inf else "bad"
+        value.reference = pair if value.verdict == "same" else NOTHING
+    return value
+
+
+def _as_coulomb(value: Value) -> Value:
+    """Coulomb levels (Tc+, Tc-): Tc+ >= 0 >= Tc-, whatever the kind of value."""
+    pair = _pair(value)
+    if pair is not None and value.verdict == "same" and not pair[0] >= 0 >= pair[1]:
+        value.verdict = "bad"
+    return value
+
+
 def _links_values(arm: ad.Robot, none_ok: bool = True) -> Kinds:
     links = list(arm.links)
     forward = [dataclasses.replace(links[0], parent=1), *links[1:]]
-    text_parent = [dataclasses.replace(links[0], parent="base"), *links[1:]]
+    text_link = copy.copy(links[0])  # a Link refuses a text parent: made past its check, for the arm to refuse
+    object.__setattr__(text_link, "parent", "base")
+    text_parent = [text_link, *links[1:]]
     items = [
         Value("a tuple of the links", tuple(links), "same", links),
         Value("None (its own)", None, "same" if none_ok else "bad", None if none_ok else NOTHING),
@@ -455,6 +487,8 @@ def _dh_row_value(draw: st.DrawFn, key: str, kind: st.SearchStrategy[Value]) -> 
     )
     if broken and value.verdict == "same":
         value.verdict = "bad"
+    if key == "qlim":
+        value = _as_limits(value)
     rows = copy.deepcopy(DH_ROWS)
     rows[index][key] = value.value
     reference = NOTHING
@@ -519,8 +553,9 @@ def constructor_targets() -> list[Target]:
     strict = Arg(lambda arm: True, lambda arm: choice_values([True, False], [], ["no", 0, None], "either"))
     planar = ARMS[0][1]
 
-    def vector(v: tuple | list, **options: object) -> Arg:
-        return Arg(lambda arm: v, lambda arm: state_values(np.array(v), batch=False, bounded=False), **options)
+    def vector(v: tuple | list, rule: Callable[[Value], Value], **options: object) -> Arg:
+        values = lambda arm: [kind.map(rule) for kind in state_values(np.array(v), batch=False, bounded=False)]  # noqa: E731
+        return Arg(lambda arm: v, values, **options)
 
     robot_args = {
         "links": Arg(
@@ -545,7 +580,7 @@ def constructor_targets() -> list[Target]:
     }
     inertial_args = {
         "mass": Arg(lambda arm: 1.0, lambda arm: scalar_values([1.0, 0.0], non_negative)),
-        "com": vector([0.1, 0.0, 0.0], names=("centre of mass", "center of mass")),
+        "com": vector([0.1, 0.0, 0.0], lambda value: value, names=("centre of mass", "center of mass")),
         "inertia": Arg(lambda arm: [0.01, 0.02, 0.02], lambda arm: inertia_values()),
         "name": names,
         "strict": strict,
@@ -571,7 +606,7 @@ def constructor_targets() -> list[Target]:
             ),
         ),
         "viscous": Arg(lambda arm: 0.1, lambda arm: scalar_values([0.1, 0.0], non_negative)),
-        "coulomb": vector((0.2, -0.1), names=("Coulomb",)),
+        "coulomb": vector((0.2, -0.1), _as_coulomb, names=("Coulomb",)),
         "motor_inertia": Arg(
             lambda arm: 1e-4, lambda arm: scalar_values([1e-4, 0.0], non_negative), names=("motor inertia",)
         ),
@@ -580,7 +615,7 @@ def constructor_targets() -> list[Target]:
             lambda arm: scalar_values([10.0, -5.0], lambda x: "bad" if x == 0 else finite(x)),
             names=("gear ratio",),
         ),
-        "limits": vector((-1.0, 1.0), names=("limit",)),
+        "limits": vector((-1.0, 1.0), _as_limits, names=("limit",)),
     }
     return [
         Target("Robot.from_dh", lambda arm, **kw: ad.Robot.from_dh(**kw), dh_args, no_arm),
