@@ -1,7 +1,7 @@
 """Robot: an ArmModel with its dynamics and kinematics as methods, the object users hold.
 
 The only place where methods meet data. Each method is a free function of armdyn.dynamics
-or armdyn.kinematics taking the arm first; the arm is packed for the compiled kernels once,
+(or armdyn.kinematics) taking the arm first; the arm is packed for the compiled kernels once,
 when it is made, and never changes afterwards.
 """
 
@@ -53,9 +53,9 @@ class Robot(ArmModel):
     regressor = parameterization.regressor
     parameters = parameterization.parameters
 
-    # kinematics (armdyn.kinematics)
-    link_transforms = kinematics.link_transforms
-    tool_pose = kinematics.tool_pose
-    jacobian = kinematics.jacobian
-    jacobian_dot = kinematics.jacobian_dot
+    # kinematics, compiled (armdyn.dynamics.api; armdyn.kinematics holds the NumPy reference)
+    link_transforms = api.link_transforms
+    tool_pose = api.tool_pose
+    jacobian = api.jacobian
+    jacobian_dot = api.jacobian_dot
     link_transform_derivatives = kinematics.link_transform_derivatives

@@ -61,7 +61,7 @@ def _where(arm: Robot) -> str:
 
 def _model(arm: Robot) -> np.ndarray:
     if arm.packed is None:
-        raise ModelError(f"robot '{arm.name}' has symbolic parameters; numeric dynamics need numbers")
+        raise ModelError(f"robot '{arm.name}' has symbolic parameters; numeric dynamics and kinematics need numbers")
     return arm.packed
 
 
@@ -507,6 +507,9 @@ def _target(arm: Robot, link: object) -> int:
 
 
 def _frame(frame: object) -> int:
+    """frames.WORLD or frames.LOCAL for "base" or "tool", else the ModelError of check_frame."""
+    if type(frame) is str and frame in _FRAMES:
+        return _FRAMES[frame]
     kinematics.check_frame(frame)
     return _FRAMES[frame]
 
