@@ -90,7 +90,7 @@ def test_cli_identify_on_a_bad_csv_is_one_error_line(files: Path, name: str, fra
         (["simulate", "two_link_planar", "--controller", "magic"], ["--controller must be one of"]),
         (["simulate", "two_link_planar", "--trajectory", "zigzag"], ["--trajectory must be sine, quintic or none"]),
         (["simulate", "two_link_planar", "--trajectory", "quintic", "--frequency", "0"], ["--frequency must be"]),
-        (["simulate", "two_link_planar", "--period", "-0.01"], ["positive, finite sample period"]),
+        (["simulate", "two_link_planar", "--period", "-0.01"], ["needs a positive sample period", "-0.01"]),
         (["simulate", "two_link_planar", "--torque-limit", "nan"], ["torque limit must be positive"]),
         (["simulate", "two_link_planar", "--controller", "none", "--period", "0.1"], ["need a controller"]),
     ],

@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import csv as csv_files
 import io
+import os
 import re
+import stat
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -627,10 +629,19 @@ def derive(
         print(text)
 
 
+CHECK_SAMPLES = 1_000_000
+"""The most samples ``check --samples`` takes (armdyn.properties.check's own limit): beyond it a
+check takes minutes, and its arrays of M(q) gigabytes, while the extremes found no longer change."""
+
+
 @app.command()
 def check(
     name: str = typer.Argument(..., help=ARM_HELP),
-    samples: int = typer.Option(300, help="Random joint configurations to sample before refining."),
+    samples: int = typer.Option(
+        300,
+        max=CHECK_SAMPLES,
+        help=f"Random joint configurations to sample before refining (at most {CHECK_SAMPLES:,}).",
+    ),
     seed: int = typer.Option(0, help="Random seed."),
     limits: str = typer.Option(
         "arm",
@@ -729,7 +740,9 @@ def _book_values(arm: Robot, ranges: Sequence[tuple[float, float]]) -> dict[str,
 def identify(
     name: str = typer.Argument(..., help=ARM_HELP),
     csv: str | None = typer.Argument(
-        None, help="CSV with columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun (a header row); none with --generate."
+        None,
+        help="CSV with columns q1..qn, qd1..qdn, qdd1..qddn, tau1..taun (a header row), a regular file of at most "
+        "256 MiB; none with --generate.",
     ),
     output: str | None = typer.Option(
         None, "--output", "-o", help="Also write the estimates to this CSV file (name, estimate, std. error, model)."
@@ -821,10 +834,15 @@ def _generated_samples(
     return {"q": data.q, "qd": data.qd, "qdd": data.qdd, "tau": data.tau}, trajectory
 
 
+CSV_BYTES = 256 * 2**20
+"""The largest samples file ``identify`` reads (256 MiB, millions of samples): its values are
+parsed one by one, and a device such as /dev/zero would never end."""
+
+
 def _read_samples(path: str, n: int) -> dict[str, np.ndarray]:
     """q, qd, qdd, tau (each (N, n)) from a CSV file with a header row; a ModelError naming the file,
     line and column for anything else (binary data, ragged rows, text where a number belongs)."""
-    data = Path(path).read_bytes()  # an OSError names the file
+    data = _csv_bytes(path)
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -855,6 +873,22 @@ def _read_samples(path: str, n: int) -> dict[str, np.ndarray]:
                 _fail(f"{path}, line {number}, column {header[column]}: {cell.strip()} is not finite")
     where = {column: header.index(column) for column in wanted}
     return {key: values[:, [where[c] for c in group]] for key, group in groups.items()}
+
+
+def _csv_bytes(path: str) -> bytes:
+    """The bytes of a regular file of at most CSV_BYTES; a ModelError for a device, a pipe or a
+    larger file (read no further than the cap, should it grow), an OSError naming a missing one."""
+    info = os.stat(path)  # an OSError names the file
+    if not stat.S_ISREG(info.st_mode):
+        _fail(f"{path} is not a regular file (a device, a pipe or a folder); give a CSV file of samples")
+    too_large = f"{path} is larger than {CSV_BYTES:,} bytes, the most identify reads; give fewer samples"
+    if info.st_size > CSV_BYTES:
+        _fail(too_large)
+    with open(path, "rb") as handle:
+        data = handle.read(CSV_BYTES + 1)
+    if len(data) > CSV_BYTES:
+        _fail(too_large)
+    return data
 
 
 def _controller(kind: str, kp: object, kv: object, ki: object, period: float, limit: object) -> object:

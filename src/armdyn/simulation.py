@@ -19,8 +19,10 @@ from __future__ import annotations
 import csv
 import itertools
 import math
+import os
+import reprlib
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -40,7 +42,13 @@ from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
 
-ADAPTIVE = ("rk45", "rk23", "dop853", "radau", "bdf", "lsoda")
+SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau", "bdf": "BDF", "lsoda": "LSODA"}
+"""The adaptive methods: simulate's names for them (taken in any case) and scipy's."""
+ADAPTIVE = tuple(SOLVERS)
+MAX_SAMPLES = 200_000_000
+"""The most samples (t_final / dt + 1) one run records: about 18 GB for the two-link arm (8 (1 + 5 n)
+bytes a sample), and minutes of the compiled loop. A run whose record needs more memory than the
+system has available is refused too (``_available_memory``), before anything is allocated."""
 
 
 SINGULAR, DIVERGED = 1, 2  # why a compiled run stopped
@@ -264,27 +272,60 @@ def _plant_buffers(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     return np.stack(plants), np.stack(coulombs)
 
 
-def _unwrap(controller: object) -> tuple[control.Spec | None, float, object]:
-    """(spec for the compiled loop or None, sample period (0 continuous), the controller)."""
+def _unwrap(controller: object, n: int) -> tuple[control.Spec | None, float, object]:
+    """(spec for the compiled loop or None, sample period (0 continuous), the controller), each
+    controller of a Digital or Saturated chain checked first (a class, a torque limit per joint)."""
     if controller is None:
         return control.Spec(control.NO_CONTROL, 0.0, 0.0, 0.0), 0.0, None
-    if not callable(controller):
-        raise ModelError(f"controller must be callable (see armdyn.control), got {type(controller).__name__}")
-    spec_of = getattr(controller, "spec", None)
-    spec = spec_of() if spec_of is not None else None
     period = 0.0
     inner = controller
-    while isinstance(inner, (control.Digital, control.Saturated)):
+    while True:
+        _callable_argument(inner, "controller", "callable (see armdyn.control)", "armdyn.control.PID(kp, kv)")
         if isinstance(inner, control.Digital):
             period = inner.period
+        elif isinstance(inner, control.Saturated):
+            _check_limit(inner.limit, n)
+        else:
+            break
         inner = inner.controller
+    spec_of = getattr(controller, "spec", None)
+    spec = spec_of() if spec_of is not None else None
     return spec, period, controller
 
 
+def _callable_argument(value: object, name: str, what: str, example: str) -> None:
+    """Refuse ``value`` unless None or a callable object; a class is refused by name, being the
+    usual slip (control.PID where control.PID(kp, kv) was meant), since calling it builds an object."""
+    if value is None:
+        return
+    if isinstance(value, type):
+        raise ModelError(
+            f"{name} must be {what}, got the class {value.__name__} itself, not an object (e.g. {example})"
+        )
+    if not callable(value):
+        raise ModelError(f"{name} must be {what}, got {type(value).__name__}")
+
+
+def _check_limit(limit: object, n: int) -> None:
+    """A Saturated torque limit must be one number or one per joint (Saturated checked its values)."""
+    try:
+        shape = np.atleast_1d(np.asarray(limit, dtype=float)).shape
+    except (TypeError, ValueError):
+        shape = None
+    if shape not in ((1,), (n,)):
+        shown = reprlib.repr(limit)
+        raise ModelError(
+            f"the torque limit of Saturated must be one number, or {n} (one per joint), got limit = {shown}"
+        )
+
+
 def _one_state(value: object, n: int, name: str, allow_scalar: bool = False) -> np.ndarray:
-    """One finite state vector (n,) (or a scalar for every joint), checked by armdyn.inputs."""
-    if allow_scalar and np.ndim(value) == 0:
-        value = np.full(n, value, dtype=float) if isinstance(value, (int, float, np.number)) else value
+    """One finite state vector (n,) (or a real scalar for every joint), checked by armdyn.inputs."""
+    if allow_scalar and isinstance(value, (int, float, np.integer, np.floating)):  # not np.ndim: a ragged list
+        try:
+            value = np.full(n, value, dtype=float)
+        except OverflowError:  # a Python int beyond float
+            raise ModelError(f"{name} must be finite, got {reprlib.repr(value)}") from None
     array = inputs.state(value, n, name, bounded=name in ("q0", "qd0"))  # torques may be large
     if array.shape != (n,):
         raise ModelError(f"{name} must be one state of {n} values, got shape {array.shape}")
@@ -293,22 +334,145 @@ def _one_state(value: object, n: int, name: str, allow_scalar: bool = False) -> 
 
 def _events(arm: Robot, events: object) -> list[tuple[float, Robot]]:
     """(time, arm) pairs sorted by time; each time finite and >= 0, each arm a Robot with the plant's joints."""
+    if isinstance(events, (str, bytes, Mapping)) or not isinstance(events, Iterable):
+        raise ModelError(f"events must be a sequence of (time, arm) pairs, got {reprlib.repr(events)}")
     checked = []
     for event in events:
         try:
             time, plant = event
         except (TypeError, ValueError):
             raise ModelError(f"each event must be a (time, arm) pair, got {event!r}") from None
-        if not (isinstance(time, (int, float, np.number)) and np.isfinite(time) and time >= 0):
-            raise ModelError(f"an event time must be a finite number of seconds >= 0, got {time!r}")
+        if not _is_time(time):
+            raise ModelError(f"an event time must be a finite number of seconds >= 0, got {reprlib.repr(time)}")
         if not isinstance(plant, Robot) or plant.n != arm.n:
             raise ModelError(f"the arm of the event at t = {time} must be a Robot with {arm.n} joints")
         checked.append((float(time), plant))
     return sorted(checked, key=lambda e: e[0])
 
 
+def _is_time(value: object) -> bool:
+    """Whether ``value`` is a real number (not a bool) that is finite and >= 0 as a float."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return False
+    try:
+        seconds = float(value)
+    except OverflowError:  # a Python int beyond float
+        return False
+    return math.isfinite(seconds) and seconds >= 0
+
+
 def _users_own(item: object) -> bool:
     return item is not None and type(item).__module__ not in ("armdyn.control", "armdyn.trajectories")
+
+
+def _seconds(t_final: object, dt: object) -> tuple[float, float]:
+    """t_final and dt as positive floats (below 1e15), or a ModelError naming them."""
+    checked = []
+    for name, value in (("t_final", t_final), ("dt", dt)):
+        try:
+            seconds = inputs.number(value, name)
+        except ModelError:  # one message for every way of not being a time
+            seconds = math.nan
+        if not seconds > 0:
+            raise ModelError(
+                f"{name} must be a positive number of seconds, below {LARGEST_STATE:.0e}, got {reprlib.repr(value)}"
+            )
+        checked.append(seconds)
+    return checked[0], checked[1]
+
+
+def _method_name(method: object) -> str:
+    """The method's name in lower case ("rk4" or one of ADAPTIVE), or a ModelError listing them."""
+    if not isinstance(method, str) or method.lower() not in ("rk4", *ADAPTIVE):
+        raise ModelError(f"method must be 'rk4' or one of {ADAPTIVE} (in any case), got {reprlib.repr(method)}")
+    return method.lower()
+
+
+def _smoothing_choice(eps: object) -> str | float:
+    """coulomb_smoothing as "auto" or a float >= 0, or a ModelError naming it."""
+    if isinstance(eps, str):
+        if eps != "auto":
+            raise ModelError(f"coulomb_smoothing must be 'auto' or a number, got {reprlib.repr(eps)}")
+        return eps
+    return inputs.number(eps, "coulomb_smoothing", minimum=0.0)
+
+
+def _steps(t_final: float, dt: float, n: int, adaptive: bool) -> int:
+    """The number of steps, round(t_final / dt), refused before anything is allocated when the
+    record would hold more than MAX_SAMPLES samples or more bytes than the memory available."""
+    samples = t_final / dt + 1  # a float: it may be far beyond any array (1e14 s / 1e-300 s)
+    per_sample = 8 * (1 + (9 if adaptive else 5) * n)  # t and 5 (n,) arrays; solve_ivp's 3n states held twice
+    available = _available_memory()
+    if samples > MAX_SAMPLES or (available is not None and samples * per_sample > available):
+        room = "" if available is None else f"; {_size(available)} of memory is available"
+        raise ModelError(
+            f"t_final = {t_final:g} s with dt = {dt:g} s is {samples:.4g} samples, whose record needs "
+            f"{_size(samples * per_sample)} (at most {MAX_SAMPLES:,} samples{room}): shorten t_final or lengthen dt"
+        )
+    return round(t_final / dt)
+
+
+def _size(nbytes: float) -> str:
+    """A number of bytes for a message: "14.6 GiB"."""
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if nbytes < 1024:
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1024
+    return f"{nbytes:.3g} TiB"
+
+
+def _available_memory() -> int | None:
+    """The bytes this process can still fill: the least of the system's available memory, a
+    cgroup's limit (a container's) and an address-space limit (RLIMIT_AS), each left out where
+    the system does not say it; None when it says none of them."""
+    found = [m for m in (_system_memory(), _cgroup_memory(), _address_space()) if m is not None]
+    return min(found) if found else None
+
+
+def _system_memory() -> int | None:
+    """Linux's MemAvailable (free memory plus the caches it can drop), else the free physical memory."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _cgroup_memory() -> int | None:
+    """What a cgroup v2 memory limit leaves (a container can be killed beyond it, MemAvailable notwithstanding)."""
+    try:
+        with open("/sys/fs/cgroup/memory.max", encoding="ascii") as handle:
+            limit = handle.read().strip()
+        if limit == "max":
+            return None
+        with open("/sys/fs/cgroup/memory.current", encoding="ascii") as handle:
+            return int(limit) - int(handle.read().strip())
+    except (OSError, ValueError):
+        return None
+
+
+def _address_space() -> int | None:
+    """What the soft RLIMIT_AS leaves of this process's address space (Linux's VmSize used)."""
+    try:
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    except (ImportError, OSError, ValueError):  # no resource module on Windows
+        return None
+    if limit == resource.RLIM_INFINITY:
+        return None
+    try:
+        with open("/proc/self/status", encoding="ascii") as handle:
+            used = next((int(line.split()[1]) * 1024 for line in handle if line.startswith("VmSize:")), 0)
+    except (OSError, ValueError, IndexError):
+        used = 0
+    return limit - used
 
 
 def simulate(
@@ -348,12 +512,18 @@ def simulate(
         None (hold q0), a Sinusoid, Quintic or CartesianCircle of armdyn.trajectories, or any
         callable ``t -> (q_d, qd_d, qdd_d)``.
     t_final : float
-        Seconds to simulate.
+        Seconds to simulate (below 1e15).
     dt : float
-        The RK4 step, and the sampling of the result for adaptive methods.
+        The RK4 step, and the sampling of the result for adaptive methods. The run takes
+        round(t_final / dt) steps, ending at the multiple of dt nearest t_final (so a dt
+        beyond 2 t_final gives the start alone, with every method). It records about
+        t_final / dt + 1 samples, at most MAX_SAMPLES (200,000,000), of 8 (1 + 5 n) bytes
+        each (8 (1 + 9 n) with an adaptive method), which must fit in the memory available
+        (the system's, less where a cgroup or RLIMIT_AS limit leaves less): a longer run is
+        refused before anything is allocated.
     method : str
         "rk4" (fixed step dt) or an adaptive solve_ivp method: "rk45", "rk23", "dop853",
-        "radau", "bdf", "lsoda".
+        "radau", "bdf", "lsoda" (in any case: "RK45" and "Radau" as scipy spells them).
     q0, qd0 : array_like, optional
         Initial joint positions and velocities (zeros by default).
     disturbance : array_like or callable, optional
@@ -364,7 +534,7 @@ def simulate(
         eps of the smoothed Coulomb law, one number for every joint, or "auto" (sized to
         the step, see the module docstring); 0 is the exact sign law.
     progress : callable, optional
-        Called with the fraction done (0 to 1) as the compiled run proceeds.
+        Called with the fraction done (0 to 1) as the compiled run (or an adaptive one) proceeds.
 
     Returns
     -------
@@ -375,26 +545,39 @@ def simulate(
     Raises
     ------
     ModelError
-        When t_final or dt is not positive, q0 or qd0 has the wrong shape, the controller is
-        not callable or its model does not match the arm, a Digital period is not a whole
-        number of steps (or meets an adaptive method), or the method is unknown.
+        When t_final or dt is not a positive number (or is 1e15 or more), or the run would
+        record more samples than MAX_SAMPLES or than the memory available holds (the message
+        says how much it needs); when q0 or qd0 has the wrong shape; when the controller, the
+        trajectory, the progress callback or a disturbance law is neither None nor a callable
+        object (a class, such as control.PID for control.PID(kp, kv), included), the
+        controller's model does not match the arm, a Saturated limit is not one number or one
+        per joint, or a Digital period is not a whole number of steps (or meets an adaptive
+        method); when events is not a sequence of (time >= 0, Robot) pairs, coulomb_smoothing
+        is not "auto" or a number >= 0, or the method is unknown (the message lists the
+        methods); and during the run when a controller, trajectory or disturbance of the
+        user's returns other than n finite values (the message names which).
+    SimulationError
+        When M(q) becomes singular or the state non-finite during the run (its ``result``
+        holds the run up to then).
     """
     if not isinstance(arm, Robot):
         raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
     n = arm.n
-    for name, value in (("t_final", t_final), ("dt", dt)):
-        if not (isinstance(value, (int, float, np.number)) and np.isfinite(value) and value > 0):
-            raise ModelError(f"{name} must be a positive number of seconds, got {value!r}")
+    t_final, dt = _seconds(t_final, dt)
+    method = _method_name(method)
+    adaptive = method in ADAPTIVE
+    coulomb_smoothing = _smoothing_choice(coulomb_smoothing)
+    _callable_argument(
+        trajectory, "trajectory", "None or a callable t -> (q_d, qd_d, qdd_d)", "armdyn.trajectories.Sinusoid(a, f)"
+    )
+    _callable_argument(progress, "progress", "None or a callable taking the fraction done", "print")
     q0, qd0 = (np.zeros(n) if x is None else _one_state(x, n, name) for x, name in ((q0, "q0"), (qd0, "qd0")))
-    if disturbance is not None and not callable(disturbance):
+    if disturbance is not None and (isinstance(disturbance, type) or not callable(disturbance)):  # a class: no law
         disturbance = np.broadcast_to(_one_state(disturbance, n, "disturbance", allow_scalar=True), (n,)).copy()
     events = _events(arm, events)
     arms = [arm] + [e[1] for e in events]
-    steps = round(t_final / dt)
-    spec, period, controller = _unwrap(controller)
-    adaptive = method.lower() in ADAPTIVE if isinstance(method, str) else False
-    if method != "rk4" and not adaptive:
-        raise ModelError(f"method must be 'rk4' or one of {ADAPTIVE}, got {method!r}")
+    steps = _steps(t_final, dt, n, adaptive)
+    spec, period, controller = _unwrap(controller, n)
     if adaptive and period:
         raise ModelError("a Digital controller needs method='rk4' (the book's fixed-step TRESP)")
     compiled = (
@@ -511,20 +694,16 @@ def _energies(arms: list[Robot], events: list, times: np.ndarray, q: np.ndarray,
     return energy
 
 
-def _smoothing(arm: Robot, eps: object, dt: float, q0: np.ndarray) -> np.ndarray:
-    """eps_i per joint. "auto": the friction's stiffness Tc_i / (eps_i M_ii) times dt stays at 1,
-    inside RK4's stability limit (2.79), and eps_i is never below 1e-3 rad/s."""
+def _smoothing(arm: Robot, eps: str | float, dt: float, q0: np.ndarray) -> np.ndarray:
+    """eps_i per joint (``eps`` checked by _smoothing_choice). "auto": the friction's stiffness
+    Tc_i / (eps_i M_ii) times dt stays at 1, inside RK4's stability limit (2.79), and eps_i is
+    never below 1e-3 rad/s."""
     if isinstance(eps, str):
-        if eps != "auto":
-            raise ModelError(f"coulomb_smoothing must be 'auto' or a number, got '{eps}'")
         largest = np.abs(arm.coulomb_friction).max(axis=1)
         diagonal = np.diag(arm.inertia_matrix(q0))  # zero where M(q0) is singular: the run then stops there
         stiffness = np.divide(largest * dt, diagonal, out=np.zeros(arm.n), where=diagonal > 0)
         return np.maximum(1e-3, stiffness)
-    value = float(eps)
-    if not (np.isfinite(value) and value >= 0):
-        raise ModelError(f"coulomb_smoothing must be a non-negative number, got {eps}")
-    return np.full(arm.n, value)
+    return np.full(arm.n, float(eps))
 
 
 def _plant_at(arms: list[Robot], events: list, t: float) -> Robot:
@@ -550,10 +729,37 @@ def _no_coulomb(link):
 
 
 def _desired_of(trajectory: object, t: float, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q_d, qd_d, qdd_d) at t, each checked to be n finite values (a scalar or one value for every joint)."""
     if trajectory is None:
         return q0, np.zeros_like(q0), np.zeros_like(q0)
-    q_d, qd_d, qdd_d = trajectory(t)
-    return np.asarray(q_d, float), np.asarray(qd_d, float), np.asarray(qdd_d, float)
+    values = trajectory(t)
+    try:
+        q_d, qd_d, qdd_d = values
+    except (TypeError, ValueError):
+        raise ModelError(
+            f"the trajectory must return (q_d, qd_d, qdd_d), got {reprlib.repr(values)} at t = {t}"
+        ) from None
+    n = q0.shape[0]
+    return tuple(
+        _returned(value, n, f"the trajectory's {name} at t = {t}")
+        for value, name in ((q_d, "q_d"), (qd_d, "qd_d"), (qdd_d, "qdd_d"))
+    )
+
+
+def _returned(value: object, n: int, what: str) -> np.ndarray:
+    """What a callable of the user's returned, as n finite floats, a scalar or a single value
+    standing for every joint (as armdyn's trajectories of scalar parameters give); or a
+    ModelError naming ``what``."""
+    usual = isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (n,)
+    if usual and np.isfinite(value).all():  # once per step: no further checks
+        return value
+    try:
+        shape = np.shape(value)
+    except (TypeError, ValueError):  # a ragged sequence: inputs.state names it
+        shape = None
+    if shape in ((), (1,)) and not isinstance(value, (str, bytes)):
+        value = np.broadcast_to(value, (n,))
+    return _one_state(value, n, what)
 
 
 def _torque(controller, plant, t, q, qd, desired, e_int, eps):
@@ -636,8 +842,6 @@ def _check_bounded(q: np.ndarray, qd: np.ndarray, tau: np.ndarray | None = None)
 def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps, progress, setup):
     """solve_ivp on x = [q; qd; e_int]; the controller runs at every function evaluation, compiled
     (``continuous_rate``) when the compiled RK4 loop could run it, else in Python."""
-    from scipy.integrate import solve_ivp
-
     n = arms[0].n
     smoothing = _smoothing(arms[0], eps, dt, q0)
     qdd_of = _dynamics(arms, events, smoothing)
@@ -666,13 +870,7 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
             progress(t / times[-1])
         return rate_and_torque(t, x)[0]
 
-    solver = method.upper() if method.lower() != "lsoda" else "LSODA"
-    x0 = np.concatenate([q0, qd0, np.zeros(n)])
-    solution = solve_ivp(rate, (0.0, times[-1]), x0, method=solver, t_eval=times, rtol=1e-8, atol=1e-10)
-    if not solution.success or not np.all(np.isfinite(solution.y)):
-        raise ModelError(f"the {method} solver failed at t = {solution.t[-1]:.6g} s: {solution.message} (the closed "
-                         "loop may diverge: lower the gains)")  # fmt: skip
-    x = solution.y.T
+    x, evaluations = _solved(rate, times, np.concatenate([q0, qd0, np.zeros(n)]), method)
     q, qd = x[:, :n], x[:, n : 2 * n]
     qdd, tau, q_d = np.empty_like(q), np.empty_like(q), np.empty_like(q)
     for k, t in enumerate(times):
@@ -683,8 +881,24 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
         progress(1.0)
     route = f"{method} ({'compiled' if setup is not None else 'Python'} right-hand side)"
     return Result(times, q, qd, qdd, tau, q_d if trajectory is not None else None, arms[0],
-                  {"method": route, "dt": dt, "evaluations": solution.nfev},
+                  {"method": route, "dt": dt, "evaluations": evaluations},
                   lambda: _energies(arms, events, times, q, qd))  # fmt: skip
+
+
+def _solved(rate: Callable, times: np.ndarray, x0: np.ndarray, method: str) -> tuple[np.ndarray, int]:
+    """The states at ``times`` by solve_ivp's ``method`` (one row each) and its number of rate
+    evaluations; the start alone when ``times`` is [0] (dt beyond 2 t_final: no step to take)."""
+    from scipy.integrate import solve_ivp
+
+    if len(times) == 1:  # solve_ivp has no empty span
+        return x0[None], 0
+    solution = solve_ivp(rate, (0.0, times[-1]), x0, method=SOLVERS[method], t_eval=times, rtol=1e-8, atol=1e-10)
+    if not solution.success or not np.all(np.isfinite(solution.y)):
+        raise ModelError(
+            f"the {method} solver failed at t = {solution.t[-1]:.6g} s: {solution.message} (the closed loop may "
+            "diverge: lower the gains)"
+        )
+    return solution.y.T, solution.nfev
 
 
 @njit(**NUMBA_OPTIONS)

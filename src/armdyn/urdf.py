@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.errors import ModelError
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
@@ -30,6 +31,13 @@ _MOVING = {"revolute", "continuous", "prismatic"}
 _SAMPLES, _SEED = 4, 20240531
 _PIVOT_RELATIVE = 1e-9  # of the joint's own diagonal entry M_jj
 _DIAGONAL_RELATIVE = 1e-13  # of the largest diagonal entry of M
+# The 3-vectors of the file that reach the model, checked on the XML itself (yourdfpy keeps the
+# first three of four numbers, and squares 1e300 in a norm): (element, child, attributes)
+_VECTORS = (
+    ("joint", "origin", ("xyz", "rpy")),
+    ("joint", "axis", ("xyz",)),
+    ("link", "inertial/origin", ("xyz", "rpy")),
+)
 
 
 def _parse(path: Path):
@@ -40,6 +48,11 @@ def _parse(path: Path):
         root = etree.parse(str(path)).getroot()
     except etree.XMLSyntaxError as error:
         raise ModelError(f"{path}: malformed XML ({error})") from None
+    except OSError as error:  # lxml's for bytes that are not in the file's encoding (UTF-8 unless declared)
+        raise ModelError(
+            f"{path}: cannot be read as XML ({error}); a URDF is text, in UTF-8 unless its <?xml?> declaration "
+            "names another encoding"
+        ) from None
     if root.tag != "robot":
         raise ModelError(f"{path}: not a URDF: the root element is <{root.tag}>, where a URDF has <robot name='...'>")
     if not root.get("name"):
@@ -57,7 +70,40 @@ def _parse(path: Path):
         raise ModelError(f"{path}: malformed XML ({error})") from None
     except Exception as error:  # yourdfpy raises several kinds on bad content
         raise ModelError(f"{path}: not a valid URDF ({type(error).__name__}: {error})") from None
+    _check_vectors(root, path.name)
     return urdf.robot
+
+
+def _check_vectors(root: object, file: str) -> None:
+    """Refuse an xyz, rpy or axis of the file that reaches the model (``_VECTORS``) unless it is
+    3 numbers, each below LARGEST_STATE (1e15) in magnitude where finite: products of larger
+    values overflow. NaN and infinity are left to the checks that name them (``_origin``,
+    ``_moving_link``)."""
+    for kind, child, attributes in _VECTORS:
+        for element in root.iterfind(kind):
+            found = element.find(child)
+            if found is None:
+                continue
+            tags = "".join(f"<{tag}>" for tag in child.split("/"))
+            for attribute in attributes:
+                text = found.get(attribute)
+                if text is not None:
+                    _check_vector(text, f"{file}: {kind} '{element.get('name')}': {tags} {attribute} '{text}'")
+
+
+def _check_vector(text: str, where: str) -> None:
+    """One xyz, rpy or axis attribute's text must be 3 numbers, none of them finite yet 1e15 or more in magnitude."""
+    try:
+        values = [float(word) for word in text.split()]
+    except ValueError:
+        raise ModelError(f"{where} is not 3 numbers separated by spaces") from None
+    if len(values) != 3:
+        raise ModelError(f"{where} holds {len(values)} numbers where the URDF specification has 3")
+    if any(np.isfinite(value) and abs(value) >= inputs.LARGEST_STATE for value in values):
+        raise ModelError(
+            f"{where} holds a value of {inputs.LARGEST_STATE:.0e} or more in magnitude: beyond the range the "
+            "dynamics are computed in (metres and radians); write smaller values"
+        )
 
 
 def _origin(element: object, where: str) -> np.ndarray:
@@ -71,7 +117,10 @@ def _origin(element: object, where: str) -> np.ndarray:
 
 def _finite(value: object, where: str, what: str) -> float:
     """``value`` as a float, refused with a ModelError naming ``where`` and ``what`` unless finite."""
-    number = float(value)  # yourdfpy has already read it as a number
+    try:
+        number = float(value)  # yourdfpy reads most numbers; it keeps <dynamics> damping and friction as text
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: {what} is '{value}', not a number; write a finite number in the file") from None
     if not np.isfinite(number):
         raise ModelError(f"{where}: {what} is {number}, not a finite number; write a finite number in the file")
     return number
@@ -138,8 +187,8 @@ def load_urdf(
 
     Parameters
     ----------
-    path : str or os.PathLike
-        The URDF file.
+    path : str, bytes or os.PathLike
+        The URDF file: XML text, UTF-8 unless its XML declaration names another encoding.
     strict : bool, optional
         True (default) refuses inertias whose principal moments break the triangle
         inequality, and arms whose M(q) is singular in every configuration (joints that move
@@ -164,19 +213,25 @@ def load_urdf(
     Raises
     ------
     armdyn.ModelError
-        When the file is missing, is malformed XML or not a valid URDF (the ``<robot>``
-        element without a name included); when it has floating or planar joints, a joint of
-        unknown type, a kinematic loop, a link defined twice, a joint naming an undefined
-        link, more or fewer than one root link, or no moving joint; when a number that reaches
-        the model (an ``<origin>`` of a joint or an ``<inertial>``, an axis, a mass, an
-        inertia, a limit, a damping or friction) is NaN or infinite; when a joint axis has no
-        direction; when a link's mass properties, friction or limits are invalid (see
-        Inertial and Link); and, with ``strict``, when an inertia breaks the triangle
-        inequality or some joint moves no mass in any configuration (the message names them);
-        when ``locked`` is not a mapping, names a joint the file does not have or a fixed one,
-        or holds a value that is not finite or lies outside the joint's limits, or locks every
-        moving joint; when ``tool_link`` is not a link of the file, or is fixed to the root
-        link (no moving joint between them, also once the locked joints are fixed).
+        When the file is missing, cannot be read as XML (bytes not in its encoding), is
+        malformed XML or not a valid URDF (the ``<robot>`` element without a name included);
+        when ``gravity`` is not 3 finite numbers below 1e15; when the file has floating or
+        planar joints, a joint of unknown type, a kinematic loop, a link defined twice, a joint
+        naming an undefined link, more or fewer than one root link, or no moving joint; when a
+        number that reaches the model (an ``<origin>`` of a joint or an ``<inertial>``, an
+        axis, a mass, an inertia, a limit, a damping or friction) is NaN or infinite, or not a
+        number; when an xyz, rpy or axis of a joint or an ``<inertial>`` is not 3 numbers, or
+        holds one of 1e15 or more in magnitude (the message names the joint or link and the
+        attribute); when a joint axis has no direction; when a link's mass properties,
+        friction or limits are invalid (see Inertial and Link); and, with ``strict``, when an
+        inertia breaks the triangle inequality or some joint moves no mass in any
+        configuration (the message names them); when ``locked`` is not a mapping, names a
+        joint the file does not have or a fixed one, or holds a value that is not finite or
+        lies outside the joint's limits, or locks every moving joint; when ``tool_link`` is not
+        a link of the file, or is fixed to the root link (no moving joint between them, also
+        once the locked joints are fixed).
+    TypeError
+        When ``path`` is not a str, bytes or os.PathLike.
 
     Warns
     -----
@@ -185,9 +240,10 @@ def load_urdf(
         with ``strict=False``, inertias that break the triangle inequality and joints that
         move no mass (a singular M(q)).
     """
-    path = Path(path)
+    path = _file_path(path)
     if not path.is_file():
-        raise ModelError(f"{path}: no such URDF file")
+        raise ModelError(f"{path}: no such URDF file; check the path")
+    gravity = inputs.numbers(gravity, "gravity", (3,))  # an arm from a file is numeric: no SymPy gravity
     robot = _parse(path)
     links = {link.name: link for link in robot.links}
     for name in links:
@@ -268,6 +324,17 @@ def load_urdf(
             )
         warnings.warn(message + "; loaded as given", stacklevel=2)
     return arm
+
+
+def _file_path(path: object) -> Path:
+    """``path`` (str, bytes or os.PathLike) as a Path, or a TypeError naming it."""
+    try:
+        name = os.fspath(path)
+    except TypeError:
+        raise TypeError(
+            f"path must be a str, bytes or os.PathLike naming the URDF file, got {type(path).__name__}"
+        ) from None
+    return Path(os.fsdecode(name))
 
 
 def _massless_joints(arm: Robot) -> list[str]:
