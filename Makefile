@@ -23,7 +23,7 @@ test: lint
 	$(BIN)/python -m pytest -q
 
 fuzz: $(STAMP)
-	ARMDYN_FUZZ=1 $(BIN)/python -m pytest -q tests/test_fuzz.py
+	ARMDYN_FUZZ_REPORT=fuzz-report.txt $(BIN)/python -m pytest -q tests/test_fuzz.py
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e ".[bench]"

@@ -2,16 +2,11 @@
 
 from __future__ import annotations
 
-import os
 import sysconfig
 from pathlib import Path
 
 import numpy as np
 import pytest
-
-# The fuzzing layer (tests/test_fuzz.py) runs with `make fuzz` (ARMDYN_FUZZ=1), not in `make test`:
-# it still finds open defects in the model constructors and variants (see the README's Errors section).
-collect_ignore = [] if os.environ.get("ARMDYN_FUZZ") else ["test_fuzz.py"]
 
 ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
 URDFS = {

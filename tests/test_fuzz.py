@@ -620,6 +620,7 @@ def constructor_targets() -> list[Target]:
     return [
         Target("Robot.from_dh", lambda arm, **kw: ad.Robot.from_dh(**kw), dh_args, no_arm),
         Target("Robot(links, ...)", lambda arm, **kw: ad.Robot(**kw), robot_args, no_arm),
+        Target("ArmModel", lambda arm, **kw: ad.ArmModel(**kw), robot_args, no_arm, sweeps=1),
         Target("Inertial", lambda arm, **kw: ad.Inertial(**kw), inertial_args, no_arm),
         Target("Joint", lambda arm, **kw: ad.Joint(**kw), joint_args, no_arm),
         Target("Link", lambda arm, **kw: ad.Link(**kw), link_args, no_arm),
@@ -1874,7 +1875,29 @@ def cli_targets() -> list[Target]:
 
 # ----- the tests ------------------------------------------------------------------------------
 
+
+def thread_targets() -> list[Target]:
+    """armdyn.set_threads (restored after each case by the summary fixture's own setting) and threads."""
+    import numba
+
+    most = numba.config.NUMBA_NUM_THREADS
+
+    def set_threads(arm: ad.Robot, count: object) -> int:
+        try:
+            ad.set_threads(count)
+            return ad.threads()
+        finally:
+            numba.set_num_threads(1)
+
+    counts = scalar_values([1, most], lambda x: "same" if x.is_integer() and 1 <= x <= most else "bad", integer=True)
+    return [
+        Target("set_threads", set_threads, {"count": Arg(lambda arm: 1, lambda arm: counts)}, SMALL_ARMS[:1]),
+        Target("threads", lambda arm: ad.threads(), {}, SMALL_ARMS[:1], sweeps=1),
+    ]
+
+
 TARGETS = [
+    *thread_targets(),
     *dynamics_targets(),
     *kinematics_targets(),
     *variant_targets(),
@@ -1928,6 +1951,20 @@ def summary(request: pytest.FixtureRequest) -> Iterator[None]:
     else:
         print(line)
     shutil.rmtree(SCRATCH, ignore_errors=True)
+
+
+def test_every_public_name_and_robot_method_is_fuzzed() -> None:
+    """Each callable of armdyn.__all__ and each public Robot method has a target (a new one is
+    not left out by accident)."""
+    names = {target.name.split("(")[0].split(" ")[0] for target in TARGETS}
+    public = {name for name in ad.__all__ if callable(getattr(ad, name)) and name != "ModelError"}
+    methods = {
+        f"Robot.{name}"
+        for name, value in vars(ad.Robot).items()
+        if not name.startswith("_") and (callable(value) or isinstance(value, classmethod))
+    }
+    missing = sorted((public | methods) - names - {"Robot"})
+    assert not missing, f"no fuzz target for {missing}"
 
 
 @pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])

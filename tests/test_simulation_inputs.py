@@ -14,7 +14,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import armdyn as ad
-from armdyn import control, simulation, trajectories
+from armdyn import control, memory, simulation, trajectories
 from armdyn.simulation import PythonLoopWarning, simulate
 from tests.test_cli import assert_one_error_line, invoke
 
@@ -64,7 +64,7 @@ def test_enormous_runs_are_refused_before_anything_is_allocated(options: dict, s
 
 
 def test_a_run_beyond_the_memory_available_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(simulation, "_available_memory", lambda: 100_000)
+    monkeypatch.setattr(memory, "available", lambda: 100_000)
     assert len(run(t_final=1.0).t) == 1001  # 1001 samples of 88 bytes fit
     refused(r"t_final = 5 s with dt = 0.001 s is 5001 samples, .* 97.7 KiB of memory is available", t_final=5.0)
 

@@ -7,13 +7,12 @@ C-contiguous float64 array of exactly the result's shape.
 
 from __future__ import annotations
 
-import functools
 import math
-import os
 from collections.abc import Sequence
 
 import numpy as np
 
+from armdyn import memory
 from armdyn.errors import ModelError
 
 LARGEST_STATE = 1e15  # beyond this a joint angle's sine and cosine are no longer exact in float64
@@ -42,7 +41,7 @@ def state(
         raise ModelError(f"{name} must have shape ({n},) or (..., {n}){where}, got {array.shape}")
     if array.size and not _finite(array):
         raise ModelError(f"{name} must be finite (it holds NaN or infinity){where}")
-    if array.size and np.abs(array).max() >= LARGEST_STATE:
+    if array.size and _largest(array) >= LARGEST_STATE:
         if name == "q":
             raise ModelError(
                 f"q holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: angles that large have no "
@@ -54,6 +53,14 @@ def state(
                 "dynamics are computed in (products of such values overflow)"
             )
     return array
+
+
+def _largest(array: np.ndarray) -> float:
+    """The largest magnitude in the array, without a temporary array of its size (a stride-0 view
+    of a billion states has no memory of its own, and must not be given one here)."""
+    if np.iscomplexobj(array):
+        return float(np.abs(array).max())
+    return float(max(-array.min(), array.max()))
 
 
 def _finite(array: np.ndarray) -> bool:
@@ -76,7 +83,8 @@ def batch_states(
         raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
     shape = (*batch, n)
     copies = sum(a.shape != shape or not a.flags.c_contiguous for a in arrays)
-    affordable(copies * math.prod(shape) * 8, f"a batch of {math.prod(batch):,} states{where}")
+    shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
+    memory.affordable(copies * math.prod(shape) * 8, f"a batch of {math.prod(batch):,} states ({shapes}){where}")
     flat = [
         np.require(np.asarray(a if a.shape == shape else np.broadcast_to(a, shape)), np.float64, ["C", "W"]).reshape(
             -1, n
@@ -89,7 +97,7 @@ def batch_states(
 def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
     """``out`` checked against the result's shape, or a new array when out is None."""
     if out is None:
-        affordable(math.prod(shape) * 8, f"a result of shape {shape}")
+        memory.affordable(math.prod(shape) * 8, f"a result of shape {shape}")
         return np.empty(shape)
     if not (
         isinstance(out, np.ndarray)
@@ -101,27 +109,6 @@ def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
         got = getattr(out, "shape", type(out).__name__)
         raise ModelError(f"out must be a writable C-contiguous float64 array of shape {shape}, got {got}")
     return out
-
-
-@functools.cache
-def physical_memory() -> int | None:
-    """The machine's physical memory in bytes, or None where the system does not say."""
-    try:
-        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
-def affordable(nbytes: int, what: str) -> None:
-    """A ModelError, before anything is allocated, when ``what`` needs more bytes than the
-    machine's physical memory: an allocation the system grants lazily would otherwise fail
-    later, or take the process down, when it is filled."""
-    memory = physical_memory()
-    if memory is not None and nbytes > memory:
-        raise ModelError(
-            f"{what} needs {nbytes / 2**30:,.1f} GiB, more than this machine's {memory / 2**30:,.1f} GiB of memory: "
-            "split it into smaller batches"
-        )
 
 
 def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
@@ -195,7 +182,7 @@ def numbers(value: object, name: str, shape: tuple[int, ...] | None = None, wher
         raise ModelError(f"{name} must be {expected}{where}, got shape {array.shape}")
     if array.size and not _finite(array):
         raise ModelError(f"{name} must be finite{where} (it holds NaN or infinity)")
-    if array.size and np.abs(array).max() >= LARGEST_STATE:
+    if array.size and _largest(array) >= LARGEST_STATE:
         raise ModelError(
             f"{name} holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: beyond the range the "
             "dynamics are computed in (products of such values overflow)"

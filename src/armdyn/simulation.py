@@ -19,7 +19,6 @@ from __future__ import annotations
 import csv
 import itertools
 import math
-import os
 import reprlib
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -30,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from armdyn import control, inputs, trajectories
+from armdyn import control, inputs, memory, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
@@ -402,77 +401,15 @@ def _steps(t_final: float, dt: float, n: int, adaptive: bool) -> int:
     record would hold more than MAX_SAMPLES samples or more bytes than the memory available."""
     samples = t_final / dt + 1  # a float: it may be far beyond any array (1e14 s / 1e-300 s)
     per_sample = 8 * (1 + (9 if adaptive else 5) * n)  # t and 5 (n,) arrays; solve_ivp's 3n states held twice
-    available = _available_memory()
+    available = memory.available()
     if samples > MAX_SAMPLES or (available is not None and samples * per_sample > available):
-        room = "" if available is None else f"; {_size(available)} of memory is available"
+        room = "" if available is None else f"; {memory.size(available)} of memory is available"
         raise ModelError(
             f"t_final = {t_final:g} s with dt = {dt:g} s is {samples:.4g} samples, whose record needs "
-            f"{_size(samples * per_sample)} (at most {MAX_SAMPLES:,} samples{room}): shorten t_final or lengthen dt"
+            f"{memory.size(samples * per_sample)} (at most {MAX_SAMPLES:,} samples{room}): "
+            "shorten t_final or lengthen dt"
         )
     return round(t_final / dt)
-
-
-def _size(nbytes: float) -> str:
-    """A number of bytes for a message: "14.6 GiB"."""
-    for unit in ("B", "KiB", "MiB", "GiB"):
-        if nbytes < 1024:
-            return f"{nbytes:.3g} {unit}"
-        nbytes /= 1024
-    return f"{nbytes:.3g} TiB"
-
-
-def _available_memory() -> int | None:
-    """The bytes this process can still fill: the least of the system's available memory, a
-    cgroup's limit (a container's) and an address-space limit (RLIMIT_AS), each left out where
-    the system does not say it; None when it says none of them."""
-    found = [m for m in (_system_memory(), _cgroup_memory(), _address_space()) if m is not None]
-    return min(found) if found else None
-
-
-def _system_memory() -> int | None:
-    """Linux's MemAvailable (free memory plus the caches it can drop), else the free physical memory."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
-def _cgroup_memory() -> int | None:
-    """What a cgroup v2 memory limit leaves (a container can be killed beyond it, MemAvailable notwithstanding)."""
-    try:
-        with open("/sys/fs/cgroup/memory.max", encoding="ascii") as handle:
-            limit = handle.read().strip()
-        if limit == "max":
-            return None
-        with open("/sys/fs/cgroup/memory.current", encoding="ascii") as handle:
-            return int(limit) - int(handle.read().strip())
-    except (OSError, ValueError):
-        return None
-
-
-def _address_space() -> int | None:
-    """What the soft RLIMIT_AS leaves of this process's address space (Linux's VmSize used)."""
-    try:
-        import resource
-
-        limit = resource.getrlimit(resource.RLIMIT_AS)[0]
-    except (ImportError, OSError, ValueError):  # no resource module on Windows
-        return None
-    if limit == resource.RLIM_INFINITY:
-        return None
-    try:
-        with open("/proc/self/status", encoding="ascii") as handle:
-            used = next((int(line.split()[1]) * 1024 for line in handle if line.startswith("VmSize:")), 0)
-    except (OSError, ValueError, IndexError):
-        used = 0
-    return limit - used
 
 
 def simulate(
