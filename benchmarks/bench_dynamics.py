@@ -2,17 +2,23 @@
 
     .venv/bin/python benchmarks/bench_dynamics.py      # or: make bench
 
-Four parts, all in this one process except the last:
+Six parts, the first four in this one process, the last two in fresh interpreters:
 
 1. one state per call: armdyn against pin.rnea / crba / computeGeneralizedGravity /
    computeCoriolisMatrix / aba, and against the Toolbox's rne / inertia / gravload / coriolis / accel;
 2. a batch of 100,000 states: armdyn's (B, n) calls against pin.rneaInParallel / abaInParallel
    and against a Python loop over the one-state Pinocchio call;
 3. the PUMA 560's Coriolis matrix, one state and a 50-state trajectory, armdyn against the Toolbox;
-4. start-up: wall time of a fresh interpreter that imports armdyn and makes a first call.
+4. kinematics, one state per call: armdyn's tool_pose / jacobian / jacobian_dot / link_transforms against
+   the sequences of Pinocchio calls that give the same (forwardKinematics, computeJointJacobians, ...);
+5. thread spin: a single-threaded loop of one-state calls right after a two-thread batch call against the
+   same loop after a rest, under armdyn's OpenMP wait policy and under OMP_WAIT_POLICY=ACTIVE;
+6. start-up: import + load the UR5's URDF + first inverse dynamics in a fresh interpreter, armdyn with
+   its kernel cache filled and empty, against Pinocchio's import + buildModelFromUrdf + first rnea.
 
 Before anything is timed, armdyn's result is checked against the peer's on the same inputs
-(relative to the largest entry, 1e-8), so a ratio never compares two different computations.
+(relative to the largest entry, 1e-8; the kinematics to 1e-12), so a ratio never compares two
+different computations.
 Times are medians over repeats; the candidates' repeats are interleaved so that machine noise
 hits all of them alike (the timing, checking and tables are benchmarks/harness.py's). Prints plain
 tables and writes the same as Markdown to results.md; --quick is a smoke run of every part with
@@ -21,21 +27,44 @@ few repeats and small batches, in well under a minute once Numba's cache is fill
 
 from __future__ import annotations
 
+import os
+import statistics
 import subprocess
 import sys
 import sysconfig
+import tempfile
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+# armdyn first: it sets OMP_WAIT_POLICY=PASSIVE (unless set) for the OpenMP runtime, which reads it once, when
+# it loads; pinocchio loads that same runtime (libgomp) on import, so imported first it would start the runtime
+# under its default policy (idle threads spin a few milliseconds) and this process would not run as armdyn's.
+import armdyn as ad
+
+# isort: split
 import numba
 import numpy as np
 import pinocchio as pin
-from harness import MILLISECOND, Candidate, Report, Table, arguments, check, describe, measure, ratio, us, wall
-
-import armdyn as ad
+from harness import (
+    EVENT,
+    Candidate,
+    Report,
+    Table,
+    arguments,
+    check,
+    describe,
+    fresh_python,
+    measure,
+    ms,
+    ratio,
+    relative_error,
+    seconds,
+    us,
+    wall,
+)
 
 try:
     import roboticstoolbox as rtb
@@ -54,7 +83,13 @@ LOOP_STATES = 10_000  # a Python loop over the one-state Pinocchio call covers t
 CHECK_STATES = 200  # batch results checked state by state against the one-state peer call
 TRAJECTORY = 50  # states of the PUMA 560 Coriolis trajectory
 THREADS = 2  # Pinocchio's *InParallel threads
+KINEMATICS_TOLERANCE = 1e-12  # kinematics: armdyn and Pinocchio agree to rounding
+KINEMATICS_CHECKS = 20  # kinematics: random states checked before timing (the first is the one timed)
+SPIN_CALLS, SPIN_ROUNDS = 2000, 30  # thread spin: one-state calls per timed loop, rounds (medians over them)
+SPIN_BATCH, SPIN_REST = 1000, 0.05  # thread spin: states of the batch call before each loop; seconds of rest
+SPIN_LIMIT = 300.0  # seconds a thread-spin interpreter may take
 STARTUP_RUNS = 3  # fresh interpreters per start-up script
+STARTUP_LIMIT = 600.0  # seconds a start-up interpreter may take (an empty kernel cache: compiling)
 TOLERANCE = 1e-8
 SEED = 20240611
 RESULTS = Path(__file__).with_name("results.md")
@@ -68,6 +103,8 @@ QUICK = {  # --quick: the same parts, small
     "BATCH_REPEATS": 2,
     "LOOP_STATES": 200,
     "CHECK_STATES": 20,
+    "KINEMATICS_CHECKS": 5,
+    "SPIN_ROUNDS": 5,
     "STARTUP_RUNS": 1,
 }
 
@@ -139,6 +176,10 @@ class PinocchioArm:
     def columns(self, y: np.ndarray) -> np.ndarray:
         """A Pinocchio (nv, B) batch result as armdyn's (B, n)."""
         return np.asarray(y)[self.iv].T
+
+    def jacobian(self, j: np.ndarray) -> np.ndarray:
+        """A Pinocchio (6, nv) Jacobian with its columns in armdyn's joint order."""
+        return np.asarray(j)[:, self.iv]
 
 
 def pinocchio_calls(p: PinocchioArm, args: dict[str, tuple]) -> dict[str, tuple[str, Callable, Callable]]:
@@ -285,39 +326,342 @@ def puma_coriolis(arm: ad.Robot, puma: object, rng: np.random.Generator) -> list
     return rows
 
 
-# ----- 4. start-up ------------------------------------------------------------------------------
-PRELUDE = "import armdyn, numpy as np; a = armdyn.models.puma560(); z = np.zeros(6)"
-STARTUP = {
-    "python -c pass": "pass",
-    "import armdyn, numpy; puma560()": PRELUDE,
-    "... + first inverse_dynamics(z, z, z)": PRELUDE + "; a.inverse_dynamics(z, z, z)",
-    "... + first inertia_matrix(z)": PRELUDE + "; a.inertia_matrix(z)",
-    "... + first gravity_vector(z)": PRELUDE + "; a.gravity_vector(z)",
-    "... + first coriolis_matrix(z, z)": PRELUDE + "; a.coriolis_matrix(z, z)",
-    "... + first forward_dynamics(z, z, z)": PRELUDE + "; a.forward_dynamics(z, z, z)",
+# ----- 4. kinematics ---------------------------------------------------------------------------
+KINEMATICS = {  # armdyn call -> (method, its state arguments, its keyword arguments)
+    "tool_pose(q)": ("tool_pose", ("q",), {}),
+    'jacobian(q, "base")': ("jacobian", ("q",), {"frame": "base"}),
+    'jacobian(q, "tool")': ("jacobian", ("q",), {"frame": "tool"}),
+    'jacobian_dot(q, qd, "base")': ("jacobian_dot", ("q", "qd"), {"frame": "base"}),
+    'jacobian_dot(q, qd, "tool")': ("jacobian_dot", ("q", "qd"), {"frame": "tool"}),
+    "link_transforms(q)": ("link_transforms", ("q",), {}),
+}
+# armdyn's frames: "base" is world axes at the target's origin, "tool" the target's own axes
+REFERENCES = {"base": (pin.LOCAL_WORLD_ALIGNED, "LWA"), "tool": (pin.LOCAL, "LOCAL")}
+
+
+def tool_frame(p: PinocchioArm, rng: np.random.Generator) -> int:
+    """The id of Pinocchio's frame placed where armdyn's tool is, at a random state (of the frames there, the
+    last body frame: a joint's frame and its child link's coincide)."""
+    x = rng.uniform(-1.0, 1.0, p.arm.n)
+    pin.framesForwardKinematics(p.model, p.data, p.q(x))
+    pose = p.arm.tool_pose(x)
+    matches = [
+        i for i in range(len(p.model.frames)) if relative_error(pose, p.data.oMf[i].homogeneous) <= KINEMATICS_TOLERANCE
+    ]
+    if not matches:
+        raise AssertionError("no Pinocchio frame is placed where armdyn's tool is")
+    bodies = [i for i in matches if p.model.frames[i].type == pin.FrameType.BODY]
+    return (bodies or matches)[-1]
+
+
+def _frame_pose(m: pin.Model, d: pin.Data, frame: int, q: np.ndarray) -> pin.SE3:
+    pin.forwardKinematics(m, d, q)
+    pin.updateFramePlacements(m, d)
+    return d.oMf[frame]
+
+
+def _one_frame_pose(m: pin.Model, d: pin.Data, frame: int, q: np.ndarray) -> pin.SE3:
+    pin.forwardKinematics(m, d, q)
+    return pin.updateFramePlacement(m, d, frame)
+
+
+def _joint_poses(m: pin.Model, d: pin.Data, joints: Sequence[int], q: np.ndarray) -> list:
+    pin.forwardKinematics(m, d, q)
+    return [d.oMi[j] for j in joints]
+
+
+def _frame_jacobian(m: pin.Model, d: pin.Data, frame: int, ref: object, q: np.ndarray) -> np.ndarray:
+    pin.computeJointJacobians(m, d, q)
+    pin.updateFramePlacements(m, d)
+    return pin.getFrameJacobian(m, d, frame, ref)
+
+
+def _frame_jacobian_only(m: pin.Model, d: pin.Data, frame: int, ref: object, q: np.ndarray) -> np.ndarray:
+    pin.computeJointJacobians(m, d, q)
+    return pin.getFrameJacobian(m, d, frame, ref)
+
+
+def _frame_jacobian_dot(m: pin.Model, d: pin.Data, frame: int, ref: object, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    pin.computeJointJacobiansTimeVariation(m, d, q, v)
+    pin.updateFramePlacements(m, d)
+    return pin.getFrameJacobianTimeVariation(m, d, frame, ref)
+
+
+def _homogeneous(pose: pin.SE3) -> np.ndarray:
+    return pose.homogeneous
+
+
+def _homogeneous_all(poses: Sequence[pin.SE3]) -> np.ndarray:
+    return np.array([pose.homogeneous for pose in poses])
+
+
+def pinocchio_kinematics(p: PinocchioArm, frame: int, state: dict) -> dict[str, list[tuple[str, Callable, Callable]]]:
+    """Per armdyn call (a key of KINEMATICS): Pinocchio's routes to the same result, each (label, zero-argument
+    call of every Pinocchio function a user calls for it, converter of its result to armdyn's form)."""
+    m, d = p.model, p.data
+    q, v = p.q(state["q"]), p.v(state["qd"])
+    joints = [m.getJointId(name) for name in p.arm.joint_names]  # a URDF link's frame is its parent joint's
+    routes = {
+        "tool_pose(q)": [
+            ("forwardKinematics + updateFramePlacements + oMf[f]", partial(_frame_pose, m, d, frame, q), _homogeneous),
+            ("forwardKinematics + updateFramePlacement(f)", partial(_one_frame_pose, m, d, frame, q), _homogeneous),
+        ],
+        "link_transforms(q)": [
+            ("forwardKinematics + oMi[j] of each link", partial(_joint_poses, m, d, joints, q), _homogeneous_all),
+        ],
+    }
+    for axes, (ref, short) in REFERENCES.items():
+        routes[f'jacobian(q, "{axes}")'] = [
+            (
+                f"computeJointJacobians + updateFramePlacements + getFrameJacobian(f, {short})",
+                partial(_frame_jacobian, m, d, frame, ref, q),
+                p.jacobian,
+            ),
+            (
+                f"computeJointJacobians + getFrameJacobian(f, {short})",
+                partial(_frame_jacobian_only, m, d, frame, ref, q),
+                p.jacobian,
+            ),
+            (
+                f"computeFrameJacobian(q, f, {short})",
+                partial(pin.computeFrameJacobian, m, d, q, frame, ref),
+                p.jacobian,
+            ),
+        ]
+        routes[f'jacobian_dot(q, qd, "{axes}")'] = [
+            (
+                "computeJointJacobiansTimeVariation + updateFramePlacements + "
+                f"getFrameJacobianTimeVariation(f, {short})",
+                partial(_frame_jacobian_dot, m, d, frame, ref, q, v),
+                p.jacobian,
+            ),
+        ]
+    return routes
+
+
+def kinematics(robot: str, p: PinocchioArm, frame: int, rng: np.random.Generator) -> list:
+    """Rows: armdyn (plain and with out=) against each Pinocchio route, checked first on KINEMATICS_CHECKS
+    random states; the ratio is against the fastest route, the others' in parentheses."""
+    arm = p.arm
+    states = [random_state(rng, arm.n) for _ in range(KINEMATICS_CHECKS)]
+    for state in states:
+        routes = pinocchio_kinematics(p, frame, state)
+        for call, (name, names, options) in KINEMATICS.items():
+            ours = getattr(arm, name)(*(state[n] for n in names), **options)
+            for label, peer, convert in routes[call]:
+                check(f"{robot} {call}: armdyn vs {label}", ours, convert(peer()), KINEMATICS_TOLERANCE)
+    state, rows = states[0], []
+    routes = pinocchio_kinematics(p, frame, state)
+    for call, (name, names, options) in KINEMATICS.items():
+        method, args = getattr(arm, name), [state[n] for n in names]
+        ours = method(*args, **options)
+        out = np.empty_like(ours)
+        check(f"{robot} {call}: armdyn out= vs armdyn", method(*args, out=out, **options), ours, 0.0)
+        plain, with_out, *theirs = measure(
+            Candidate(partial(method, *args, **options), CALLS, REPEATS),
+            Candidate(partial(method, *args, out=out, **options), CALLS, REPEATS),
+            *(Candidate(peer, CALLS, REPEATS) for _, peer, _ in routes[call]),
+        )
+        for i, ((label, _, _), time) in enumerate(zip(routes[call], theirs, strict=True)):
+            speed = ratio(plain / time)
+            first = i == 0
+            rows.append(
+                [
+                    robot if first else "",
+                    call if first else "",
+                    label,
+                    us(plain) if first else "",
+                    us(with_out) if first else "",
+                    us(time),
+                    speed if time == min(theirs) else f"({speed})",
+                ]
+            )
+    return rows
+
+
+# ----- 5. thread spin ---------------------------------------------------------------------------
+# A fresh interpreter (the OpenMP runtime reads OMP_WAIT_POLICY once, when it loads): a single-threaded loop of
+# one-state inverse dynamics right after a batch call on THREADS threads, against the same loop after the same
+# batch call and a rest; also the process's CPU time during the rest (threads spinning while nothing runs).
+SPIN_SCRIPT = """
+import gc, json, os, statistics, time
+{first}
+import numba
+import numpy as np
+import armdyn
+
+arm = armdyn.load_urdf({urdf!r})
+armdyn.set_threads(min({threads}, numba.config.NUMBA_NUM_THREADS))
+rng = np.random.default_rng(0)
+Q = rng.uniform(-1.0, 1.0, ({batch}, arm.n))
+q, qd, qdd = rng.uniform(-1.0, 1.0, (3, arm.n))
+
+
+def loop():
+    start = time.perf_counter_ns()
+    for _ in range({calls}):
+        arm.inverse_dynamics(q, qd, qdd)
+    return (time.perf_counter_ns() - start) / 1e9
+
+
+arm.inverse_dynamics(Q, Q, Q)
+loop()
+after_batch, after_rest, cpu = [], [], []
+gc.disable()
+for _ in range({rounds}):
+    arm.inverse_dynamics(Q, Q, Q)
+    after_batch.append(loop())
+    arm.inverse_dynamics(Q, Q, Q)
+    start = time.process_time()
+    time.sleep({rest})
+    cpu.append(time.process_time() - start)
+    after_rest.append(loop())
+values = {{
+    "after_batch": statistics.median(after_batch),
+    "after_rest": statistics.median(after_rest),
+    "cpu": statistics.median(cpu),
+    "layer": numba.threading_layer(),
+    "threads": armdyn.threads(),
+    "policy": os.environ.get("OMP_WAIT_POLICY", "unset"),
+}}
+print({event!r} + json.dumps(values))
+"""
+SPIN_SETTINGS = {  # label -> (OMP_WAIT_POLICY in the interpreter's environment or None for unset, first import)
+    "OMP_WAIT_POLICY unset: armdyn's default (it sets PASSIVE)": (None, ""),
+    "OMP_WAIT_POLICY=ACTIVE": ("ACTIVE", ""),
+    "unset, but pinocchio imported before armdyn": (None, "import pinocchio"),
 }
 
 
+def thread_spin(notes: list[str]) -> list:
+    rows = []
+    code = partial(
+        SPIN_SCRIPT.format,
+        urdf=str(URDFS["UR5"]),
+        threads=THREADS,
+        batch=SPIN_BATCH,
+        calls=SPIN_CALLS,
+        rounds=SPIN_ROUNDS,
+        rest=SPIN_REST,
+        event=EVENT,
+    )
+    for label, (policy, first) in SPIN_SETTINGS.items():
+        env = {name: value for name, value in os.environ.items() if name != "OMP_WAIT_POLICY"}
+        if policy is not None:
+            env["OMP_WAIT_POLICY"] = policy
+        try:
+            values = fresh_python(code(first=first), env, SPIN_LIMIT)[1]
+        except (RuntimeError, subprocess.TimeoutExpired) as error:
+            rows.append([label, f"failed: {error}"[:200], "", "", "", ""])
+            continue
+        batch, rest = values["after_batch"], values["after_rest"]
+        rows.append([label, values["policy"], ms(batch), ms(rest), ratio(batch / rest), ms(values["cpu"])])
+        note = f"Numba's threading layer: {values['layer']}, batch calls on {values['threads']} threads."
+        if note not in notes:
+            notes.append(note)
+    return rows
+
+
+# ----- 6. start-up ------------------------------------------------------------------------------
+# Each script times its own steps; EVENT marks the line with their seconds.
+ARMDYN_STARTUP = """
+import time
+start = time.perf_counter()
+import armdyn
+imported = time.perf_counter()
+arm = armdyn.load_urdf({urdf!r})
+loaded = time.perf_counter()
+import numpy as np
+z = np.zeros(arm.n)
+arm.inverse_dynamics(z, z, z)
+called = time.perf_counter()
+import json
+print({event!r} + json.dumps({{"import": imported - start, "load": loaded - imported, "call": called - loaded}}))
+"""
+PINOCCHIO_STARTUP = """
+import time
+start = time.perf_counter()
+import pinocchio
+imported = time.perf_counter()
+model = pinocchio.buildModelFromUrdf({urdf!r})
+data = model.createData()
+loaded = time.perf_counter()
+import numpy as np
+z = np.zeros(model.nq)
+pinocchio.rnea(model, data, z, z, z)
+called = time.perf_counter()
+import json
+print({event!r} + json.dumps({{"import": imported - start, "load": loaded - imported, "call": called - loaded}}))
+"""
+PINOCCHIO = "Pinocchio: import pinocchio, buildModelFromUrdf + createData, first rnea"
+STARTUP = {  # label -> (script, with an empty kernel cache)
+    "python -c pass": ("pass", False),
+    PINOCCHIO: (PINOCCHIO_STARTUP, False),
+    "armdyn, kernel cache filled: import armdyn, load_urdf, first inverse_dynamics": (ARMDYN_STARTUP, False),
+    "armdyn, empty kernel cache (a fresh NUMBA_CACHE_DIR): the same": (ARMDYN_STARTUP, True),
+}
+
+
+def _start(code: str, cold: bool) -> tuple[float, dict]:
+    """fresh_python(code), with NUMBA_CACHE_DIR a fresh empty folder when ``cold``."""
+    if not cold:
+        return fresh_python(code, timeout=STARTUP_LIMIT)
+    with tempfile.TemporaryDirectory(prefix="armdyn-cold-") as folder:
+        return fresh_python(code, {**os.environ, "NUMBA_CACHE_DIR": folder}, STARTUP_LIMIT)
+
+
 def startup() -> list:
-    """Median wall time of fresh interpreters, each script's first (untimed) run filling Numba's cache."""
-    scripts = [partial(subprocess.run, [sys.executable, "-c", code], check=True) for code in STARTUP.values()]
-    times = measure(*(Candidate(script, repeats=STARTUP_RUNS) for script in scripts), unit=MILLISECOND)
-    medians = dict(zip(STARTUP, times, strict=True))
-    base = medians["import armdyn, numpy; puma560()"]
-    return [
-        [label, f"{ms:,.0f}", f"{ms - base:+,.0f}" if label.startswith("...") else "-"] for label, ms in medians.items()
-    ]
+    """Median seconds of STARTUP_RUNS fresh interpreters per script, their runs interleaved, after one untimed
+    run of each script with a filled cache (filling it, and the OS's file cache)."""
+    urdf = str(URDFS["UR5"])
+    scripts = {label: (code.format(urdf=urdf, event=EVENT), cold) for label, (code, cold) in STARTUP.items()}
+    results: dict[str, list[tuple[float, dict]]] = {label: [] for label in scripts}
+    failed: dict[str, str] = {}
+    for run in range(-1, STARTUP_RUNS):  # run -1: untimed
+        for label, (code, cold) in scripts.items():
+            if label in failed or (run < 0 and cold):
+                continue
+            try:
+                result = _start(code, cold)
+            except (RuntimeError, subprocess.TimeoutExpired) as error:
+                failed[label] = f"failed: {error}"[:200]
+                continue
+            if run >= 0:
+                results[label].append(result)
+    medians: dict[str, dict[str, float]] = {}  # label -> {"wall": s, and the script's own steps: s}
+    for label, runs in results.items():
+        if label not in failed:
+            medians[label] = {"wall": statistics.median(wall_time for wall_time, _ in runs)}
+            for step in ("import", "load", "call"):
+                if all(step in values for _, values in runs):
+                    medians[label][step] = statistics.median(values[step] for _, values in runs)
+    reference = medians.get(PINOCCHIO, {}).get("wall")
+    rows = []
+    for label in scripts:
+        if label in failed:
+            rows.append([label, failed[label], "", "", "", "", ""])
+            continue
+        times = medians[label]
+        steps = [times[step] for step in ("import", "load", "call") if step in times]
+        split = [ms(step) for step in steps] if len(steps) == 3 else ["-"] * 3
+        outside = ms(times["wall"] - sum(steps)) if len(steps) == 3 else "-"
+        versus = ratio(times["wall"] / reference) if reference and label.startswith("armdyn") else "-"
+        rows.append([label, seconds(times["wall"]), *split, outside, versus])
+    return rows
 
 
 # ----- the run ----------------------------------------------------------------------------------
 
 
 def warm_up(arms: Sequence[ad.Robot]) -> None:
-    """Every function's first call, one state and a batch (Numba compiles or loads its cache)."""
+    """Every function's first call, one state and a batch, and the kinematics' with one state (Numba compiles
+    or loads its cache)."""
     for arm in arms:
         for function in FUNCTIONS:
             for shape in ((arm.n,), (2, arm.n)):
                 getattr(arm, function)(*[np.zeros(shape)] * len(ARGUMENTS[function]))
+        for name, names, options in KINEMATICS.values():
+            getattr(arm, name)(*[np.zeros(arm.n)] * len(names), **options)
 
 
 def header(source: tuple[str, str]) -> list[str]:
@@ -328,11 +672,13 @@ def header(source: tuple[str, str]) -> list[str]:
         "pinocchio": pin.__version__,
         "roboticstoolbox": toolbox,
     }
-    return describe(source, versions, f", Pinocchio *InParallel threads {THREADS}") + [
+    policy = os.environ.get("OMP_WAIT_POLICY", "unset")
+    return describe(source, versions, f", Pinocchio *InParallel threads {THREADS}, OMP_WAIT_POLICY {policy}") + [
         f"Every time is a median: one state {CALLS} calls x {REPEATS} repeats (Toolbox {TOOLBOX_CALLS} x "
         f"{TOOLBOX_REPEATS}, its coriolis {TOOLBOX_CORIOLIS_CALLS} x {TOOLBOX_REPEATS}), batch {BATCH_REPEATS} "
         "repeats; the candidates' repeats are interleaved. armdyn and the peer are checked to agree "
-        f"(to {TOLERANCE:g} relative) on the same inputs before timing.",
+        f"(to {TOLERANCE:g} relative, the kinematics to {KINEMATICS_TOLERANCE:g} on {KINEMATICS_CHECKS} states) "
+        "on the same inputs before timing.",
     ]
 
 
@@ -347,9 +693,9 @@ def main() -> None:
     toolbox = rtb.models.DH.Puma560() if rtb else None
     if toolbox is None:
         print(f"NOTE: the Robotics Toolbox is not available ({TOOLBOX_MISSING}); its columns are skipped.")
-    seconds = wall(partial(warm_up, [p.arm for p in pinned.values()] + [puma]))[1]
+    elapsed = wall(partial(warm_up, [p.arm for p in pinned.values()] + [puma]))[1]
     report.note(
-        f"armdyn's first calls in this process (compile or load machine code, untimed): {seconds:.1f} s", end="\n\n"
+        f"armdyn's first calls in this process (compile or load machine code, untimed): {elapsed:.1f} s", end="\n\n"
     )
 
     single = Table(
@@ -405,19 +751,68 @@ def main() -> None:
         coriolis.rows = puma_coriolis(puma, toolbox, rng)
         report.show(coriolis)
 
+    frames = {name: tool_frame(p, rng) for name, p in pinned.items()}
+    motion = Table(
+        "4. Kinematics, one state per call (microseconds per call)",
+        ["robot", "armdyn", "Pinocchio route", "armdyn", "armdyn out=", "Pinocchio", "armdyn/Pinocchio"],
+        notes=[
+            "armdyn/Pinocchio < 1: armdyn is faster. The ratio is armdyn's plain call against the fastest "
+            "Pinocchio route; in parentheses, against the slower routes. Each route is every call a user makes: "
+            "pin.<function>(model, data, ...) in turn, and reading data.oMf / data.oMi (SE3 objects, views of "
+            "Pinocchio's Data, where armdyn returns 4x4 arrays).",
+            "f: Pinocchio's frame placed where armdyn's tool is (found by comparing the poses at a random state): "
+            + ", ".join(f"{name} '{pinned[name].model.frames[f].name}'" for name, f in frames.items())
+            + ". armdyn's tool is the last link of the chain it loads; the Panda loads with its two finger joints "
+            "(9 joints, as in parts 1 and 2), so its tool is the right finger.",
+            'LWA: pin.LOCAL_WORLD_ALIGNED, the axes of armdyn\'s "base"; LOCAL: the frame\'s own, armdyn\'s "tool". '
+            "Pinocchio's Jacobian columns are put in armdyn's joint order before the checks.",
+            "Pinocchio 4's getFrameJacobian needs only computeJointJacobians (its docstring); "
+            "getFrameJacobianTimeVariation's asks for updateFramePlacements as well.",
+            "link_transforms: a URDF link's frame is its parent joint's, data.oMi of that joint.",
+        ],
+        left=3,
+    )
+    for name, p in pinned.items():
+        motion.rows += kinematics(name, p, frames[name], rng)
+    report.show(motion)
+
+    spin = Table(
+        f"5. Thread spin: a one-state loop right after a batch call (UR5, {SPIN_CALLS:,} inverse_dynamics calls)",
+        ["setting", "policy", "loop after batch ms", "loop after rest ms", "after batch/after rest", "CPU in rest ms"],
+        notes=[
+            f"A fresh interpreter per setting (the OpenMP runtime reads OMP_WAIT_POLICY once, when it loads). Each of "
+            f"{SPIN_ROUNDS} rounds: a batch inverse_dynamics call ({SPIN_BATCH:,} states, {THREADS} threads) then the "
+            f"timed loop; the same batch call, {SPIN_REST * 1e3:.0f} ms of rest, the timed loop. Medians over the "
+            "rounds. 'CPU in rest': the process's CPU time during the rest, the idle batch threads spinning.",
+            "after batch/after rest near 1: the batch threads leave the cores to the single-threaded work that "
+            "follows. 'policy' is the environment variable as the interpreter saw it after importing armdyn; with "
+            "pinocchio imported first, the runtime had already started without it.",
+        ],
+        left=2,
+    )
+    spin.rows = thread_spin(spin.notes)
+    report.show(spin)
+
     report.show(
         Table(
-            f"4. Start-up: a fresh interpreter (median wall milliseconds of {STARTUP_RUNS} runs, cache filled)",
-            ["script", "ms", "first call, ms"],
+            f"6. Start-up: a fresh interpreter (medians of {STARTUP_RUNS} run{'s' if STARTUP_RUNS > 1 else ''})",
+            ["script (UR5)", "wall s", "import ms", "load ms", "first call ms", "start + exit ms", "wall/Pinocchio's"],
             startup(),
             notes=[
-                f"python -c with {sys.executable}; 'first call' is the time over importing armdyn and numpy "
-                "and building the PUMA 560. Each script runs once untimed first (filling Numba's cache)."
+                f"{sys.executable} -c script. 'wall s': the interpreter's whole run, from start to exit; import, "
+                "load and first call: each script's own steps, timed inside it; 'start + exit': the rest of the wall "
+                "time (the interpreter's start, and its exit with the libraries' clean-up).",
+                "Each script with a filled kernel cache runs once untimed first (filling armdyn's kernel cache, and "
+                "the OS's file cache). The empty-cache runs compile armdyn's kernels (and write them to that folder), "
+                "as the first run after installing armdyn or changing its source does.",
             ],
-            left=3,
+            left=1,
         )
     )
-    report.finish("parts 1-3 timed the version imported at the start, part 4 may have timed another (and compiled it).")
+    report.finish(
+        "parts 1-4 timed the version imported at the start; parts 5 and 6 ran fresh interpreters, which may have "
+        "imported another (and compiled it)."
+    )
 
 
 if __name__ == "__main__":

@@ -9,7 +9,9 @@
 - Reporting: ``Table`` formats as plain text and as Markdown; ``describe`` says which machine, versions and
   armdyn source ran; ``Report`` prints the header lines and tables as they come and writes them as Markdown.
 - Workers: ``run_worker`` runs a step-by-step job in a subprocess (the script itself, dispatched by ``parse``),
-  each step with a time limit; the worker reports its steps with ``emit`` and ``timed_step``.
+  each step with a time limit; the worker reports its steps with ``emit`` and ``timed_step``. ``fresh_python``
+  runs a short script in a fresh interpreter (its own environment, nothing imported first) and returns its
+  wall time and what it reported on an ``EVENT`` line.
 
 The scripts import this file by name (``from harness import ...``): Python puts the script's folder first
 on sys.path.
@@ -28,10 +30,11 @@ import platform
 import queue
 import statistics
 import subprocess
+import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -402,3 +405,26 @@ def run_worker(command: Sequence[str], phases: Sequence[tuple[str, float]]) -> d
                 process.kill()
             process.wait()
     return results
+
+
+def fresh_python(code: str, env: Mapping[str, str] | None = None, timeout: float | None = None) -> tuple[float, dict]:
+    """Run ``python -c code`` in a fresh interpreter (this one's executable) with the environment ``env``
+    (None: this process's). Returns its wall seconds, from start to exit, and the JSON object of the last line
+    it printed that starts with EVENT ({} if none).
+
+    Raises RuntimeError, with the end of its stderr, when it exits with an error, and
+    subprocess.TimeoutExpired (after stopping it) when it runs past ``timeout`` seconds."""
+    start = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        env=None if env is None else dict(env),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+    elapsed = time.perf_counter() - start
+    if done.returncode:
+        tail = " ".join(done.stderr.strip().splitlines()[-3:])[-300:]
+        raise RuntimeError(f"exited with code {done.returncode}: {tail}")
+    events = [line[len(EVENT) :] for line in done.stdout.splitlines() if line.startswith(EVENT)]
+    return elapsed, json.loads(events[-1]) if events else {}
