@@ -499,6 +499,16 @@ def inertia_matrix_dot(arm: Robot, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
 
 # ----- kinematics, compiled (armdyn.kinematics holds the NumPy reference) -----------------------
 _FRAMES = {"base": frames.WORLD, "tool": frames.LOCAL}
+# the fast path's link and frame go unchecked to the kernel: a link that is not an int fails the
+# signature (TypeError), a frame not in _FRAMES fails the lookup (KeyError; TypeError unhashable)
+_NOT_ONE_STATE_OR_OPTION = (*_NOT_ONE_STATE, KeyError)
+
+
+def _fast_target(arm: Robot, link: object) -> object:
+    """frames.TOOL for None, a plain non-negative int as it is (the kernel refuses it out of range),
+    anything else out of range, so that the general path checks it (Numba would convert a bool or
+    a float to the kernel's int, and no link index may mean the tool)."""
+    return frames.TOOL if link is None else link if type(link) is int and link >= 0 else arm.n
 
 
 def _target(arm: Robot, link: object) -> int:
@@ -610,12 +620,12 @@ def jacobian(
         "base" or "tool", or ``link`` is not None or an integer index of a link.
     """
     result = _empty((6, arm.n)) if out is None else out
-    target, axes = _target(arm, link), _frame(frame)
-    try:
-        if frames.jacobian_one(arm.packed, q, target, axes, result) == 0:
+    try:  # a link that is not an int, or a frame not in _FRAMES, falls through to the checks below
+        if frames.jacobian_one(arm.packed, q, _fast_target(arm, link), _FRAMES[frame], result) == 0:
             return result
-    except _NOT_ONE_STATE:
+    except _NOT_ONE_STATE_OR_OPTION:
         pass
+    target, axes = _target(arm, link), _frame(frame)
     kernel = _with_target(frames.jacobian_batch, target, axes)
     return _batch(arm, kernel, ("q",), (q,), out, (6, arm.n))
 
@@ -659,12 +669,12 @@ def jacobian_dot(
         As for ``jacobian``, and when qd is invalid.
     """
     result = _empty((6, arm.n)) if out is None else out
-    target, axes = _target(arm, link), _frame(frame)
     try:
-        if frames.jacobian_dot_one(arm.packed, q, qd, target, axes, result) == 0:
+        if frames.jacobian_dot_one(arm.packed, q, qd, _fast_target(arm, link), _FRAMES[frame], result) == 0:
             return result
-    except _NOT_ONE_STATE:
+    except _NOT_ONE_STATE_OR_OPTION:
         pass
+    target, axes = _target(arm, link), _frame(frame)
     kernel = _with_target(frames.jacobian_dot_batch, target, axes)
     return _batch(arm, kernel, ("q", "qd"), (q, qd), out, (6, arm.n))
 
