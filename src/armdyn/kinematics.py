@@ -19,7 +19,22 @@ FRAMES = ("base", "tool")
 
 def check_arm(robot: object, numeric: bool = True, hint: str = "") -> None:
     """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot), with numbers
-    for parameters when ``numeric``; ``hint`` is added to the symbolic case's message."""
+    for parameters when ``numeric``.
+
+    Parameters
+    ----------
+    robot : object
+        What the caller was given as the arm.
+    numeric : bool, optional
+        Whether the arm's parameters must be numbers (default True): symbolic ones are refused.
+    hint : str, optional
+        Added to the message for a symbolic arm (where to go instead).
+
+    Raises
+    ------
+    TypeError
+        When ``robot`` is not an ArmModel, or is symbolic where numbers are needed.
+    """
     if not isinstance(robot, ArmModel):
         raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
     if numeric and robot.is_symbolic:
@@ -40,7 +55,25 @@ def _numbers(value: object, name: str) -> np.ndarray:
 
 
 def link_index(robot: ArmModel, link: object) -> int:
-    """The tool link for None, else ``link`` checked as an integer index of a link of the arm."""
+    """The tool link for None, else ``link`` checked as an integer index of a link of the arm.
+
+    Parameters
+    ----------
+    robot : ArmModel
+        The arm.
+    link : int or None
+        A link index (an int or NumPy integer, not a bool or a float), or None for the tool link.
+
+    Returns
+    -------
+    int
+        The link's index.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``link`` is not an integer or is out of range.
+    """
     if link is None:
         return robot.tool_link
     if isinstance(link, (bool, np.bool_)) or not isinstance(link, (int, np.integer)):
@@ -53,7 +86,18 @@ def link_index(robot: ArmModel, link: object) -> int:
 
 
 def check_frame(frame: object) -> None:
-    """A ModelError unless ``frame`` is "base" or "tool"."""
+    """A ModelError unless ``frame`` is "base" or "tool".
+
+    Parameters
+    ----------
+    frame : object
+        The frame argument given.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``frame`` is not the string "base" or "tool".
+    """
     if not (isinstance(frame, str) and frame in FRAMES):
         raise ModelError(f"frame must be 'base' or 'tool', got {frame!r}")
 
