@@ -500,8 +500,8 @@ def inertia_matrix_dot(arm: Robot, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
 # ----- kinematics, compiled (armdyn.kinematics holds the NumPy reference) -----------------------
 _FRAMES = {"base": frames.WORLD, "tool": frames.LOCAL}
 # the fast path's link and frame go unchecked to the kernel: a link that is not an int fails the
-# signature (TypeError), a frame not in _FRAMES fails the lookup (KeyError; TypeError unhashable)
-_NOT_ONE_STATE_OR_OPTION = (*_NOT_ONE_STATE, KeyError)
+# signature (TypeError; OverflowError beyond int64), a frame not in _FRAMES fails the lookup (KeyError)
+_NOT_ONE_STATE_OR_OPTION = (*_NOT_ONE_STATE, KeyError, OverflowError)
 
 
 def _fast_target(arm: Robot, link: object) -> object:
