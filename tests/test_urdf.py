@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -1002,3 +1004,145 @@ def test_reduced_errors_name_the_joint_and_the_rule() -> None:
     assert symbolic.reduced({"theta1": 0.3}).n == 1  # SymPy parameters pass into the placements
     with pytest.raises(ModelError, match=r"moves the tool onto link 'theta1' through symbolic \(SymPy\) parameters"):
         symbolic.reduced({"theta2": 0.3})
+
+
+# ----- 5. the file is read with lxml alone: no mesh or scene-graph library, the URDF specification's defaults -------
+def test_loading_a_urdf_imports_no_mesh_library() -> None:
+    """load_urdf reads the XML itself: yourdfpy (and trimesh, which it imports, 0.75 s of start-up) stay out."""
+    code = (
+        "import sys, armdyn; armdyn.load_urdf(sys.argv[1]); "
+        "print(sorted(name for name in ('yourdfpy', 'trimesh') if name in sys.modules))"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code, str(URDFS["ur5"])], capture_output=True, text=True, timeout=600, check=False
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip().splitlines()[-1] == "[]", run.stdout
+
+
+@pytest.mark.parametrize("axis", ["", "<axis/>"], ids=["no-axis-element", "axis-without-xyz"])
+@pytest.mark.parametrize("kind", ["revolute", "continuous", "prismatic"])
+def test_omitted_axis_is_x_as_the_specification_says(tmp_path: Path, kind: str, axis: str) -> None:
+    joint = _joint("j", "a", "b", kind).replace("<axis xyz='0 0 1'/>", axis)
+    path = _write(tmp_path, _robot(_link("a"), _link("b"), joint))
+    arm = load_urdf(path)
+    assert_array_equal(arm.links[0].joint.axis, [1.0, 0.0, 0.0])
+    if axis:  # urdfdom, and so Pinocchio, reads an <axis> without xyz as 0 0 0: armdyn keeps the default, 1 0 0
+        return
+    model = pin.buildModelFromUrdf(str(path))
+    assert model.joints[1].shortname() in ("JointModelRX", "JointModelPX", "JointModelRUBX")
+    _assert_fk_matches_pinocchio(path, arm)
+
+
+RPY = ["0 0 0", "0.3 0 0", "0 -0.4 0", "0 0 2.9", "0.3 0.1 -0.2", "-3.0 1.5707963267948966 0.7", "6.5 -2.2 -4.1"]
+
+
+def test_rpy_joint_placements_match_pinocchio(tmp_path: Path) -> None:
+    """rpy is roll, pitch, yaw about the fixed axes: R = Rz(yaw) Ry(pitch) Rx(roll); a fixed joint's is carried into
+    the next moving joint's placement, as Pinocchio merges it."""
+    names = [f"l{i}" for i in range(len(RPY) + 2)]
+    joints = [
+        _joint(f"j{i}", names[i], names[i + 1], xyz=f"0.1 {-0.05 * i} 0.2", rpy=rpy, axis="0 1 0")
+        for i, rpy in enumerate(RPY)
+    ]
+    joints.append(_joint("f", names[-2], names[-1], "fixed", rpy="0.5 -0.6 0.7", extra=""))
+    joints.append(_joint("last", names[-1], "tip", rpy="-0.2 0.9 1.3"))
+    path = _write(tmp_path, _robot(*(_link(name) for name in [*names, "tip"]), *joints))
+    arm = load_urdf(path)
+    model, ids = _pinocchio(path, arm)
+    for link, joint_id in zip(arm.links, ids, strict=True):
+        assert_allclose(link.joint.placement, model.jointPlacements[joint_id].homogeneous, rtol=0, atol=1e-14)
+    roll, pitch, yaw = 0.3, 0.1, -0.2  # j4, written out: a rotation about x, then y, then z, all fixed axes
+    c, s = np.cos, np.sin
+    rx = np.array([[1, 0, 0], [0, c(roll), -s(roll)], [0, s(roll), c(roll)]])
+    ry = np.array([[c(pitch), 0, s(pitch)], [0, 1, 0], [-s(pitch), 0, c(pitch)]])
+    rz = np.array([[c(yaw), -s(yaw), 0], [s(yaw), c(yaw), 0], [0, 0, 1]])
+    assert_allclose(arm.links[4].joint.placement[:3, :3], rz @ ry @ rx, rtol=0, atol=1e-15)
+    _assert_fk_matches_pinocchio(path, arm)
+
+
+def test_origin_without_rpy_or_xyz_and_inertial_without_origin(tmp_path: Path) -> None:
+    """Each of xyz and rpy is 0 0 0 when absent, an absent <origin> the identity, in joints and inertials alike."""
+    joint = _joint("j", "a", "b").replace("<origin xyz='0.1 0.05 0.2' rpy='0.3 0.1 -0.2'/>", "<origin xyz='0 0 1'/>")
+    joint2 = _joint("k", "b", "c").replace("<origin xyz='0.1 0.05 0.2' rpy='0.3 0.1 -0.2'/>", "<origin rpy='0 0 1'/>")
+    joint3 = _joint("m", "c", "d").replace("<origin xyz='0.1 0.05 0.2' rpy='0.3 0.1 -0.2'/>", "")
+    link = _link("d").replace("<origin xyz='0.01 0.02 0.03' rpy='0.1 -0.2 0.3'/>", "")
+    path = _write(tmp_path, _robot(_link("a"), _link("b"), _link("c"), link, joint, joint2, joint3))
+    arm = load_urdf(path)
+    assert_array_equal(arm.links[0].joint.placement, [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]])
+    assert_array_equal(arm.links[1].joint.placement[:3, 3], [0.0, 0.0, 0.0])
+    assert_array_equal(arm.links[2].joint.placement, np.eye(4))
+    assert_array_equal(arm.links[2].inertial.com, [0.0, 0.0, 0.0])
+    _assert_fk_matches_pinocchio(path, arm)
+    _assert_inertias_match_pinocchio(path, arm)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (
+            _robot(_link("a"), _link("b", mass="heavy"), _joint("j", "a", "b")),
+            r"test\.urdf: link 'b': <inertial><mass> value is 'heavy', not a number",
+        ),
+        (
+            _robot(_link("a"), _link("b", inertia=GOOD_INERTIA.replace("'0.03'", "'x'")), _joint("j", "a", "b")),
+            r"test\.urdf: link 'b': <inertial><inertia> iyy is 'x', not a number",
+        ),
+        (
+            _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra="<limit lower='-1' upper='one'/>")),
+            r"test\.urdf: joint 'j': <limit> upper is 'one', not a number",
+        ),
+        (
+            _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra="<limit effort='ten' velocity='1'/>")),
+            r"test\.urdf: joint 'j': <limit> effort is 'ten', not a number",
+        ),
+        (
+            _robot(_link("a"), _link("b"), _joint("j", "a", "b", extra=LIMIT + "<mimic joint='x' multiplier='2x'/>")),
+            r"test\.urdf: joint 'j': <mimic> multiplier is '2x', not a number",
+        ),
+        (
+            _robot(_link("a"), _link("b"), "<joint name='j' type='revolute'><child link='b'/></joint>"),
+            r"test\.urdf: not a valid URDF: joint 'j' has no <parent> element",
+        ),
+        (
+            _robot(_link("a"), _link("b"), "<joint name='j' type='revolute'><parent link='a'/></joint>"),
+            r"test\.urdf: not a valid URDF: joint 'j' has no <child> element",
+        ),
+        (
+            _robot(_link("a"), "<link/>", _joint("j", "a", "b")),
+            r"test\.urdf: not a valid URDF: the <link> element on line 4 has no name",
+        ),
+        (
+            _robot(_link("a"), _link("b"), "<joint type='revolute'><parent link='a'/><child link='b'/></joint>"),
+            r"test\.urdf: not a valid URDF: the <joint> element on line 5 has no name",
+        ),
+    ],
+    ids=["mass", "inertia", "limit", "effort", "mimic", "no-parent", "no-child", "unnamed-link", "unnamed-joint"],
+)
+def test_what_is_not_a_urdf_is_named(tmp_path: Path, text: str, match: str) -> None:
+    with pytest.raises(ModelError, match=match):
+        load_urdf(_write(tmp_path, text))
+
+
+def test_visual_and_collision_elements_are_not_read(tmp_path: Path) -> None:
+    """Meshes and shapes never reach the model: a missing mesh or a malformed shape does not stop the load."""
+    extra = (
+        "<visual><geometry><mesh filename='package://nowhere/none.stl'/></geometry><material name='m'>"
+        "<color rgba='red'/></material></visual><collision><geometry><box size='a b c'/></geometry></collision>"
+    )
+    path = _write(tmp_path, _robot(_link("a"), _link("b", extra=extra), _joint("j", "a", "b")))
+    assert load_urdf(path).n == 1
+
+
+def test_an_inertia_missing_a_moment_is_refused_not_invented(tmp_path: Path) -> None:
+    """The specification requires all six <inertia> attributes; a missing moment is not taken as 1."""
+    xml = (
+        "<robot name='r'><link name='base'/><link name='l1'><inertial><mass value='1'/>"
+        "<inertia ixx='0.02' iyy='0.03' ixy='0' ixz='0' iyz='0'/></inertial></link>"
+        "<joint name='j1' type='revolute'><parent link='base'/><child link='l1'/><axis xyz='0 0 1'/>"
+        "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>"
+    )
+    path = tmp_path / "missing.urdf"
+    path.write_text(xml)
+    with pytest.raises(ModelError, match=r"link 'l1'.*<inertial><inertia> lacks izz; the URDF specification requires"):
+        ad.load_urdf(path)

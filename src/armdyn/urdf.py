@@ -1,4 +1,4 @@
-"""load_urdf(path) -> Robot, parsing through yourdfpy; meshes are never loaded.
+"""load_urdf(path) -> Robot, read from the XML with lxml; meshes are never loaded.
 
 Revolute, continuous (one coordinate, the angle), prismatic and fixed joints; branching
 trees. Fixed joints are merged into their parent body (parallel-axis theorem). Joints
@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -31,20 +32,72 @@ _MOVING = {"revolute", "continuous", "prismatic"}
 _SAMPLES, _SEED = 4, 20240531
 _PIVOT_RELATIVE = 1e-9  # of the joint's own diagonal entry M_jj
 _DIAGONAL_RELATIVE = 1e-13  # of the largest diagonal entry of M
-# The 3-vectors of the file that reach the model, checked on the XML itself (yourdfpy keeps the
-# first three of four numbers, and squares 1e300 in a norm): (element, child, attributes)
+# The 3-vectors of the file that reach the model, checked on the XML itself before it is read
+# (so that _pose and _read_joint meet exactly 3 numbers, each small enough to square): (element, child, attributes)
 _VECTORS = (
     ("joint", "origin", ("xyz", "rpy")),
     ("joint", "axis", ("xyz",)),
     ("link", "inertial/origin", ("xyz", "rpy")),
 )
+# <inertia> attributes: the URDF specification requires all six (a default of 1 kg m^2 for a missing
+# moment would be an invented inertia; Pinocchio refuses such a file too)
+_MOMENTS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 
-def _parse(path: Path):
-    import yourdfpy
+# ----- what load_urdf reads of the file: <robot>, its <link> and <joint> elements ---------------------------------
+# (the rest, <visual>, <collision>, <material>, <transmission>, <gazebo>, <calibration>, <safety_controller>,
+# never reaches the model and is not read)
+@dataclass(frozen=True)
+class _Inertial:
+    """A link's ``<inertial>``."""
+
+    origin: np.ndarray | None  # 4x4 pose of the inertial frame in the link frame; None when <origin> is absent
+    mass: float | None  # None when <mass> is absent: the link is massless
+    inertia: np.ndarray | None  # 3x3 in the inertial frame; None when <inertia> is absent (zero)
+
+
+@dataclass(frozen=True)
+class _Link:
+    name: str
+    inertial: _Inertial | None  # None when <inertial> is absent: the link is massless
+
+
+@dataclass(frozen=True)
+class _Limit:
+    lower: float | None  # None when the attribute is absent (the specification: 0)
+    upper: float | None
+
+
+@dataclass(frozen=True)
+class _Dynamics:
+    damping: str | None  # the attribute's text, read by _finite (absent or empty: 0)
+    friction: str | None
+
+
+@dataclass(frozen=True)
+class _Joint:
+    name: str
+    type: str | None  # as written; load_urdf refuses all but revolute, continuous, prismatic and fixed
+    parent: str | None  # the link attribute of <parent> and <child>
+    child: str | None
+    origin: np.ndarray | None  # 4x4 pose of the joint frame in the parent link frame; None when <origin> is absent
+    axis: np.ndarray  # as written; 1 0 0 when <axis> (the specification) or its xyz is absent
+    limit: _Limit | None
+    dynamics: _Dynamics | None
+    mimic: bool  # whether the joint has a <mimic> element
+
+
+@dataclass(frozen=True)
+class _Robot:
+    name: str
+    links: list[_Link]
+    joints: list[_Joint]
+
+
+def _parse(path: Path) -> _Robot:
     from lxml import etree
 
-    try:  # yourdfpy would recover from broken XML on its own: parse strictly first
+    try:  # strictly: a URDF with broken XML is refused, not recovered
         root = etree.parse(str(path)).getroot()
     except etree.XMLSyntaxError as error:
         raise ModelError(f"{path}: malformed XML ({error})") from None
@@ -60,18 +113,124 @@ def _parse(path: Path):
             f"{path}: the <robot> element has no name, which the URDF specification requires "
             "(Pinocchio's parser refuses it too); add name='...' to <robot>"
         )
-    try:  # NaN or inf in an rpy makes NumPy warn inside yourdfpy: the loader refuses them itself, naming the element
-        with np.errstate(invalid="ignore", over="ignore"):
-            urdf = yourdfpy.URDF.load(
-                str(path), build_scene_graph=False, build_collision_scene_graph=False, load_meshes=False,
-                load_collision_meshes=False,
-            )  # fmt: skip
-    except etree.XMLSyntaxError as error:
-        raise ModelError(f"{path}: malformed XML ({error})") from None
-    except Exception as error:  # yourdfpy raises several kinds on bad content
-        raise ModelError(f"{path}: not a valid URDF ({type(error).__name__}: {error})") from None
     _check_vectors(root, path.name)
-    return urdf.robot
+    links = [_read_link(element, path) for element in root.iterfind("link")]
+    return _Robot(root.get("name"), links, [_read_joint(element, path) for element in root.iterfind("joint")])
+
+
+def _name(element: object, path: Path) -> str:
+    """The name attribute of a <link> or <joint>, which the URDF specification requires."""
+    name = element.get("name")
+    if name is None:
+        raise ModelError(
+            f"{path}: not a valid URDF: the <{element.tag}> element on line {element.sourceline} has no name, which "
+            f"the URDF specification requires; add name='...' to it"
+        )
+    return name
+
+
+def _number(element: object, attribute: str, default: float | None, where: str, what: str) -> float | None:
+    """An attribute read as a number (Python's float: NaN and infinity pass, for the checks that name them), or
+    ``default`` when it is absent; refused unless it is a number."""
+    text = element.get(attribute)
+    if text is None:
+        return default
+    try:
+        return float(text)
+    except ValueError:
+        raise ModelError(
+            f"{where}: {what} {attribute} is '{text}', not a number; write a finite number in the file"
+        ) from None
+
+
+def _pose(origin: object) -> np.ndarray | None:
+    """The 4x4 pose an ``<origin xyz rpy>`` gives (each 0 0 0 when absent), None for no element.
+
+    rpy are fixed-axis roll, pitch, yaw: R = Rz(yaw) Ry(pitch) Rx(roll), written out term by term as trimesh's
+    euler_matrix (axes 'sxyz', which yourdfpy used) writes it, so the poses are those of earlier versions to the
+    bit. Both vectors are 3 numbers (``_check_vectors``); NaN or infinity pass here, to be refused by ``_origin``
+    naming the joint or link."""
+    if origin is None:
+        return None
+    xyz = [float(word) for word in origin.get("xyz", "0 0 0").split()]
+    roll, pitch, yaw = np.array([float(word) for word in origin.get("rpy", "0 0 0").split()])
+    with np.errstate(invalid="ignore"):  # sin and cos of infinity are NaN, refused by _origin
+        si, sj, sk = np.sin(roll), np.sin(pitch), np.sin(yaw)
+        ci, cj, ck = np.cos(roll), np.cos(pitch), np.cos(yaw)
+    cc, cs, sc, ss = ci * ck, ci * sk, si * ck, si * sk
+    pose = np.eye(4)
+    pose[:3, :3] = [
+        [cj * ck, sj * sc - cs, sj * cc + ss],
+        [cj * sk, sj * ss + cc, sj * cs - sc],
+        [-sj, cj * si, cj * ci],
+    ]
+    pose[:3, 3] = xyz
+    return pose
+
+
+def _read_link(element: object, path: Path) -> _Link:
+    name = _name(element, path)
+    found = element.find("inertial")
+    if found is None:
+        return _Link(name, None)
+    where = f"{path.name}: link '{name}'"
+    mass = found.find("mass")
+    inertia = found.find("inertia")
+    tensor = None
+    if inertia is not None:
+        moments = {key: _number(inertia, key, None, where, "<inertial><inertia>") for key in _MOMENTS}
+        missing = [key for key in _MOMENTS if moments[key] is None]
+        if missing:
+            raise ModelError(
+                f"{where}: <inertial><inertia> lacks {', '.join(missing)}; the URDF specification requires all six "
+                "(ixx ixy ixz iyy iyz izz): write them in the file"
+            )
+        tensor = np.array(
+            [
+                [moments["ixx"], moments["ixy"], moments["ixz"]],
+                [moments["ixy"], moments["iyy"], moments["iyz"]],
+                [moments["ixz"], moments["iyz"], moments["izz"]],
+            ]
+        )
+    return _Link(
+        name,
+        _Inertial(
+            _pose(found.find("origin")),
+            None if mass is None else _number(mass, "value", 0.0, where, "<inertial><mass>"),
+            tensor,
+        ),
+    )
+
+
+def _read_joint(element: object, path: Path) -> _Joint:
+    name = _name(element, path)
+    where = f"{path.name}: joint '{name}'"
+    ends = []
+    for end in ("parent", "child"):
+        found = element.find(end)
+        if found is None:
+            raise ModelError(
+                f"{path}: not a valid URDF: joint '{name}' has no <{end}> element, which the URDF specification "
+                f"requires; add <{end} link='...'/> to it"
+            )
+        ends.append(found.get("link"))
+    axis = element.find("axis")  # absent: 1 0 0 (the specification); without xyz, 1 0 0 too (urdfdom reads 0 0 0)
+    xyz = "1 0 0" if axis is None else axis.get("xyz", "1 0 0")
+    limit = element.find("limit")
+    if limit is not None:
+        for attribute in ("effort", "velocity"):  # never reach the model, but must be numbers as in any URDF
+            _number(limit, attribute, None, where, "<limit>")
+        limit = _Limit(*(_number(limit, bound, None, where, "<limit>") for bound in ("lower", "upper")))
+    dynamics = element.find("dynamics")
+    if dynamics is not None:
+        dynamics = _Dynamics(dynamics.get("damping"), dynamics.get("friction"))
+    mimic = element.find("mimic")
+    if mimic is not None:  # loaded as an independent joint; multiplier and offset must be numbers all the same
+        for attribute in ("multiplier", "offset"):
+            _number(mimic, attribute, None, where, "<mimic>")
+    origin = _pose(element.find("origin"))
+    axis = np.array([float(word) for word in xyz.split()])
+    return _Joint(name, element.get("type"), *ends, origin, axis, limit, dynamics, mimic is not None)
 
 
 def _check_vectors(root: object, file: str) -> None:
@@ -106,10 +265,9 @@ def _check_vector(text: str, where: str) -> None:
         )
 
 
-def _origin(element: object, where: str) -> np.ndarray:
+def _origin(element: _Joint | _Inertial, where: str) -> np.ndarray:
     """The pose an element's ``<origin>`` gives (identity when absent), refused unless finite."""
-    origin = getattr(element, "origin", None)
-    pose = np.eye(4) if origin is None else np.array(origin, dtype=float)
+    pose = np.eye(4) if element.origin is None else element.origin.copy()
     if not np.all(np.isfinite(pose)):
         raise ModelError(f"{where}: <origin> has a NaN or infinite xyz or rpy; write finite numbers in the file")
     return pose
@@ -118,7 +276,7 @@ def _origin(element: object, where: str) -> np.ndarray:
 def _finite(value: object, where: str, what: str) -> float:
     """``value`` as a float, refused with a ModelError naming ``where`` and ``what`` unless finite."""
     try:
-        number = float(value)  # yourdfpy reads most numbers; it keeps <dynamics> damping and friction as text
+        number = float(value)  # the file's <dynamics> damping and friction reach here as text
     except (TypeError, ValueError):
         raise ModelError(f"{where}: {what} is '{value}', not a number; write a finite number in the file") from None
     if not np.isfinite(number):
@@ -126,7 +284,7 @@ def _finite(value: object, where: str, what: str) -> float:
     return number
 
 
-def _body(file: str, urdf_link: object, strict: bool) -> Inertial:
+def _body(file: str, urdf_link: _Link, strict: bool) -> Inertial:
     """The link's mass properties in its own frame (URDF gives them in the inertial frame)."""
     where = f"{file}: link '{urdf_link.name}'"
     inertial = urdf_link.inertial
@@ -135,7 +293,7 @@ def _body(file: str, urdf_link: object, strict: bool) -> Inertial:
     mass = _finite(inertial.mass, where, "<inertial><mass> value")
     pose = _origin(inertial, f"{where}: <inertial>")
     rotation = pose[:3, :3]
-    tensor = np.zeros((3, 3)) if inertial.inertia is None else np.array(inertial.inertia, dtype=float)
+    tensor = np.zeros((3, 3)) if inertial.inertia is None else inertial.inertia
     if not np.all(np.isfinite(tensor)):
         raise ModelError(
             f"{where}: <inertial><inertia> holds NaN or infinite values ({tensor[np.triu_indices(3)]}); "
@@ -162,8 +320,9 @@ def load_urdf(
     Coulomb friction. ``<limit lower upper>`` are the joint limits; as the URDF
     specification says (and as Pinocchio reads them), a missing ``lower`` or ``upper`` is 0.
     A continuous joint, or a revolute or prismatic joint without ``<limit>``, is unlimited.
-    Mimic joints load as independent joints, with a warning naming them. Meshes are never
-    loaded.
+    Mimic joints load as independent joints, with a warning naming them. Only ``<robot>``,
+    ``<link>`` (its ``<inertial>``) and ``<joint>`` are read: meshes are never loaded, and
+    ``<visual>``, ``<collision>`` and the rest of the file are not read.
 
     ``locked`` holds joints at given values, as Pinocchio's ``buildReducedModel`` does: the
     arm is loaded whole, then reduced by ``Robot.reduced(locked)`` (each locked joint becomes
@@ -290,7 +449,7 @@ def load_urdf(
             frames[joint.child] = (parent, placement)
             stack.extend((child, parent, placement) for child in reversed(children[joint.child]))
             continue
-        if joint.mimic is not None and joint.name not in locked:
+        if joint.mimic and joint.name not in locked:
             mimics.append(joint.name)
         built.append(_moving_link(path.name, joint, parent, placement, _body(path.name, links[joint.child], strict)))
         index = len(built) - 1
@@ -359,7 +518,9 @@ def _massless_joints(arm: Robot) -> list[str]:
     middle = np.clip(0.0, np.where(wide, lower + span, 0.0), np.where(wide, upper - span, 0.0))
     lower, upper = np.where(wide, middle - span, lower), np.where(wide, middle + span, upper)
     q = np.random.default_rng(_SEED).uniform(lower, upper, (_SAMPLES, arm.n))
-    work = np.array(arm.inertia_matrix(q))  # (samples, n, n), overwritten below
+    # One state at a time, not the batch call arm.inertia_matrix(q): the one-state kernel compiles much faster than
+    # the parallel batch kernel (seconds on an empty Numba cache), and it is the one users call first anyway
+    work = np.stack([arm.inertia_matrix(x) for x in q])  # (samples, n, n), overwritten below
     diagonal = np.diagonal(work, axis1=1, axis2=2).copy()
     largest = diagonal.max(axis=1)
     zero = np.zeros((_SAMPLES, arm.n), dtype=bool)
@@ -373,7 +534,7 @@ def _massless_joints(arm: Robot) -> list[str]:
     return [name for name, always in zip(arm.joint_names, zero.all(axis=0), strict=True) if always]
 
 
-def _check_locked(file: str, joints: list, locked: object) -> dict:
+def _check_locked(file: str, joints: list[_Joint], locked: object) -> dict:
     """``locked`` as a dict, refused unless it names moving joints of the file (values are checked by reduced)."""
     if locked is None:
         return {}
@@ -416,9 +577,9 @@ def _with_inertial(link: Link, inertial: Inertial) -> Link:
     return dataclasses.replace(link, inertial=inertial)
 
 
-def _moving_link(file: str, joint: object, parent: int, placement: np.ndarray, body: Inertial) -> Link:
+def _moving_link(file: str, joint: _Joint, parent: int, placement: np.ndarray, body: Inertial) -> Link:
     where = f"{file}: joint '{joint.name}'"
-    axis = np.array([1.0, 0.0, 0.0] if joint.axis is None else joint.axis, dtype=float)
+    axis = joint.axis
     if not np.all(np.isfinite(axis)):
         raise ModelError(f"{where}: <axis> xyz {axis} holds NaN or infinite values; write a finite direction")
     norm = np.linalg.norm(axis)
