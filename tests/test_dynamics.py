@@ -239,3 +239,29 @@ def test_vectorized_batch_equals_the_one_state_kernel() -> None:
     batch = arm.inverse_dynamics(q, qd, qdd)
     for k in (0, 31, 32, 76):
         close(batch[k], arm.inverse_dynamics(q[k], qd[k], qdd[k]), 1e-13)
+
+
+@pytest.mark.parametrize("n", [3, 60])
+def test_one_state_scratch_on_the_stack_or_the_heap_gives_the_batch_result(n: int) -> None:
+    """A one-state kernel keeps its scratch on the stack up to spatial.STACK_SCRATCH values and on
+    the heap beyond (a 60-joint arm); either way it equals the batch kernels, which use the heap."""
+    from armdyn.dynamics.packed import ABA_JOINT
+    from armdyn.dynamics.spatial import STACK_SCRATCH
+
+    assert (ABA_JOINT * n > STACK_SCRATCH) == (n == 60)
+    arm = random_robot(11, n)
+    rng = np.random.default_rng(n)
+    q, qd, qdd = rng.uniform(-1, 1, (3, 2, n))
+    for name, args in [
+        ("inverse_dynamics", (q, qd, qdd)),
+        ("forward_dynamics", (q, qd, qdd)),
+        ("inertia_matrix", (q,)),
+        ("coriolis_matrix", (q, qd)),
+        ("gravity_vector", (q,)),
+        ("energies", (q, qd)),
+        ("jacobian_dot", (q, qd)),
+    ]:
+        method = getattr(arm, name)
+        batch = method(*args)
+        for s in range(2):
+            assert_allclose(method(*(a[s] for a in args)), batch[s], rtol=1e-13, atol=1e-13, err_msg=name)

@@ -34,6 +34,7 @@ from armdyn.dynamics.spatial import (
     motion_cross,
     one_state,
     rigid_times,
+    scratch,
     states_status,
     world_motion_subspace,
     world_pose,
@@ -169,7 +170,7 @@ def aba_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, q
     status = states_status(model, q, qd, tau, 3)
     if status == 0 and qdd.shape[0] != int(model[N_JOINTS]):
         status = 4
-    if status == 0 and aba_core(model, np.empty(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd) >= 0:
+    if status == 0 and aba_core(model, scratch(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd) >= 0:
         status = SINGULAR_STATUS
     return status
 

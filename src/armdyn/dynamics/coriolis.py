@@ -32,6 +32,7 @@ from armdyn.dynamics.spatial import (
     joint_transform,
     motion_cross,
     one_state,
+    scratch,
     states_status,
     world_motion_subspace,
     world_pose,
@@ -159,7 +160,7 @@ def coriolis_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray
     if status == 0 and (C.shape[0] != n or C.shape[1] != n):
         status = 4
     if status == 0:
-        coriolis_core(model, np.empty(CORIOLIS_JOINT * n + CORIOLIS_FIXED), q, qd, C)
+        coriolis_core(model, scratch(CORIOLIS_JOINT * n + CORIOLIS_FIXED), q, qd, C)
     return status
 
 

@@ -33,6 +33,7 @@ from armdyn.dynamics.spatial import (
     force_to_parent,
     joint_transform,
     one_state,
+    scratch,
     states_status,
 )
 
@@ -117,7 +118,7 @@ def crba_one(model: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
     if status == 0 and (M.shape[0] != n or M.shape[1] != n):
         status = 4
     if status == 0:
-        crba_core(model, np.empty((TRANSFORM + COMPOSITE) * n), q, M)
+        crba_core(model, scratch((TRANSFORM + COMPOSITE) * n), q, M)
     return status
 
 

@@ -31,6 +31,7 @@ from armdyn.dynamics.spatial import (
     joint_transform,
     motion_to_child,
     one_state,
+    scratch,
     states_status,
     world_pose,
 )
@@ -76,7 +77,7 @@ def energy_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray
     if status == 0 and out.shape[0] != 2:
         status = 4
     if status == 0:
-        energy_core(model, np.empty(ENERGY_JOINT * int(model[N_JOINTS]) + ENERGY_FIXED), q, qd, out)
+        energy_core(model, scratch(ENERGY_JOINT * int(model[N_JOINTS]) + ENERGY_FIXED), q, qd, out)
     return status
 
 

@@ -34,6 +34,7 @@ from armdyn.dynamics.spatial import (
     VECTOR,
     joint_transform,
     one_state,
+    scratch,
     states_status,
     world_pose,
 )
@@ -223,10 +224,10 @@ def transforms_core(model: np.ndarray, q: np.ndarray, work: np.ndarray, out: np.
     """out (n, 4, 4): the world pose of every link frame."""
     n = int(model[N_JOINTS])
     body_poses(model, q, work)
-    scratch = POSE * (n + 1)
+    link_pose = POSE * (n + 1)
     for i in range(n):
-        compose(work, POSE * i, model, HEADER + STRIDE * i + LINK_ROTATION, work, scratch)
-        write_pose(work, scratch, out[i])
+        compose(work, POSE * i, model, HEADER + STRIDE * i + LINK_ROTATION, work, link_pose)
+        write_pose(work, link_pose, out[i])
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -270,9 +271,9 @@ def jacobian_dot_core(
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def workspace(n: int) -> np.ndarray:
-    """Scratch for one state: the body poses, two more poses and the body velocities."""
-    return np.empty(POSE * (n + 2) + 6 * n)
+def workspace_size(n: int) -> int:
+    """Scratch values for one state: the body poses, two more poses and the body velocities."""
+    return POSE * (n + 2) + 6 * n
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -291,7 +292,7 @@ def transforms_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     if status == 0 and (out.shape[0] != n or out.shape[1] != 4 or out.shape[2] != 4):
         status = 4
     if status == 0:
-        transforms_core(model, q, workspace(n), out)
+        transforms_core(model, q, scratch(workspace_size(n)), out)
     return status
 
 
@@ -304,7 +305,7 @@ def pose_one(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -> 
     if status == 0 and (out.shape[0] != 4 or out.shape[1] != 4):
         status = 4
     if status == 0:
-        pose_core(model, q, target, workspace(int(model[N_JOINTS])), out)
+        pose_core(model, q, target, scratch(workspace_size(int(model[N_JOINTS]))), out)
     return status
 
 
@@ -318,7 +319,7 @@ def jacobian_one(model: np.ndarray, q: np.ndarray, target: int, frame: int, out:
     if status == 0 and (out.shape[0] != 6 or out.shape[1] != n):
         status = 4
     if status == 0:
-        jacobian_core(model, q, target, frame, workspace(n), out)
+        jacobian_core(model, q, target, frame, scratch(workspace_size(n)), out)
     return status
 
 
@@ -332,7 +333,7 @@ def jacobian_dot_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, target: i
     if status == 0 and (out.shape[0] != 6 or out.shape[1] != n):
         status = 4
     if status == 0:
-        jacobian_dot_core(model, q, qd, target, frame, workspace(n), out)
+        jacobian_dot_core(model, q, qd, target, frame, scratch(workspace_size(n)), out)
     return status
 
 
@@ -342,7 +343,7 @@ def transforms_batch(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> None:
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = workspace(q.shape[1])
+        work = np.empty(workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             transforms_core(model, q[s], work, out[s])
 
@@ -353,7 +354,7 @@ def pose_batch(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = workspace(q.shape[1])
+        work = np.empty(workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             pose_core(model, q[s], target, work, out[s])
 
@@ -364,7 +365,7 @@ def jacobian_batch(model: np.ndarray, q: np.ndarray, target: int, frame: int, ou
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = workspace(q.shape[1])
+        work = np.empty(workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             jacobian_core(model, q[s], target, frame, work, out[s])
 
@@ -377,6 +378,6 @@ def jacobian_dot_batch(
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = workspace(q.shape[1])
+        work = np.empty(workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             jacobian_dot_core(model, q[s], qd[s], target, frame, work, out[s])

@@ -46,6 +46,7 @@ from armdyn.dynamics.spatial import (
     joint_transform,
     newton_euler_step,
     one_state,
+    scratch,
     sin_cos,
     states_status,
 )
@@ -182,7 +183,7 @@ def rnea_checked(
     if status == 0 and tau.shape[0] != int(model[N_JOINTS]):
         status = 4
     if status == 0:
-        rnea_core(model, np.empty(RNEA_JOINT * int(model[N_JOINTS]) + RNEA_FIXED), q, qd, qdd, qd, flags, tau)
+        rnea_core(model, scratch(RNEA_JOINT * int(model[N_JOINTS]) + RNEA_FIXED), q, qd, qdd, qd, flags, tau)
     return status
 
 
@@ -262,5 +263,5 @@ def gravity_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     if status == 0 and out.shape[0] != int(model[N_JOINTS]):
         status = 4
     if status == 0:
-        gravity_core(model, np.empty(GRAVITY_JOINT * int(model[N_JOINTS])), q, out)
+        gravity_core(model, scratch(GRAVITY_JOINT * int(model[N_JOINTS])), q, out)
     return status
