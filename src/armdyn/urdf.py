@@ -518,9 +518,11 @@ def _massless_joints(arm: Robot) -> list[str]:
     middle = np.clip(0.0, np.where(wide, lower + span, 0.0), np.where(wide, upper - span, 0.0))
     lower, upper = np.where(wide, middle - span, lower), np.where(wide, middle + span, upper)
     q = np.random.default_rng(_SEED).uniform(lower, upper, (_SAMPLES, arm.n))
-    # One state at a time, not the batch call arm.inertia_matrix(q): the one-state kernel compiles much faster than
-    # the parallel batch kernel (seconds on an empty Numba cache), and it is the one users call first anyway
-    work = np.stack([arm.inertia_matrix(x) for x in q])  # (samples, n, n), overwritten below
+    # M's columns M e_j as inverse dynamics at rest without gravity (no velocity, friction or gravity terms): the
+    # inverse-dynamics kernel is the one a user calls first, so loading an arm compiles (on an empty Numba cache)
+    # or loads no kernel of its own; one state at a time, the one-state kernel compiling much faster than the batch
+    still, rest = arm.with_gravity([0.0, 0.0, 0.0]), np.zeros(arm.n)
+    work = np.stack([np.column_stack([still.inverse_dynamics(x, rest, e) for e in np.eye(arm.n)]) for x in q])
     diagonal = np.diagonal(work, axis1=1, axis2=2).copy()
     largest = diagonal.max(axis=1)
     zero = np.zeros((_SAMPLES, arm.n), dtype=bool)
