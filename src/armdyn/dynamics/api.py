@@ -22,10 +22,12 @@ from numba.core.errors import NumbaError
 
 from armdyn import inputs, kinematics
 from armdyn.dynamics import frames
-from armdyn.dynamics.aba import aba_batch, aba_one
+from armdyn.dynamics.aba import aba_one
+from armdyn.dynamics.aba_blocks import aba_blocks
 from armdyn.dynamics.coriolis import coriolis_batch, coriolis_one
 from armdyn.dynamics.crba import crba_batch, crba_one
 from armdyn.dynamics.energy import energy_batch, energy_one
+from armdyn.dynamics.frames import TOOL, jacobian_dot_one, jacobian_one, pose_one, transforms_one
 from armdyn.dynamics.friction import friction_batch, friction_one
 from armdyn.dynamics.rnea import (
     CORIOLIS,
@@ -376,7 +378,7 @@ def forward_dynamics(
     result = inputs.result(out, (*batch, arm.n))
     singular = np.full(flat[0].shape[0], -1)
     if singular.size:
-        aba_batch(model, *flat, result.reshape(-1, arm.n), singular)
+        aba_blocks(model, *flat, result.reshape(-1, arm.n), singular)
     if singular.max(initial=-1) >= 0:
         raise _singular(arm, flat[0], singular, batch)
     return result
@@ -504,13 +506,6 @@ _FRAMES = {"base": frames.WORLD, "tool": frames.LOCAL}
 _NOT_ONE_STATE_OR_OPTION = (*_NOT_ONE_STATE, KeyError, OverflowError)
 
 
-def _fast_target(arm: Robot, link: object) -> object:
-    """frames.TOOL for None, a plain non-negative int as it is (the kernel refuses it out of range),
-    anything else out of range, so that the general path checks it (Numba would convert a bool or
-    a float to the kernel's int, and no link index may mean the tool)."""
-    return frames.TOOL if link is None else link if type(link) is int and link >= 0 else arm.n
-
-
 def _target(arm: Robot, link: object) -> int:
     """frames.TOOL for None, else the checked link index."""
     return frames.TOOL if link is None else kinematics.link_index(arm, link)
@@ -548,7 +543,7 @@ def link_transforms(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> 
     """
     result = _empty((arm.n, 4, 4)) if out is None else out
     try:
-        if frames.transforms_one(arm.packed, q, result) == 0:
+        if transforms_one(arm.packed, q, result) == 0:
             return result
     except _NOT_ONE_STATE:
         pass
@@ -579,7 +574,7 @@ def tool_pose(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.nda
     """
     result = _empty((4, 4)) if out is None else out
     try:
-        if frames.pose_one(arm.packed, q, frames.TOOL, result) == 0:
+        if pose_one(arm.packed, q, TOOL, result) == 0:
             return result
     except _NOT_ONE_STATE:
         pass
@@ -621,7 +616,10 @@ def jacobian(
     """
     result = _empty((6, arm.n)) if out is None else out
     try:  # a link that is not an int, or a frame not in _FRAMES, falls through to the checks below
-        if frames.jacobian_one(arm.packed, q, _fast_target(arm, link), _FRAMES[frame], result) == 0:
+        # the link unchecked when a plain non-negative int (the kernel refuses it out of range); anything else
+        # made out of range, for the checks below (Numba would convert a bool or a float to the kernel's int)
+        target = TOOL if link is None else link if type(link) is int and link >= 0 else arm.n
+        if jacobian_one(arm.packed, q, target, _FRAMES[frame], result) == 0:
             return result
     except _NOT_ONE_STATE_OR_OPTION:
         pass
@@ -670,7 +668,8 @@ def jacobian_dot(
     """
     result = _empty((6, arm.n)) if out is None else out
     try:
-        if frames.jacobian_dot_one(arm.packed, q, qd, _fast_target(arm, link), _FRAMES[frame], result) == 0:
+        target = TOOL if link is None else link if type(link) is int and link >= 0 else arm.n  # as in jacobian
+        if jacobian_dot_one(arm.packed, q, qd, target, _FRAMES[frame], result) == 0:
             return result
     except _NOT_ONE_STATE_OR_OPTION:
         pass

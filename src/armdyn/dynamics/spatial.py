@@ -45,7 +45,9 @@ def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
     types raises TypeError as with an explicit signature (the api's fast path relies on it).
     Numba calls ``_compile_for_args`` only when no compiled version matches the arguments;
     here it compiles the one signature and hands the call back to the dispatcher, which then
-    runs it or raises TypeError.
+    runs it or raises TypeError, at once: no conversion of other types is searched, and the
+    message does not type every argument (Numba's would cost about 60 us on a batch, which
+    every batch call would pay before its general path).
     """
 
     def decorate(function: Callable) -> Dispatcher:
@@ -57,7 +59,17 @@ def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
                 self.disable_compile()
             return self
 
+        def no_conversion(self: Dispatcher, *args: object, **kwargs: object) -> bool:
+            return False  # the signature's types exactly: Numba would otherwise convert a bool or a float to an int
+
+        def refuse(self: Dispatcher, *args: object, **kwargs: object) -> None:
+            # Numba's own message types every argument (about 60 us for a batch): the api's general path,
+            # which every refused call takes next, names what is wrong
+            raise TypeError(f"{self.py_func.__name__} takes only the types of its signature {signature}")
+
         dispatcher._compile_for_args = MethodType(compile_signature, dispatcher)
+        dispatcher._search_new_conversions = MethodType(no_conversion, dispatcher)
+        dispatcher._explain_matching_error = MethodType(refuse, dispatcher)
         return dispatcher
 
     return decorate
