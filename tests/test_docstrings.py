@@ -38,6 +38,7 @@ MODULES = (
     "armdyn.dynamics.regressor",
     "armdyn.model",
     "armdyn.excitation",
+    "armdyn.cartesian",
 )
 # Entry points named one by one (their modules are not walked in full); all of them need Raises.
 ENTRY_POINTS = (

@@ -1,0 +1,369 @@
+"""Task-space dynamics (BOOK.md section 6, Khatib 1987) against Pinocchio, closed forms and properties."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from numpy.testing import assert_allclose
+
+import armdyn as ad
+from armdyn import cartesian as ct
+from armdyn.errors import ModelError
+from tests import strategies
+from tests import test_docstrings as docs
+from tests.conftest import URDFS, pinocchio_pair
+
+SEEDS = range(5)
+
+
+def _ur5() -> ad.Robot:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ad.load_urdf(URDFS["ur5"]).without_friction()
+
+
+def _regular_states(arm: ad.Robot, output: ct.TaskOutput, seed: int, count: int = 4, limit: float = 1e3):
+    """Random (q, qd) with cond J below ``limit`` (away from singularities)."""
+    rng = np.random.default_rng(seed)
+    found = []
+    while len(found) < count:
+        q, qd = rng.uniform(-2, 2, arm.n), rng.uniform(-2, 2, arm.n)
+        if ct.condition_number(arm, output, q) < limit:
+            found.append((q, qd))
+    return np.array([s[0] for s in found]), np.array([s[1] for s in found])
+
+
+def _close(actual: np.ndarray, expected: np.ndarray, rtol: float) -> None:
+    """Equal to rtol relative to the largest entry of expected (a norm-wise relative test)."""
+    assert_allclose(actual, expected, rtol=rtol, atol=rtol * max(np.abs(expected).max(), 1e-300))
+
+
+# ----- UR5 against a dense construction from Pinocchio ---------------------------------------------
+def _pinocchio_task(q: np.ndarray, qd: np.ndarray):
+    """Mbar, Nbar, Gbar of the UR5 tool frame (Pinocchio's "wrist_3_link") from dense inverses."""
+    _, model, data, q_index, v_index = pinocchio_pair(URDFS["ur5"])
+    config, velocity = pin.neutral(model), np.zeros(model.nv)
+    config[q_index], velocity[v_index] = q, qd
+    frame = model.getFrameId("wrist_3_link")
+    M = pin.crba(model, data, config)
+    M = (np.triu(M) + np.triu(M, 1).T)[np.ix_(v_index, v_index)]
+    J = pin.computeFrameJacobian(model, data, config, frame, pin.LOCAL_WORLD_ALIGNED)[:, v_index]
+    pin.computeJointJacobiansTimeVariation(model, data, config, velocity)
+    pin.updateFramePlacements(model, data)
+    Jdot = pin.getFrameJacobianTimeVariation(model, data, frame, pin.LOCAL_WORLD_ALIGNED)[:, v_index]
+    N = pin.nonLinearEffects(model, data, config, velocity)[v_index]
+    G = pin.computeGeneralizedGravity(model, data, config)[v_index]
+    pose = data.oMf[frame].homogeneous.copy()
+    Ji = np.linalg.inv(J)
+    return Ji.T @ M @ Ji, Ji.T @ (N - M @ Ji @ Jdot @ qd), Ji.T @ G, pose
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ur5_tool_pose_matches_pinocchio(seed: int) -> None:
+    arm, output = _ur5(), ct.ToolPose()
+    qs, qds = _regular_states(arm, output, seed)
+    Mbar, Nbar, Gbar = (
+        ct.task_inertia(arm, output, qs),
+        ct.task_nonlinear(arm, output, qs, qds),
+        ct.task_gravity(arm, output, qs),
+    )
+    for k, (q, qd) in enumerate(zip(qs, qds, strict=True)):
+        M_ref, N_ref, G_ref, pose = _pinocchio_task(q, qd)
+        assert_allclose(arm.tool_pose(q), pose, rtol=0, atol=1e-12)  # the same tool frame
+        _close(Mbar[k], M_ref, 1e-9)
+        _close(Nbar[k], N_ref, 1e-9)
+        _close(Gbar[k], G_ref, 1e-9)
+        # one state at a time equals the batch
+        assert_allclose(ct.task_inertia(arm, output, q), Mbar[k], rtol=1e-13, atol=1e-13 * np.abs(Mbar[k]).max())
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ur5_lambda_equals_mbar_and_inverse_dynamics_reproduces_rnea(seed: int) -> None:
+    arm, output = _ur5(), ct.ToolPose()
+    qs, qds = _regular_states(arm, output, seed)
+    yddot = np.random.default_rng(seed + 100).normal(size=qs.shape)
+    Mbar, Nbar = ct.task_inertia(arm, output, qs), ct.task_nonlinear(arm, output, qs, qds)
+    space = ct.operational_space(arm, output, qs, qds)
+    _close(space.Lambda, Mbar, 1e-9)
+    _close(space.mu + space.p + space.friction, Nbar, 1e-9)
+    assert np.abs(space.Nproj).max() < 1e-9  # no null space for a square J
+    f = ct.task_inverse_dynamics(arm, output, qs, qds, yddot)
+    _close(f, np.einsum("bij,bj->bi", Mbar, yddot) + Nbar, 1e-9)
+    J = output.jacobian(arm, qs)
+    qdd = np.linalg.solve(J, (yddot - output.bias(arm, qs, qds))[..., None])[..., 0]
+    tau = arm.inverse_dynamics(qs, qds, qdd)
+    _close(np.einsum("bji,bj->bi", J, f), tau, 1e-9)  # tau = J^T f
+    _close(ct.task_force(arm, output, qs, tau), f, 1e-9)
+    _close(ct.task_forward_dynamics(arm, output, qs, qds, f), yddot, 1e-8)
+
+
+# ----- the skew property ---------------------------------------------------------------------------
+def _skew_defect(arm: ad.Robot, output: ct.TaskOutput, q: np.ndarray, qd: np.ndarray) -> float:
+    """max |x^T (Mbar_dot - 2 Vmbar) x| / (|x|^2 |Vmbar|) over random x, and the symmetric part's size."""
+    h = 2e-4  # truncation ~h^4 and rounding ~eps/h both near 1e-11 relative
+    Mb = [ct.task_inertia(arm, output, q + k * h * qd) for k in (-2, -1, 1, 2)]
+    Mbar_dot = (Mb[0] - 8 * Mb[1] + 8 * Mb[2] - Mb[3]) / (12 * h)  # fourth order along the motion
+    Vmbar = ct.task_coriolis(arm, output, q, qd)
+    S = Mbar_dot - 2 * Vmbar
+    scale = max(np.abs(Vmbar).max(), np.abs(Mbar_dot).max())
+    x = np.random.default_rng(0).normal(size=(20, arm.n))
+    quadratic = np.abs(np.einsum("ki,ij,kj->k", x, S, x)) / np.einsum("ki,ki->k", x, x)
+    return max(quadratic.max(), np.abs(S + S.T).max()) / scale
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_skew_property_ur5_tool_pose(seed: int) -> None:
+    arm, output = _ur5(), ct.ToolPose()
+    qs, qds = _regular_states(arm, output, seed, count=2, limit=100)
+    for q, qd in zip(qs, qds, strict=True):
+        assert _skew_defect(arm, output, q, qd) < 1e-8
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_skew_property_random_chain_tool_position(seed: int) -> None:
+    arm, output = strategies.random_robot(seed, 3, chain=True), ct.ToolPosition()
+    qs, qds = _regular_states(arm, output, seed, count=2, limit=100)
+    for q, qd in zip(qs, qds, strict=True):
+        assert _skew_defect(arm, output, q, qd) < 1e-8
+        # Vmbar ydot is the velocity part of Nbar
+        Nbar = ct.task_nonlinear(arm, output, q, qd)
+        Gbar = ct.task_gravity(arm, output, q)
+        Fbar = ct.task_force(arm, output, q, arm.friction(qd))
+        ydot = output.jacobian(arm, q) @ qd
+        _close(ct.task_coriolis(arm, output, q, qd) @ ydot + Gbar + Fbar, Nbar, 1e-9)
+
+
+# ----- outputs: Jacobians and biases by finite differences ----------------------------------------
+def _tilted_camera() -> ct.Camera:
+    from scipy.spatial.transform import Rotation
+
+    pose = np.eye(4)
+    pose[:3, :3] = Rotation.from_rotvec([0.3, -2.8, 0.2]).as_matrix()
+    pose[:3, 3] = [0.2, -0.1, 2.5]
+    return ct.Camera(800.0, pose)
+
+
+OUTPUTS = {
+    "tool_position": ct.ToolPosition(),
+    "link_point": ct.LinkPoint(3),
+    "planar": ct.PlanarPosition((0, 2)),
+    "camera": _tilted_camera(),
+}
+
+
+@pytest.mark.parametrize("name", sorted(OUTPUTS))
+def test_jacobian_and_bias_match_finite_differences(name: str) -> None:
+    arm, output = _ur5(), OUTPUTS[name]
+    rng = np.random.default_rng(7)
+    q, qd = rng.uniform(-1, 1, arm.n), rng.uniform(-1, 1, arm.n)
+    if name == "camera":
+        q = np.array([0.1, -1.2, 1.0, -0.5, 0.3, 0.2])
+        assert (output.value(arm, q) != 0).all()
+    h = 1e-4
+    J = output.jacobian(arm, q)
+    numeric = np.stack(
+        [
+            (
+                -output.value(arm, q + 2 * h * e)
+                + 8 * output.value(arm, q + h * e)
+                - 8 * output.value(arm, q - h * e)
+                + output.value(arm, q - 2 * h * e)
+            )
+            / (12 * h)
+            for e in np.eye(arm.n)
+        ],
+        axis=-1,
+    )
+    _close(J, numeric, 1e-7)
+    Jdot = (
+        -output.jacobian(arm, q + 2 * h * qd)
+        + 8 * output.jacobian(arm, q + h * qd)
+        - 8 * output.jacobian(arm, q - h * qd)
+        + output.jacobian(arm, q - 2 * h * qd)
+    ) / (12 * h)
+    _close(output.jacobian_dot(arm, q, qd), Jdot, 1e-7)
+    _close(output.bias(arm, q, qd), Jdot @ qd, 1e-7)
+    # batches
+    qs, qds = np.stack([q, q + 0.1]), np.stack([qd, -qd])
+    assert_allclose(output.jacobian(arm, qs)[0], J, rtol=1e-14, atol=1e-14 * np.abs(J).max())
+    assert output.bias(arm, qs, qds).shape == (2, J.shape[0])
+
+
+def test_tool_pose_value_and_rates() -> None:
+    arm, output = _ur5(), ct.ToolPose()
+    q = np.linspace(-1, 1, 6)
+    y = output.value(arm, q)
+    assert_allclose(y[:3], arm.tool_pose(q)[:3, 3])
+    from scipy.spatial.transform import Rotation
+
+    assert_allclose(Rotation.from_rotvec(y[3:]).as_matrix(), arm.tool_pose(q)[:3, :3], atol=1e-12)
+    assert_allclose(output.jacobian(arm, q), arm.jacobian(q))
+
+
+# ----- the polar arm under an overhead camera (Example 3.2-1, Example A.3-3) -----------------------
+def test_polar_arm_camera_is_a_point_mass_in_image_coordinates() -> None:
+    """Camera on the axis normal to the arm's plane, at depth H with f = H: y = [-r s, r c] (Example A.3-3).
+
+    The arm is a point mass m, so in image coordinates (scaled by f / H = 1) Mbar = m I,
+    Vmbar = 0, and Gbar = [-m g, 0] (gravity -g y world appears along -u).
+    """
+    m, g, H = 2.5, 9.8, 3.0
+    arm = ad.models.polar_rp(m=m, g=g)
+    pose = np.eye(4)
+    pose[:3, :3] = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # x_c = -y, y_c = x, z_c = z
+    pose[:3, 3] = [0.0, 0.0, -H]
+    camera = ct.Camera(H, pose)
+    rng = np.random.default_rng(3)
+    q = np.column_stack([rng.uniform(-3, 3, 6), rng.uniform(0.2, 1.5, 6)])
+    qd = rng.uniform(-2, 2, q.shape)
+    theta, r = q[:, 0], q[:, 1]
+    assert_allclose(camera.value(arm, q), np.column_stack([-r * np.sin(theta), r * np.cos(theta)]), atol=1e-14)
+    J = np.stack([[-r * np.cos(theta), -np.sin(theta)], [-r * np.sin(theta), np.cos(theta)]]).transpose(2, 0, 1)
+    assert_allclose(camera.jacobian(arm, q), J, atol=1e-14)
+    assert_allclose(ct.task_inertia(arm, camera, q), np.broadcast_to(m * np.eye(2), (6, 2, 2)), atol=1e-12)
+    assert_allclose(ct.task_coriolis(arm, camera, q, qd), 0, atol=1e-12)
+    assert_allclose(ct.task_gravity(arm, camera, q), np.broadcast_to([-m * g, 0.0], (6, 2)), atol=1e-12)
+    assert_allclose(ct.task_nonlinear(arm, camera, q, qd), np.broadcast_to([-m * g, 0.0], (6, 2)), atol=1e-11)
+
+
+def test_cylindrical_arm_example_3_5_1() -> None:
+    """Example 3.5-1: y = [r c, r s, h] of the cylindrical arm, J and Mbar in closed form (Jbar = J / r^2)."""
+    Jb, m1, m2, g = 2.0, 1.5, 0.7, 9.8
+    arm, output = ad.models.cylindrical(J=Jb, m1=m1, m2=m2, g=g), ct.ToolPosition()
+    rng = np.random.default_rng(5)
+    q = np.column_stack([rng.uniform(-3, 3, 5), rng.uniform(-1, 1, 5), rng.uniform(0.3, 1.5, 5)])
+    theta, r = q[:, 0], q[:, 2]
+    c, s, z = np.cos(theta), np.sin(theta), np.zeros(5)
+    J = np.stack([[-r * s, z, c], [r * c, z, s], [z, z + 1, z]]).transpose(2, 0, 1)
+    assert_allclose(output.jacobian(arm, q), J, atol=1e-14)
+    jbar = Jb / r**2
+    Mbar = np.stack(
+        [[m2 + jbar * s**2, -jbar * s * c, z], [-jbar * s * c, m2 + jbar * c**2, z], [z, z, z + m1 + m2]]
+    ).transpose(2, 0, 1)
+    assert_allclose(ct.task_inertia(arm, output, q), Mbar, rtol=1e-12, atol=1e-12)
+    assert_allclose(ct.task_gravity(arm, output, q), np.broadcast_to([0, 0, (m1 + m2) * g], (5, 3)), atol=1e-12)
+
+
+# ----- singularities --------------------------------------------------------------------------------
+def test_stretched_two_link_arm_is_singular_unless_damped() -> None:
+    arm, output = ad.models.two_link_planar(), ct.PlanarPosition()
+    q, qd = np.array([0.3, 0.0]), np.array([0.5, -0.2])
+    for call in (
+        lambda **k: ct.task_inertia(arm, output, q, **k),
+        lambda **k: ct.task_coriolis(arm, output, q, qd, **k),
+        lambda **k: ct.task_nonlinear(arm, output, q, qd, **k),
+        lambda **k: ct.task_gravity(arm, output, q, **k),
+        lambda **k: ct.task_inverse_dynamics(arm, output, q, qd, np.ones(2), **k),
+        lambda **k: ct.operational_space(arm, output, q, qd, **k),
+    ):
+        with pytest.raises(ModelError, match="condition number"):
+            call()
+        result = call(damping=0.01)
+        values = result.Lambda if isinstance(result, ct.OperationalSpace) else result
+        assert np.all(np.isfinite(values))
+    with pytest.raises(ModelError, match=r"at state \(1,\).*condition number"):
+        ct.task_inertia(arm, output, np.array([[0.3, 1.0], [0.3, 0.0]]))
+    # near but not at the singularity: finite, and damping leaves regular states untouched
+    regular = np.array([0.3, 1.0])
+    assert_allclose(ct.task_inertia(arm, output, regular, damping=0.01), ct.task_inertia(arm, output, regular))
+    assert np.isinf(ct.condition_number(arm, output, q)) or ct.condition_number(arm, output, q) > 1e15
+    with pytest.raises(ModelError, match="condition number"):
+        ct.task_inertia(arm, output, regular, max_condition=1.5)
+
+
+def test_damped_inverse() -> None:
+    J = np.array([[1.0, 0.0], [0.0, 0.0]])
+    assert_allclose(ct.damped_inverse(J, 0.1), [[1 / 1.01, 0.0], [0.0, 0.0]])
+    J = np.random.default_rng(0).normal(size=(3, 2, 4))
+    expected = np.swapaxes(J, 1, 2) @ np.linalg.inv(J @ np.swapaxes(J, 1, 2) + 0.04 * np.eye(2))
+    assert_allclose(ct.damped_inverse(J, 0.2), expected, rtol=1e-12)
+
+
+# ----- redundancy -----------------------------------------------------------------------------------
+def test_operational_space_redundant_ur5_position() -> None:
+    arm, output = _ur5(), ct.ToolPosition()
+    qs, qds = _regular_states(arm, output, 11, count=3)
+    space = ct.operational_space(arm, output, qs, qds)
+    M, J = arm.inertia_matrix(qs), output.jacobian(arm, qs)
+    Lambda = np.linalg.inv(J @ np.linalg.solve(M, np.swapaxes(J, 1, 2)))
+    _close(space.Lambda, Lambda, 1e-9)
+    _close(J @ space.Jbar, np.broadcast_to(np.eye(3), (3, 3, 3)), 1e-9)
+    assert np.abs(J @ space.Nproj).max() < 1e-9
+    # the task equation: with tau = J^T f + Nproj^T tau0, yddot = Lambda^-1 (f - mu - p - friction)
+    rng = np.random.default_rng(1)
+    f, tau0 = rng.normal(size=(3, 3)), rng.normal(size=(3, 6))
+    tau = np.einsum("bji,bj->bi", J, f) + np.einsum("bji,bj->bi", space.Nproj, tau0)
+    yddot = np.einsum("bij,bj->bi", J, arm.forward_dynamics(qs, qds, tau)) + output.bias(arm, qs, qds)
+    expected = np.linalg.solve(space.Lambda, (f - space.mu - space.p - space.friction)[..., None])[..., 0]
+    _close(yddot, expected, 1e-8)
+    _close(
+        ct.task_forward_dynamics(arm, output, qs, qds, f),
+        np.linalg.solve(space.Lambda, (f - space.mu - space.p)[..., None])[..., 0],
+        1e-8,
+    )
+
+
+def test_user_output_equals_builtin() -> None:
+    arm = _ur5()
+    builtin = ct.ToolPosition()
+    user = ct.Output(
+        lambda q: arm.tool_pose(q)[:3, 3],
+        lambda q: arm.jacobian(q)[:3],
+        jacobian_dot=lambda q, qd: arm.jacobian_dot(q, qd)[:3],
+    )
+    qs, qds = _regular_states(arm, builtin, 2, count=2)
+    space_b, space_u = ct.operational_space(arm, builtin, qs, qds), ct.operational_space(arm, user, qs, qds)
+    assert_allclose(space_u.Lambda, space_b.Lambda)
+    assert_allclose(space_u.mu, space_b.mu)
+    assert_allclose(user.value(arm, qs), builtin.value(arm, qs))
+
+
+# ----- arguments --------------------------------------------------------------------------------------
+def test_bad_arguments_are_named() -> None:
+    arm, output = ad.models.two_link_planar(), ct.PlanarPosition()
+    q = np.array([0.3, 1.0])
+    cases = [
+        (lambda: ct.task_inertia("arm", output, q), "arm"),
+        (lambda: ct.task_inertia(arm, "output", q), "output"),
+        (lambda: ct.task_inertia(arm, output, [1.0, 2.0, 3.0]), "q"),
+        (lambda: ct.task_nonlinear(arm, output, q, [np.nan, 0.0]), "qd"),
+        (lambda: ct.task_force(arm, output, q, "tau"), "tau"),
+        (lambda: ct.task_inverse_dynamics(arm, output, q, q, [1.0]), "yddot"),
+        (lambda: ct.task_forward_dynamics(arm, output, q, q, [1.0, 2.0, 3.0]), "f"),
+        (lambda: ct.task_inertia(arm, output, q, damping=-1.0), "damping"),
+        (lambda: ct.task_inertia(arm, output, q, max_condition=0.5), "max_condition"),
+        (lambda: ct.task_inertia(arm, ct.ToolPosition(), q), "rows"),
+        (lambda: ct.task_inertia(ad.models.two_link_planar(symbolic=True), output, q), "symbolic"),
+        (lambda: ct.Camera(-1.0, np.eye(4)), "focal_length"),
+        (lambda: ct.Camera(1.0, np.ones((4, 4))), "pose"),
+        (lambda: ct.Camera(1.0, np.eye(3)), "pose"),
+        (lambda: ct.PlanarPosition((0, 0)), "axes"),
+        (lambda: ct.PlanarPosition("xy"), "axes"),
+        (lambda: ct.LinkPoint(-1), "link"),
+        (lambda: ct.LinkPoint(5).jacobian(arm, q), "link"),
+        (lambda: ct.Output(1, lambda q: q), "h"),
+        (lambda: ct.Output(lambda q: q, lambda q: np.eye(3)).jacobian(arm, q), "J"),
+        (lambda: ct.task_coriolis(arm, ct.Output(lambda q: q, lambda q: np.eye(2)), q, q), "jacobian_dot"),
+        (lambda: ct.damped_inverse(np.eye(2), 0.0), "damping"),
+        (lambda: ct.damped_inverse([1.0, 2.0], 0.1), "J"),
+        (lambda: ct.Camera(1.0, np.eye(4)).value(arm, q), "camera"),
+    ]
+    for call, name in cases:
+        with pytest.raises(ModelError, match=name):
+            call()
+
+
+def test_public_callables_are_documented() -> None:
+    """The numpydoc rules of tests/test_docstrings.py, applied to armdyn.cartesian (not yet in its walk)."""
+    items = list(docs._module_items(ct))
+    assert any(item.label.endswith("task_inertia") for item in items)
+    for item in items:
+        if item.signature is not None:
+            assert not docs.undocumented(item), item.label
+        if item.needs_returns:
+            assert docs.has_section(item.docstring, "Returns"), item.label
+        if not isinstance(item.target, type):  # every function and method says what it raises
+            assert docs.has_section(item.docstring, "Raises"), item.label
