@@ -367,3 +367,53 @@ def test_public_callables_are_documented() -> None:
             assert docs.has_section(item.docstring, "Returns"), item.label
         if not isinstance(item.target, type):  # every function and method says what it raises
             assert docs.has_section(item.docstring, "Raises"), item.label
+
+
+# ----- the Panda (7 joints, 6-D pose): operational space against Pinocchio ----------------------------
+def _panda_reduced() -> tuple[ad.Robot, pin.Model, int]:
+    """The Panda with its fingers locked (7 joints) in both libraries, and Pinocchio's frame at armdyn's tool."""
+    locked = {"panda_finger_joint1": 0.02, "panda_finger_joint2": 0.02}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        arm = ad.load_urdf(URDFS["panda"], locked=locked).without_friction()
+    full = pin.buildModelFromUrdf(str(URDFS["panda"]))
+    q_lock = pin.neutral(full)
+    for name, value in locked.items():
+        q_lock[full.joints[full.getJointId(name)].idx_q] = value
+    model = pin.buildReducedModel(full, [full.getJointId(name) for name in locked], q_lock)
+    assert arm.joint_names == list(model.names)[1:]
+    data, q = model.createData(), np.linspace(-0.5, 0.5, 7)
+    pin.framesForwardKinematics(model, data, q)
+    tool = arm.tool_pose(q)
+    frames = [k for k in range(model.nframes) if np.allclose(data.oMf[k].homogeneous, tool, atol=1e-12)]
+    assert frames, "no Pinocchio frame at armdyn's tool"
+    return arm, model, frames[0]
+
+
+def test_panda_operational_space_matches_pinocchio() -> None:
+    """Lambda = (J M^-1 J^T)^-1, mu = Jbar^T C qd - Lambda Jdot qd and p = Jbar^T G of the Panda's 6-D tool
+    pose equal a dense construction from Pinocchio's M, frame Jacobian and its time variation to 1e-9."""
+    arm, model, frame = _panda_reduced()
+    data = model.createData()
+    output = ct.ToolPose()
+    qs, qds = _regular_states(arm, output, 3)
+    space = ct.operational_space(arm, output, qs, qds)
+    for k, (q, qd) in enumerate(zip(qs, qds, strict=True)):
+        M = pin.crba(model, data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        J = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)
+        pin.computeJointJacobiansTimeVariation(model, data, q, qd)
+        pin.updateFramePlacements(model, data)
+        Jdot = pin.getFrameJacobianTimeVariation(model, data, frame, pin.LOCAL_WORLD_ALIGNED)
+        G = pin.computeGeneralizedGravity(model, data, q)
+        Cqd = pin.nonLinearEffects(model, data, q, qd) - G
+        Minv_JT = np.linalg.solve(M, J.T)
+        Lambda = np.linalg.inv(J @ Minv_JT)
+        Jbar = Minv_JT @ Lambda
+        _close(space.Lambda[k], Lambda, 1e-9)
+        _close(space.Jbar[k], Jbar, 1e-9)
+        _close(space.mu[k], Jbar.T @ Cqd - Lambda @ Jdot @ qd, 1e-9)
+        _close(space.p[k], Jbar.T @ G, 1e-9)
+        _close(space.Nproj[k], np.eye(7) - Jbar @ J, 1e-9)
+        # null-space motion leaves the task still: J N = 0, so qdd + N z moves y the same
+        assert np.abs(J @ space.Nproj[k]).max() < 1e-9 * np.abs(J).max()
