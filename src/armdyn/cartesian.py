@@ -1086,3 +1086,136 @@ def operational_space(
         _shaped(Nproj, b),
         _condition(J).reshape(b),
     )
+
+
+# ----- control in task coordinates ------------------------------------------------------------------
+@dataclass(frozen=True)
+class Circle:
+    """A circle in a plane of task coordinates (Example 4.2-1): y_d = c + r [cos wt, sin wt],
+    w = 2 pi / period, with its velocity and acceleration.
+
+    Parameters
+    ----------
+    centre : sequence of 2 float
+        The centre c (m).
+    radius : float
+        The radius r (m), at least 0.
+    period : float
+        The time of one turn (s), positive.
+    """
+
+    centre: tuple[float, float]
+    radius: float
+    period: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "centre", tuple(inputs.numbers(self.centre, "centre", (2,), " of a Circle")))
+        object.__setattr__(self, "radius", inputs.number(self.radius, "radius", " of a Circle", minimum=0.0))
+        if not inputs.number(self.period, "period", " of a Circle") > 0:
+            raise ModelError(f"period of a Circle must be positive, got {self.period!r}")
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(y_d, yd_d, ydd_d) at time t (s), each (2,).
+
+        Parameters
+        ----------
+        t : float
+            The time (s).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The desired position, velocity and acceleration.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``t`` is not a finite number.
+        """
+        w = 2.0 * np.pi / self.period
+        angle = w * inputs.number(t, "t")
+        ring = np.array([np.cos(angle), np.sin(angle)])
+        turn = np.array([-np.sin(angle), np.cos(angle)])
+        return np.array(self.centre) + self.radius * ring, self.radius * w * turn, -self.radius * w * w * ring
+
+
+class ComputedTorque:
+    """Computed-torque control in task coordinates (BOOK.md section 6):
+    tau = J^T (Mbar (yddot_d + Kv edot + Kp e) + Nbar), e = y_d - y, edot = yd_d - J qd.
+
+    It decouples the task coordinates into double integrators with PD feedback, for a square,
+    nonsingular J (a singular J is a ModelError, see ``task_inertia``). A controller for
+    ``armdyn.simulate`` (its Python loop): ``path(t)`` gives (y_d, yd_d, ydd_d); the model is
+    ``model`` or, inside simulate, the plant.
+
+    Parameters
+    ----------
+    output : TaskOutput
+        The task coordinates y = h(q) (PlanarPosition, ToolPosition, ToolPose is not supported:
+        its orientation error needs a rotation error, not a difference).
+    path : callable
+        t -> (y_d, yd_d, ydd_d), e.g. a Circle.
+    kp, kv : float
+        The proportional and derivative gains (1/s^2, 1/s).
+    model : Robot, optional
+        The arm the law computes with; default the plant ``simulate`` passes.
+    """
+
+    def __init__(self, output: TaskOutput, path: Callable, kp: float, kv: float, model: Robot | None = None) -> None:
+        self.output = _check_output(output)
+        if isinstance(output, ToolPose):
+            raise ModelError("ComputedTorque in task coordinates takes a position output, not ToolPose")
+        if not callable(path) or isinstance(path, type):
+            raise ModelError(f"path must be a callable t -> (y_d, yd_d, ydd_d), got {path!r}")
+        self.path = path
+        self.kp = inputs.number(kp, "kp", minimum=0.0)
+        self.kv = inputs.number(kv, "kv", minimum=0.0)
+        self.model = None if model is None else _check_arm(model)
+
+    def __call__(
+        self, t: float, q: np.ndarray, qd: np.ndarray, *joint_reference: object, plant: Robot | None = None
+    ) -> np.ndarray:
+        """The torque at time t for the state (q, qd); the joint-space reference simulate passes
+        is not used.
+
+        Parameters
+        ----------
+        t : float
+            The time (s).
+        q, qd : numpy.ndarray
+            The joint positions and velocities, (n,).
+        *joint_reference : object
+            simulate's joint-space reference (q_d, qd_d, qdd_d, e_int), ignored.
+        plant : Robot, optional
+            The arm simulated, used when the law has no model of its own.
+
+        Returns
+        -------
+        numpy.ndarray
+            tau, (n,).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When there is no arm to compute with, or J is singular.
+        """
+        arm = self.model if self.model is not None else plant
+        if arm is None:
+            raise ModelError(
+                "ComputedTorque in task coordinates needs a model of the arm (model=...) outside simulate()"
+            )
+        y_d, yd_d, ydd_d = (np.asarray(part, dtype=float) for part in self.path(t))
+        J = self.output.jacobian(arm, q)
+        e, edot = y_d - self.output.value(arm, q), yd_d - J @ qd
+        f = task_inverse_dynamics(arm, self.output, q, qd, ydd_d + self.kv * edot + self.kp * e)
+        return J.T @ f
+
+    def describe(self) -> str:
+        """The law and its gains, for titles and reports.
+
+        Returns
+        -------
+        str
+            A short description.
+        """
+        return f"task-space computed torque (kp = {self.kp:g}, kv = {self.kv:g})"
