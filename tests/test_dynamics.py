@@ -265,3 +265,18 @@ def test_one_state_scratch_on_the_stack_or_the_heap_gives_the_batch_result(n: in
         batch = method(*args)
         for s in range(2):
             assert_allclose(method(*(a[s] for a in args)), batch[s], rtol=1e-13, atol=1e-13, err_msg=name)
+
+
+def test_small_batches_run_on_the_calling_thread_and_leave_the_thread_count() -> None:
+    """A batch below api.SERIAL_WORK result values runs on one thread (waking the idle threads
+    costs more than the work), a larger one on all; either way the thread count is restored
+    and the numbers are those of the one-state calls."""
+    from armdyn.dynamics import api
+
+    arm = ad.models.puma560()
+    threads = ad.threads()
+    for states in (3, api.SERIAL_WORK // arm.n + 1):
+        q = np.random.default_rng(states).uniform(-1, 1, (states, arm.n))
+        tau = arm.inverse_dynamics(q, q, q)
+        assert ad.threads() == threads
+        assert_allclose(tau[-1], arm.inverse_dynamics(q[-1], q[-1], q[-1]), rtol=1e-13, atol=1e-12)

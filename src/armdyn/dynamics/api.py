@@ -18,6 +18,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import get_num_threads, set_num_threads
 from numba.core.errors import NumbaError
 
 from armdyn import inputs, kinematics
@@ -57,6 +58,25 @@ _NOT_ONE_STATE = (TypeError, ValueError, NumbaError)
 _NO_WRENCH = np.zeros((1, 6))
 
 
+SERIAL_WORK = 8192
+"""Result values below which a batch runs on the calling thread alone: waking the idle batch
+threads costs about 80 us, more than a thousand states take on one (measured crossover between
+1,000 and 2,000 states of inverse or forward dynamics on a six-joint arm)."""
+
+
+def _launch(kernel: Callable, work: int, *args: object) -> None:
+    """kernel(*args), on one thread when the result has fewer than SERIAL_WORK values."""
+    threads = get_num_threads()
+    if work >= SERIAL_WORK or threads == 1:
+        kernel(*args)
+        return
+    set_num_threads(1)
+    try:
+        kernel(*args)
+    finally:
+        set_num_threads(threads)
+
+
 def _where(arm: Robot) -> str:
     return f" for '{arm.name}' (n = {arm.n})"
 
@@ -79,9 +99,10 @@ def _rnea(
     if not target.shape[0]:
         return result
     if f_ext is None:
-        rnea_blocks(model, flat[0], flat[1], flat[2], flags, target)
+        _launch(rnea_blocks, target.size, model, flat[0], flat[1], flat[2], flags, target)
     else:
-        rnea_batch(model, flat[0], flat[1], flat[2], inputs.wrenches(f_ext, batch), flags | WITH_WRENCH, target)
+        wrench = inputs.wrenches(f_ext, batch)
+        _launch(rnea_batch, target.size, model, flat[0], flat[1], flat[2], wrench, flags | WITH_WRENCH, target)
     return result
 
 
@@ -94,7 +115,7 @@ def _batch(
     result = inputs.result(out, (*batch, *trailing))
     target = result.reshape(-1, *trailing)
     if target.shape[0]:
-        kernel(model, *flat, target)
+        _launch(kernel, target.size, model, *flat, target)
     return result
 
 
@@ -378,7 +399,7 @@ def forward_dynamics(
     result = inputs.result(out, (*batch, arm.n))
     singular = np.full(flat[0].shape[0], -1)
     if singular.size:
-        aba_blocks(model, *flat, result.reshape(-1, arm.n), singular)
+        _launch(aba_blocks, result.size, model, *flat, result.reshape(-1, arm.n), singular)
     if singular.max(initial=-1) >= 0:
         raise _singular(arm, flat[0], singular, batch)
     return result

@@ -62,10 +62,12 @@ def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
         def no_conversion(self: Dispatcher, *args: object, **kwargs: object) -> bool:
             return False  # the signature's types exactly: Numba would otherwise convert a bool or a float to an int
 
+        message = f"{function.__name__} takes only the types of its signature {signature}"
+
         def refuse(self: Dispatcher, *args: object, **kwargs: object) -> None:
             # Numba's own message types every argument (about 60 us for a batch): the api's general path,
             # which every refused call takes next, names what is wrong
-            raise TypeError(f"{self.py_func.__name__} takes only the types of its signature {signature}")
+            raise TypeError(message)
 
         dispatcher._compile_for_args = MethodType(compile_signature, dispatcher)
         dispatcher._search_new_conversions = MethodType(no_conversion, dispatcher)
