@@ -488,3 +488,32 @@ def test_cli_progress_shows_on_stderr_when_asked(monkeypatch: pytest.MonkeyPatch
     checked = invoke("--progress", "check", "two_link_planar", "--samples", "10")
     assert checked.exit_code == 0, checked.output
     assert "checking Table 3.3.1 on two_link_planar" in checked.stderr
+
+
+# ----- task coordinates ------------------------------------------------------------------------------
+def test_cli_task_prints_the_task_space_equation(tmp_path: Path) -> None:
+    from armdyn import cartesian
+
+    result = invoke("task", "two_link_planar", "-c", "planar", "--q", "0.3,1.2", "--qd", "0.5,-0.2",
+                    "-o", tmp_path / "task.csv")  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "cond J = 3.728" in result.stdout
+    arm, output = ad.models.two_link_planar(), cartesian.PlanarPosition()
+    q, qd = np.array([0.3, 1.2]), np.array([0.5, -0.2])
+    Mbar, Nbar = cartesian.task_inertia(arm, output, q), cartesian.task_nonlinear(arm, output, q, qd)
+    text = (tmp_path / "task.csv").read_text()
+    assert f"{Mbar[1, 1]:.6g}" in text and f"{Nbar[1]:.6g}" in text
+    damped = invoke("task", "two_link_planar", "-c", "planar", "--q", "0.3,0", "--damping", "0.01")
+    assert damped.exit_code == 0 and "damping 0.01" in damped.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "fragments"),
+    [
+        (["task", "two_link_planar", "-c", "planar", "--q", "0.3,0"], ["singular or ill-conditioned", "2.25e+16"]),
+        (["task", "two_link_planar", "-c", "sideways"], ["--coordinates must be one of position, pose, planar"]),
+        (["task", "puma560", "-c", "planar"], ["square"]),
+    ],
+)
+def test_cli_task_errors_are_one_line(args: list[str], fragments: list[str]) -> None:
+    assert_one_error_line(invoke(*args), *fragments)

@@ -1084,3 +1084,56 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
+
+
+TASK_OUTPUTS = ("position", "pose", "planar")
+
+
+@app.command()
+def task(
+    name: str = typer.Argument(..., help=ARM_HELP),
+    coordinates: str = typer.Option(
+        "position",
+        "--coordinates",
+        "-c",
+        help="The task coordinates: 'position' (tool point, 3), 'pose' (tool position and angular velocity, 6) or "
+        "'planar' (tool x, y, 2). Square J is needed: as many coordinates as joints.",
+    ),
+    q: str | None = typer.Option(None, "--q", help=f"The configuration (rad or m): a named one, or {PER_JOINT}."),
+    qd: str | None = typer.Option(None, "--qd", help=f"Joint velocities (rad/s or m/s): {PER_JOINT}. Default 0."),
+    damping: float | None = typer.Option(None, "--damping", help="Damped least-squares inverse near a singular J."),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    output: str | None = typer.Option(
+        None, "--output", "-o", help="Also write the tables to this file: .csv, .md or .txt (by its suffix)."
+    ),
+) -> None:
+    """The robot equation in task coordinates (Section 3.5): Mbar, Nbar and Gbar at a state, and cond J."""
+    from armdyn import cartesian
+
+    target = _table_file(output, "--output") if output else None
+    arm = _arm(name, strict)
+    outputs = {"position": cartesian.ToolPosition, "pose": cartesian.ToolPose, "planar": cartesian.PlanarPosition}
+    if coordinates not in outputs:
+        raise ModelError(f"--coordinates must be one of {', '.join(TASK_OUTPUTS)}, got {coordinates!r}")
+    chosen = outputs[coordinates]()
+    start = _joint_state(q, "--q", arm) if q is not None else np.zeros(arm.n)
+    rates = np.broadcast_to(_per_joint(qd, "--qd", arm.n), (arm.n,)).copy() if qd is not None else np.zeros(arm.n)
+    options = {} if damping is None else {"damping": damping}
+    Mbar = cartesian.task_inertia(arm, chosen, start, **options)
+    Nbar = cartesian.task_nonlinear(arm, chosen, start, rates, **options)
+    Gbar = cartesian.task_gravity(arm, chosen, start, **options)
+    condition = float(cartesian.condition_number(arm, chosen, start))
+    labels = {"position": ["x", "y", "z"], "pose": ["x", "y", "z", "wx", "wy", "wz"], "planar": ["x", "y"]}[coordinates]
+    sheets = [
+        _Sheet(f"Mbar = J^-T M J^-1 ({arm.name}, {coordinates})", ["", *labels],
+               [[label, *(_number(v, 6) for v in row)] for label, row in zip(labels, Mbar, strict=True)]),
+        _Sheet("Nbar = J^-T (N - M J^-1 Jdot qd) and Gbar = J^-T G", ["coordinate", "Nbar", "Gbar"],
+               [[label, _number(n, 6), _number(g, 6)] for label, n, g in zip(labels, Nbar, Gbar, strict=True)]),
+    ]  # fmt: skip
+    for sheet in sheets:
+        console.print(sheet.rich())
+    state = f"q = {_vector(start)}, qd = {_vector(rates)}"
+    console.print(f"{state}; cond J = {condition:.4g}" + ("" if damping is None else f" (damping {damping:g})"))
+    if target is not None:
+        _write_sheets(target, sheets, [state, f"cond J = {condition:.6g}"])
+        console.print(f"wrote {output}")
