@@ -1219,3 +1219,99 @@ class ComputedTorque:
             A short description.
         """
         return f"task-space computed torque (kp = {self.kp:g}, kv = {self.kv:g})"
+
+
+class OperationalSpaceControl:
+    """Operational-space control of a redundant arm (Khatib 1987): the task by computed torque
+    in task coordinates, a joint posture in the null space,
+    tau = J^T (Lambda (yddot_d + kv edot + kp e) + mu + p + friction) + Nproj^T tau_0,
+    tau_0 = M (kp0 (q_0 - q) - kv0 qd), e = y_d - y, edot = yd_d - J qd.
+
+    The null-space torque leaves the task acceleration unchanged (J M^-1 Nproj^T = 0: the
+    generalized inverse is dynamically consistent), so the task error obeys
+    edd + kv ed + kp e = 0 whatever the posture does. A controller for ``armdyn.simulate``.
+
+    Parameters
+    ----------
+    output : TaskOutput
+        The task coordinates (a position output: ToolPosition, LinkPoint, PlanarPosition).
+    path : callable
+        t -> (y_d, yd_d, ydd_d).
+    kp, kv : float
+        The task gains (1/s^2, 1/s).
+    posture : callable or array_like
+        The joint posture q_0: a fixed (n,) configuration or a callable t -> q_0(t).
+    kp0, kv0 : float
+        The posture gains (1/s^2, 1/s).
+    model : Robot, optional
+        The arm the law computes with; default the plant ``simulate`` passes.
+    """
+
+    def __init__(
+        self,
+        output: TaskOutput,
+        path: Callable,
+        kp: float,
+        kv: float,
+        posture: object,
+        kp0: float,
+        kv0: float,
+        model: Robot | None = None,
+    ) -> None:
+        self.task = ComputedTorque(output, path, kp, kv, model)
+        self.posture = posture if callable(posture) else inputs.numbers(posture, "posture")
+        self.kp0 = inputs.number(kp0, "kp0", minimum=0.0)
+        self.kv0 = inputs.number(kv0, "kv0", minimum=0.0)
+
+    def __call__(
+        self, t: float, q: np.ndarray, qd: np.ndarray, *joint_reference: object, plant: Robot | None = None
+    ) -> np.ndarray:
+        """The torque at time t for the state (q, qd); simulate's joint reference is not used.
+
+        Parameters
+        ----------
+        t : float
+            The time (s).
+        q, qd : numpy.ndarray
+            The joint positions and velocities, (n,).
+        *joint_reference : object
+            simulate's joint-space reference, ignored.
+        plant : Robot, optional
+            The arm simulated, used when the law has no model of its own.
+
+        Returns
+        -------
+        numpy.ndarray
+            tau, (n,).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When there is no arm to compute with, J is singular, or the posture has the wrong length.
+        """
+        task = self.task
+        arm = task.model if task.model is not None else plant
+        if arm is None:
+            raise ModelError("OperationalSpaceControl needs a model of the arm (model=...) outside simulate()")
+        y_d, yd_d, ydd_d = (np.asarray(part, dtype=float) for part in task.path(t))
+        space = operational_space(arm, task.output, q, qd)
+        e, edot = y_d - task.output.value(arm, q), yd_d - space.J @ qd
+        force = space.Lambda @ (ydd_d + task.kv * edot + task.kp * e) + space.mu + space.p + space.friction
+        target = np.asarray(self.posture(t) if callable(self.posture) else self.posture, dtype=float)
+        if target.shape != q.shape:
+            raise ModelError(f"posture must have {q.shape[0]} values, got shape {target.shape}")
+        tau_0 = arm.inertia_matrix(q) @ (self.kp0 * (target - q) - self.kv0 * qd)
+        return space.J.T @ force + space.Nproj.T @ tau_0
+
+    def describe(self) -> str:
+        """The law and its gains, for titles and reports.
+
+        Returns
+        -------
+        str
+            A short description.
+        """
+        return (
+            f"operational-space control (kp = {self.task.kp:g}, kv = {self.task.kv:g}; "
+            f"posture kp0 = {self.kp0:g}, kv0 = {self.kv0:g})"
+        )
