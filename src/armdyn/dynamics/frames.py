@@ -34,6 +34,7 @@ from armdyn.dynamics.spatial import (
     VECTOR,
     joint_transform,
     one_state,
+    pose_product,
     scratch,
     states_status,
     world_pose,
@@ -59,34 +60,15 @@ def body_poses(model: np.ndarray, q: np.ndarray, work: np.ndarray) -> None:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def compose(work: np.ndarray, pose: int, model: np.ndarray, offset: int, out: np.ndarray, o: int) -> None:
-    """out[o:o+12] = (R, p) of the world pose at work[pose:] times the constant (R', p') stored
-    at model[offset:offset+12]: R R', p + R p'."""
-    for r in range(3):
-        for c in range(3):
-            out[o + 3 * r + c] = (
-                work[pose + 3 * r] * model[offset + c]
-                + work[pose + 3 * r + 1] * model[offset + 3 + c]
-                + work[pose + 3 * r + 2] * model[offset + 6 + c]
-            )
-        out[o + 9 + r] = (
-            work[pose + 9 + r]
-            + work[pose + 3 * r] * model[offset + 9]
-            + work[pose + 3 * r + 1] * model[offset + 10]
-            + work[pose + 3 * r + 2] * model[offset + 11]
-        )
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
 def target_pose(model: np.ndarray, work: np.ndarray, target: int, o: int) -> int:
     """The world pose of the target (a link frame, or the tool) at work[o:o+12]; returns the
     index of the body that carries it."""
     if target == TOOL:
         body = int(model[TOOL_LINK])
-        compose(work, POSE * body, model, TOOL_ROTATION, work, o)
+        pose_product(work, POSE * body, model, TOOL_ROTATION, work, o)
     else:
         body = target
-        compose(work, POSE * body, model, HEADER + STRIDE * body + LINK_ROTATION, work, o)
+        pose_product(work, POSE * body, model, HEADER + STRIDE * body + LINK_ROTATION, work, o)
     return body
 
 
@@ -163,11 +145,11 @@ def body_velocities(model: np.ndarray, qd: np.ndarray, work: np.ndarray, w: int)
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def jacobian_dot_columns(
-    model: np.ndarray, work: np.ndarray, body: int, point: int, w: int, jac: np.ndarray, out: np.ndarray
+    model: np.ndarray, work: np.ndarray, body: int, point: int, w: int, out: np.ndarray
 ) -> tuple[float, float, float]:
     """out (6, n) = dJ/dt in world axes: for a joint j that moves the body, with zdot_j =
     w_parent x z_j and odot_j the velocity of o_j, [zdot_j x (p - o_j) + z_j x (pdot - odot_j);
-    zdot_j] (revolute) or [zdot_j; 0] (prismatic). ``jac`` holds J; returns the target's w."""
+    zdot_j] (revolute) or [zdot_j; 0] (prismatic); returns the target's w."""
     n = int(model[N_JOINTS])
     for r in range(6):
         for j in range(n):
@@ -226,7 +208,7 @@ def transforms_core(model: np.ndarray, q: np.ndarray, work: np.ndarray, out: np.
     body_poses(model, q, work)
     link_pose = POSE * (n + 1)
     for i in range(n):
-        compose(work, POSE * i, model, HEADER + STRIDE * i + LINK_ROTATION, work, link_pose)
+        pose_product(work, POSE * i, model, HEADER + STRIDE * i + LINK_ROTATION, work, link_pose)
         write_pose(work, link_pose, out[i])
 
 
@@ -253,19 +235,26 @@ def jacobian_core(model: np.ndarray, q: np.ndarray, target: int, frame: int, wor
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def jacobian_dot_core(
-    model: np.ndarray, q: np.ndarray, qd: np.ndarray, target: int, frame: int, work: np.ndarray, out: np.ndarray
+    model: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    target: int,
+    frame: int,
+    work: np.ndarray,
+    jac: np.ndarray,
+    out: np.ndarray,
 ) -> None:
-    """out (6, n): dJ/dt of the target's Jacobian, in world or local axes."""
+    """out (6, n): dJ/dt of the target's Jacobian, in world or local axes (``jac``, (6, n), is
+    scratch for J, needed in local axes only)."""
     n = int(model[N_JOINTS])
     body_poses(model, q, work)
     pose = POSE * (n + 1)
     body = target_pose(model, work, target, pose)
     velocities = POSE * (n + 2)
     body_velocities(model, qd, work, velocities)
-    jac = np.empty((6, n))
-    jacobian_columns(model, work, body, pose + 9, jac)
-    wx, wy, wz = jacobian_dot_columns(model, work, body, pose + 9, velocities, jac, out)
+    wx, wy, wz = jacobian_dot_columns(model, work, body, pose + 9, velocities, out)
     if frame == LOCAL:
+        jacobian_columns(model, work, body, pose + 9, jac)
         local_derivative(out, jac, wx, wy, wz)
         rotate_rows_into(work, pose, out)
 
@@ -333,7 +322,7 @@ def jacobian_dot_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, target: i
     if status == 0 and (out.shape[0] != 6 or out.shape[1] != n):
         status = 4
     if status == 0:
-        jacobian_dot_core(model, q, qd, target, frame, scratch(workspace_size(n)), out)
+        jacobian_dot_core(model, q, qd, target, frame, scratch(workspace_size(n)), np.empty((6, n)), out)
     return status
 
 
@@ -378,6 +367,6 @@ def jacobian_dot_batch(
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = np.empty(workspace_size(q.shape[1]))
+        work, jac = np.empty(workspace_size(q.shape[1])), np.empty((6, q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
-            jacobian_dot_core(model, q[s], qd[s], target, frame, work, out[s])
+            jacobian_dot_core(model, q[s], qd[s], target, frame, work, jac, out[s])

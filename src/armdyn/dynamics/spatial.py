@@ -376,25 +376,27 @@ def add_inertia_to_parent(work: np.ndarray, t: int, src: int, dst: int) -> None:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
+def pose_product(a: np.ndarray, ia: int, b: np.ndarray, ib: int, out: np.ndarray, o: int) -> None:
+    """out[o:o+12] = A B for poses (R, p) stored as 12 values (R row-major, then p):
+    R = R_a R_b, p = p_a + R_a p_b."""
+    for r in range(3):
+        for c in range(3):
+            out[o + 3 * r + c] = (
+                a[ia + 3 * r] * b[ib + c] + a[ia + 3 * r + 1] * b[ib + 3 + c] + a[ia + 3 * r + 2] * b[ib + 6 + c]
+            )
+        out[o + 9 + r] = (
+            a[ia + 9 + r] + a[ia + 3 * r] * b[ib + 9] + a[ia + 3 * r + 1] * b[ib + 10] + a[ia + 3 * r + 2] * b[ib + 11]
+        )
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
 def world_pose(model: np.ndarray, work: np.ndarray, local: int, parent_pose: int, pose: int, has_parent: bool) -> None:
     """Pose of a body in the world: R_w = R_wp R, p_w = p_wp + R_wp p (12 values at work[pose:])."""
     if not has_parent:
         for k in range(12):
             work[pose + k] = work[local + k]
         return
-    for r in range(3):
-        for c in range(3):
-            work[pose + 3 * r + c] = (
-                work[parent_pose + 3 * r] * work[local + c]
-                + work[parent_pose + 3 * r + 1] * work[local + 3 + c]
-                + work[parent_pose + 3 * r + 2] * work[local + 6 + c]
-            )
-        work[pose + 9 + r] = (
-            work[parent_pose + 9 + r]
-            + work[parent_pose + 3 * r] * work[local + 9]
-            + work[parent_pose + 3 * r + 1] * work[local + 10]
-            + work[parent_pose + 3 * r + 2] * work[local + 11]
-        )
+    pose_product(work, parent_pose, work, local, work, pose)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
