@@ -136,6 +136,49 @@ def test_skew_property_random_chain_tool_position(seed: int) -> None:
         _close(ct.task_coriolis(arm, output, q, qd) @ ydot + Gbar + Fbar, Nbar, 1e-9)
 
 
+@pytest.mark.parametrize("seed", SEEDS)
+def test_friction_and_regressor_in_task_coordinates(seed: int) -> None:
+    """Fbar = J^-T F, Vmbar ydot + Fbar + Gbar = Nbar, and Wbar phi = Mbar yddot + Nbar (a random chain with friction)."""
+    arm, output = strategies.random_robot(seed, 3, chain=True), ct.ToolPosition()
+    qs, qds = _regular_states(arm, output, seed, count=3, limit=100)
+    yddot = np.random.default_rng(seed).normal(size=qs.shape)
+    J = output.jacobian(arm, qs)
+    Fbar = ct.task_friction(arm, output, qs, qds)
+    _close(np.einsum("bji,bj->bi", J, Fbar), arm.friction(qds), 1e-10)
+    ydot = np.einsum("bij,bj->bi", J, qds)
+    Vmbar_ydot = np.einsum("bij,bj->bi", ct.task_coriolis(arm, output, qs, qds), ydot)
+    Nbar = ct.task_nonlinear(arm, output, qs, qds)
+    _close(Vmbar_ydot + Fbar + ct.task_gravity(arm, output, qs), Nbar, 1e-9)
+    Wbar = ct.task_regressor(arm, output, qs, qds, yddot)
+    assert Wbar.shape == (3, 3, len(arm.parameters()))
+    f = np.einsum("bij,bj->bi", ct.task_inertia(arm, output, qs), yddot) + Nbar
+    _close(Wbar @ arm.parameters(), f, 1e-9)
+    _close(Wbar[1] @ arm.parameters(), ct.task_inverse_dynamics(arm, output, qs[1], qds[1], yddot[1]), 1e-9)
+
+
+def test_redundant_skew_property_holds_with_null_space_motion() -> None:
+    """Panda tool position (m = 3 < n = 7): Lambda_dot - 2 mu_x is skew while the arm also moves in its
+    null space, and mu = mu_x ydot + coupling with the coupling (Jbar^T Vm - Lambda Jdot) N qd."""
+    arm, _, _ = _panda_reduced()
+    output = ct.ToolPosition()
+    qs, qds = _regular_states(arm, output, 11, count=2, limit=100)
+    for q, qd in zip(qs, qds, strict=True):
+        space = ct.operational_space(arm, output, q, qd)
+        assert np.abs(space.Nproj @ qd).max() > 0.1 * np.abs(qd).max()  # a real null-space motion
+        mu_x, coupling = ct.operational_coriolis(arm, output, q, qd)
+        _close(mu_x @ (space.J @ qd) + coupling, space.mu, 1e-9)
+        h = 2e-4
+        L = [ct.operational_space(arm, output, q + k * h * qd, qd).Lambda for k in (-2, -1, 1, 2)]
+        Lambda_dot = (L[0] - 8 * L[1] + 8 * L[2] - L[3]) / (12 * h)
+        S = Lambda_dot - 2 * mu_x
+        assert np.abs(S + S.T).max() < 1e-8 * max(np.abs(Lambda_dot).max(), np.abs(mu_x).max())
+    ur5, pose = _ur5(), ct.ToolPose()
+    q1, qd1 = _regular_states(ur5, pose, 1, 1)
+    mu_x, coupling = ct.operational_coriolis(ur5, pose, q1, qd1)
+    _close(mu_x, ct.task_coriolis(ur5, pose, q1, qd1), 1e-9)  # m = n: mu_x = Vmbar, no null space
+    assert np.abs(coupling).max() < 1e-9 * np.abs(mu_x).max()
+
+
 # ----- outputs: Jacobians and biases by finite differences ----------------------------------------
 def _tilted_camera() -> ct.Camera:
     from scipy.spatial.transform import Rotation
@@ -417,6 +460,34 @@ def test_panda_operational_space_matches_pinocchio() -> None:
         _close(space.Nproj[k], np.eye(7) - Jbar @ J, 1e-9)
         # null-space motion leaves the task still: J N = 0, so qdd + N z moves y the same
         assert np.abs(J @ space.Nproj[k]).max() < 1e-9 * np.abs(J).max()
+
+
+@pytest.mark.parametrize("output", [ct.ToolPose(), ct.ToolPosition(), ct.LinkPoint(4), ct.PlanarPosition((1, 2))], ids=repr)
+def test_compiled_one_state_path_equals_the_batch_path(output: ct.TaskOutput) -> None:
+    """One state of a built-in row output runs a compiled kernel; a batch runs NumPy's solves: equal to 1e-12,
+    on the Panda (7 joints) and on a 3-joint random chain, and a near-singular state still raises."""
+    panda, _, _ = _panda_reduced()
+    for arm in (panda, strategies.random_robot(4, 3, chain=True)):
+        if isinstance(output, ct.LinkPoint) and arm.n < 5 or output.jacobian(arm, np.zeros(arm.n)).shape[0] > arm.n:
+            continue
+        qs, qds = _regular_states(arm, output, 2, count=3, limit=1e3)
+        batch = ct.operational_space(arm, output, qs, qds)
+        Lambdas = ct.operational_inertia(arm, output, qs)
+        for k in range(3):
+            one = ct.operational_space(arm, output, qs[k], qds[k])
+            for name in ("J", "Lambda", "Jbar", "mu", "p", "friction"):
+                _close(getattr(one, name), getattr(batch, name)[k], 1e-12)
+            assert_allclose(one.Nproj, batch.Nproj[k], atol=1e-12)  # zero for m = n
+            _close(ct.operational_inertia(arm, output, qs[k]), Lambdas[k], 1e-12)
+            assert one.condition == pytest.approx(batch.condition[k], rel=1e-12)
+            if Lambdas.shape[-1] == arm.n:
+                _close(ct.task_inertia(arm, output, qs[k]), ct.task_inertia(arm, output, qs)[k], 1e-12)
+    stretched = ad.models.two_link_planar()
+    with pytest.raises(ModelError, match="condition number"):
+        ct.operational_inertia(stretched, ct.PlanarPosition(), np.array([0.3, 1e-12]))
+    with pytest.raises(ModelError, match="condition number"):
+        ct.task_inertia(stretched, ct.PlanarPosition(), np.array([0.3, 1e-12]))
+    assert np.isfinite(ct.operational_inertia(stretched, ct.PlanarPosition(), np.array([0.3, 0.0]), damping=0.01)).all()
 
 
 # ----- computed torque in task coordinates ---------------------------------------------------------------

@@ -33,11 +33,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba.core.errors import NumbaError
 
 from armdyn import inputs, kinematics
+from armdyn.dynamics.frames import TOOL
+from armdyn.dynamics.operational import lambda_one, operational_one
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -56,14 +60,18 @@ __all__ = [
     "ToolPosition",
     "condition_number",
     "damped_inverse",
+    "operational_coriolis",
+    "operational_inertia",
     "operational_space",
     "task_coriolis",
     "task_force",
     "task_forward_dynamics",
+    "task_friction",
     "task_gravity",
     "task_inertia",
     "task_inverse_dynamics",
     "task_nonlinear",
+    "task_regressor",
 ]
 
 DEFAULT_MAX_CONDITION = 1e8
@@ -233,6 +241,13 @@ class _Rows(TaskOutput):
 
     def _link(self, arm: Robot) -> int | None:
         return None
+
+    def _compiled(self) -> tuple[int, np.ndarray]:
+        """(target, rows) for the compiled one-state kernels (the kernel checks the target)."""
+        rows = self.__dict__.get("_row_array")
+        if rows is None:
+            rows = self.__dict__["_row_array"] = np.array(self._rows, dtype=np.int64)
+        return getattr(self, "link", TOOL), rows
 
     def _position(self, arm: Robot, q: np.ndarray) -> np.ndarray:
         link = self._link(arm)
@@ -524,6 +539,9 @@ class Output(TaskOutput):
         return np.stack([self._call(function, "bias", (x.copy(), v.copy()), (m,)) for x, v in zip(q, qd, strict=True)])
 
 
+_ROW_OUTPUTS = (ToolPosition, ToolPose, LinkPoint, PlanarPosition)
+
+
 # ----- conditioning and the (damped) inverse ------------------------------------------------------
 def _condition(J: np.ndarray) -> np.ndarray:
     """sigma_max / sigma_min of each (m, n) J with m <= n; inf for a rank-deficient one, never NaN."""
@@ -681,6 +699,22 @@ def _task(
     return arm, output, _Task(batch, flat, J, damped, 0.0 if lam is None else lam)
 
 
+# The compiled one-state path: the built-in row outputs, one state of float64 arrays, a float
+# max_condition and no damping to check; anything else (or a state the kernel cannot certify
+# regular) takes the general path, which checks the arguments and decides at singular states.
+_NOT_ONE_STATE = (TypeError, ValueError, NumbaError)
+
+
+def _compiled(arm: object, output: object, m: int | None, damping: object, limit: object) -> tuple | None:
+    """(target, rows) when the compiled one-state kernels may take the call (with m rows if given)."""
+    if type(output) not in _ROW_OUTPUTS or not isinstance(arm, Robot) or type(limit) is not float:
+        return None
+    if damping is not None and not (type(damping) is float and damping > 0):
+        return None
+    target, rows = output._compiled()
+    return None if m is not None and rows.shape[0] != m else (target, rows)
+
+
 # ----- square outputs: Mbar, Vmbar, Gbar, Nbar (BOOK.md section 6) --------------------------------
 _T = np.swapaxes
 
@@ -720,6 +754,14 @@ def task_inertia(
         When an argument is invalid, m != n, or J is ill-conditioned at a state and no
         damping is given (the message names the state and the condition number).
     """
+    fast = _compiled(arm, output, getattr(arm, "n", None), damping, max_condition)
+    if fast is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
+        result = np.empty((arm.n, arm.n))
+        try:
+            if lambda_one(arm.packed, q, fast[0], fast[1], max_condition, result) == 0:
+                return result
+        except _NOT_ONE_STATE:
+            pass
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
     M = arm.inertia_matrix(task.states[0])
     Mbar = task.inverse_transpose(_T(task.inverse_transpose(M), 1, 2))  # J^-T (J^-T M)^T, M symmetric
@@ -848,6 +890,93 @@ def task_nonlinear(
     M, N = arm.inertia_matrix(fq), arm.nonlinear_terms(fq, fqd)
     a = task.inverse(output._bias(arm, fq, fqd)[:, :, None])
     return _shaped(task.inverse_transpose(N[:, :, None] - M @ a)[:, :, 0], task.batch)
+
+
+def task_friction(
+    arm: Robot,
+    output: TaskOutput,
+    q: ArrayLike,
+    qd: ArrayLike,
+    *,
+    damping: float | None = None,
+    max_condition: float = DEFAULT_MAX_CONDITION,
+) -> np.ndarray:
+    """Fbar = J^-T F(qd), the friction in output coordinates (BOOK.md section 6).
+
+    With qd = J^-1 ydot, the viscous part J^-T Fv J^-1 ydot couples the outputs even when
+    Fv is diagonal.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    output : TaskOutput
+        A square output (m = n).
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast.
+    damping : float, optional
+        As for ``task_inertia``.
+    max_condition : float, optional
+        As for ``task_inertia``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Fbar, shape (..., n).
+
+    Raises
+    ------
+    ModelError
+        As for ``task_inertia``, and when qd is invalid.
+    """
+    arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
+    F = arm.friction(task.states[1])
+    return _shaped(task.inverse_transpose(F[:, :, None])[:, :, 0], task.batch)
+
+
+def task_regressor(
+    arm: Robot,
+    output: TaskOutput,
+    q: ArrayLike,
+    qd: ArrayLike,
+    yddot: ArrayLike,
+    *,
+    damping: float | None = None,
+    max_condition: float = DEFAULT_MAX_CONDITION,
+) -> np.ndarray:
+    """Wbar = J^-T W(q, qd, qdd) at qdd = J^-1 (yddot - Jdot qd): f = Wbar phi (BOOK.md section 6).
+
+    The linear parameterization in output coordinates: Mbar yddot + Nbar = Wbar phi with
+    phi = arm.parameters(), the same parameters as the joint-space tau = W phi.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    output : TaskOutput
+        A square output (m = n).
+    q, qd, yddot : array_like
+        Joint positions, velocities and the output's acceleration, (n,) or a batch (..., n);
+        the batch shapes broadcast.
+    damping : float, optional
+        As for ``task_inertia``.
+    max_condition : float, optional
+        As for ``task_inertia``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Wbar, shape (..., n, p) with p = len(arm.parameters()).
+
+    Raises
+    ------
+    ModelError
+        As for ``task_inertia``, and when qd or yddot is invalid.
+    """
+    arm, output, task = _task(arm, output, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, True)
+    fq, fqd, acc = task.states
+    qdd = task.inverse((acc - output._bias(arm, fq, fqd))[:, :, None])[:, :, 0]
+    return _shaped(task.inverse_transpose(arm.regressor(fq, fqd, qdd)), task.batch)
 
 
 def task_force(
@@ -1004,8 +1133,6 @@ class OperationalSpace:
         The friction force Jbar^T F(qd), (..., m).
     Nproj : numpy.ndarray
         The null-space projector I - Jbar J, (..., n, n).
-    condition : numpy.ndarray
-        The condition number of J, (...).
     """
 
     J: np.ndarray
@@ -1015,7 +1142,76 @@ class OperationalSpace:
     p: np.ndarray
     friction: np.ndarray
     Nproj: np.ndarray
-    condition: np.ndarray
+
+    @cached_property
+    def condition(self) -> np.ndarray:
+        """The condition number of J, (...) (an SVD per state, made when first read)."""
+        J = self.J
+        return _condition(J.reshape(-1, *J.shape[-2:])).reshape(J.shape[:-2])
+
+
+def operational_inertia(
+    arm: Robot,
+    output: TaskOutput,
+    q: ArrayLike,
+    *,
+    damping: float | None = None,
+    max_condition: float = DEFAULT_MAX_CONDITION,
+) -> np.ndarray:
+    """Lambda = (J M^-1 J^T)^-1, the inertia an output with m <= n presents (Khatib 1987, eq. 12).
+
+    For a square output at a regular state it equals Mbar = J^-T M J^-1 (``task_inertia``);
+    for a redundant one it is the inertia felt at the task, not J^+T M J^+. One state of the
+    built-in row outputs (ToolPosition, ToolPose, LinkPoint, PlanarPosition) is one compiled
+    call (Cholesky factors of M and of J M^-1 J^T, no explicit inverse of M).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    output : TaskOutput
+        The task output (m <= n).
+    q : array_like
+        Joint positions, (n,) or a batch (..., n).
+    damping : float, optional
+        As for ``operational_space``.
+    max_condition : float, optional
+        As for ``operational_space``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Lambda, symmetric positive definite, (..., m, m).
+
+    Raises
+    ------
+    ModelError
+        As for ``operational_space``.
+    """
+    fast = _compiled(arm, output, None, damping, max_condition)
+    if fast is not None:
+        m = fast[1].shape[0]
+        result = np.empty((m, m))
+        try:
+            if lambda_one(arm.packed, q, fast[0], fast[1], max_condition, result) == 0:
+                return result
+        except _NOT_ONE_STATE:
+            pass
+    arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=False)
+    Lambda, _ = _lambda(arm, task)
+    return _shaped(Lambda, task.batch)
+
+
+def _lambda(arm: Robot, task: _Task) -> tuple[np.ndarray, np.ndarray]:
+    """Lambda and M^-1 J^T for the checked states, by solves."""
+    J = task.J
+    m = J.shape[1]
+    Minv_JT = np.linalg.solve(arm.inertia_matrix(task.states[0]), _T(J, 1, 2))  # (B, n, m)
+    Lambda_inv = J @ Minv_JT
+    Lambda_inv = 0.5 * (Lambda_inv + _T(Lambda_inv, 1, 2))
+    Lambda_inv[task.damped] += task.damping**2 * np.eye(m)
+    Lambda = np.linalg.solve(Lambda_inv, np.broadcast_to(np.eye(m), Lambda_inv.shape))
+    return 0.5 * (Lambda + _T(Lambda, 1, 2)), Minv_JT
 
 
 def operational_space(
@@ -1031,7 +1227,8 @@ def operational_space(
 
     Lambda = (J M^-1 J^T)^-1, Jbar = M^-1 J^T Lambda, mu = Jbar^T Vm qd - Lambda Jdot qd,
     p = Jbar^T G, friction = Jbar^T F, Nproj = I - Jbar J; all by solves with M and with
-    J M^-1 J^T (which is singular exactly when J is).
+    J M^-1 J^T (which is singular exactly when J is). One state of the built-in row outputs
+    is one compiled call.
 
     Parameters
     ----------
@@ -1058,17 +1255,20 @@ def operational_space(
         When an argument is invalid, m > n, or J is ill-conditioned at a state and no
         damping is given (the message names the state and the condition number).
     """
+    fast = _compiled(arm, output, None, damping, max_condition)
+    if fast is not None:
+        n, m = arm.n, fast[1].shape[0]
+        parts = (np.empty((m, n)), np.empty((m, m)), np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m),
+                 np.empty((n, n)))  # fmt: skip
+        try:
+            if operational_one(arm.packed, q, qd, fast[0], fast[1], max_condition, *parts) == 0:
+                return OperationalSpace(*parts)
+        except _NOT_ONE_STATE:
+            pass
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=False)
     fq, fqd = task.states
     J, n = task.J, arm.n
-    m = J.shape[1]
-    M = arm.inertia_matrix(fq)
-    Minv_JT = np.linalg.solve(M, _T(J, 1, 2))  # (B, n, m)
-    Lambda_inv = J @ Minv_JT
-    Lambda_inv = 0.5 * (Lambda_inv + _T(Lambda_inv, 1, 2))
-    Lambda_inv[task.damped] += task.damping**2 * np.eye(m)
-    Lambda = np.linalg.solve(Lambda_inv, np.broadcast_to(np.eye(m), Lambda_inv.shape))
-    Lambda = 0.5 * (Lambda + _T(Lambda, 1, 2))
+    Lambda, Minv_JT = _lambda(arm, task)
     Jbar = Minv_JT @ Lambda
     JbarT = _T(Jbar, 1, 2)
     mu = _mv(JbarT, arm.coriolis_vector(fq, fqd)) - _mv(Lambda, output._bias(arm, fq, fqd))
@@ -1076,16 +1276,58 @@ def operational_space(
     friction = _mv(JbarT, arm.friction(fqd))
     Nproj = np.eye(n) - Jbar @ J
     b = task.batch
-    return OperationalSpace(
-        _shaped(J, b),
-        _shaped(Lambda, b),
-        _shaped(Jbar, b),
-        _shaped(mu, b),
-        _shaped(p, b),
-        _shaped(friction, b),
-        _shaped(Nproj, b),
-        _condition(J).reshape(b),
-    )
+    return OperationalSpace(*(_shaped(x, b) for x in (J, Lambda, Jbar, mu, p, friction, Nproj)))
+
+
+def operational_coriolis(
+    arm: Robot,
+    output: TaskOutput,
+    q: ArrayLike,
+    qd: ArrayLike,
+    *,
+    damping: float | None = None,
+    max_condition: float = DEFAULT_MAX_CONDITION,
+) -> tuple[np.ndarray, np.ndarray]:
+    """mu_x = Jbar^T Vm Jbar - Lambda Jdot Jbar and the null-space coupling (Jbar^T Vm - Lambda Jdot) N qd.
+
+    With qd = Jbar ydot + Nproj qd, Khatib's mu splits as mu = mu_x ydot + coupling: mu_x is
+    the operational-space Coriolis matrix, with Lambda_dot - 2 mu_x skew-symmetric even while
+    the arm moves in its null space, and the coupling is the force that null-space motion
+    exerts on the task (zero for m = n, where mu_x = Vmbar).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    output : TaskOutput
+        The task output (m <= n) with a Jdot.
+    q, qd : array_like
+        Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast.
+    damping : float, optional
+        As for ``operational_space``.
+    max_condition : float, optional
+        As for ``operational_space``.
+
+    Returns
+    -------
+    mu_x : numpy.ndarray
+        Shape (..., m, m).
+    coupling : numpy.ndarray
+        Shape (..., m).
+
+    Raises
+    ------
+    ModelError
+        As for ``operational_space``.
+    """
+    space = operational_space(arm, output, q, qd, damping=damping, max_condition=max_condition)
+    batch = space.Lambda.shape[:-2]
+    fq, fqd = _states(arm, ("q", "qd"), (q, qd))[1]
+    m = space.J.shape[-2]
+    Jbar, Lambda, Nproj = (x.reshape(-1, *x.shape[-2:]) for x in (space.Jbar, space.Lambda, space.Nproj))
+    K = _T(Jbar, 1, 2) @ arm.coriolis_matrix(fq, fqd) - Lambda @ output._jacobian_dot(arm, fq, fqd)  # (B, m, n)
+    mu_x = (K @ Jbar).reshape(*batch, m, m)
+    return mu_x, _mv(K, _mv(Nproj, fqd)).reshape(*batch, m)
 
 
 # ----- control in task coordinates ------------------------------------------------------------------

@@ -1,0 +1,258 @@
+"""Operational-space quantities of one state in one compiled pass (Khatib 1987; BOOK.md section 6).
+
+For an output made of rows of a frame's world Jacobian [v; w] (the tool point, the tool pose,
+a link frame's origin, two of the tool's coordinates): J, M (CRBA), the Cholesky factors of M
+and of J M^-1 J^T, and from them
+
+    Lambda = (J M^-1 J^T)^-1,  Jbar = M^-1 J^T Lambda,  mu = Jbar^T Vm qd - Lambda Jdot qd,
+    p = Jbar^T G,  friction = Jbar^T F,  Nproj = I - Jbar J.
+
+The singularity test is certified without an SVD: with B = J J^T (m x m, Cholesky L),
+lambda_min(B) >= det B / lambda_max^(m-1), so cond(J)^2 = cond(B) <= trace(B)^m / det(B). A
+state passes when that bound is at most max_condition^2; any other state returns SINGULAR, and
+the caller's general path decides with the exact condition number (and raises, or damps).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, types
+
+from armdyn.dynamics.crba import crba_one
+from armdyn.dynamics.frames import WORLD, jacobian_dot_one, jacobian_one
+from armdyn.dynamics.friction import friction_one
+from armdyn.dynamics.packed import N_JOINTS
+from armdyn.dynamics.rnea import coriolis_vector_one, gravity_one
+from armdyn.dynamics.spatial import MATRIX, MODEL, NUMBA_OPTIONS, VECTOR, one_state, scratch
+
+SINGULAR = 7
+"""Status of a state whose J is not certified regular: the caller's general path takes it."""
+ROWS = types.int64[::1]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def cholesky(A: np.ndarray) -> bool:
+    """A = L L^T in place: L below the diagonal, 1 / L_jj on it (the solves multiply, never
+    divide); False when A is not positive definite."""
+    m = A.shape[0]
+    for j in range(m):
+        d = A[j, j]
+        for k in range(j):
+            d -= A[j, k] * A[j, k]
+        if not d > 0.0:
+            return False
+        inverse = 1.0 / np.sqrt(d)
+        A[j, j] = inverse
+        for i in range(j + 1, m):
+            s = A[i, j]
+            for k in range(j):
+                s -= A[i, k] * A[j, k]
+            A[i, j] = s * inverse
+    return True
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def forward(L: np.ndarray, X: np.ndarray) -> None:
+    """X <- L^-1 X in place (L from ``cholesky``), X (m, k)."""
+    for i in range(L.shape[0]):
+        for c in range(X.shape[1]):
+            s = X[i, c]
+            for k in range(i):
+                s -= L[i, k] * X[k, c]
+            X[i, c] = s * L[i, i]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def backward(L: np.ndarray, X: np.ndarray) -> None:
+    """X <- L^-T X in place (L from ``cholesky``), X (m, k)."""
+    for i in range(L.shape[0] - 1, -1, -1):
+        for c in range(X.shape[1]):
+            s = X[i, c]
+            for k in range(i + 1, L.shape[0]):
+                s -= L[k, i] * X[k, c]
+            X[i, c] = s * L[i, i]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def certified_regular(J: np.ndarray, limit: float, B: np.ndarray) -> bool:
+    """cond(J) <= limit, certified by trace(J J^T)^m <= limit^2 det(J J^T) (module docstring)."""
+    m, n = J.shape
+    trace = 0.0
+    for i in range(m):
+        for k in range(i + 1):
+            s = 0.0
+            for j in range(n):
+                s += J[i, j] * J[k, j]
+            B[i, k] = s
+        trace += B[i, i]
+    if not cholesky(B):
+        return False
+    ratio = 1.0  # trace^m / det = prod of trace / L_ii^2, a factor per row so that neither overflows
+    for i in range(m):
+        ratio *= trace * B[i, i] * B[i, i]
+    return ratio <= limit * limit
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def lambda_from(J: np.ndarray, M: np.ndarray, limit: float, Y: np.ndarray, B: np.ndarray, Lambda: np.ndarray) -> bool:
+    """Lambda = (J M^-1 J^T)^-1 as (Y^T Y)^-1 with Y = L^-1 J^T, M = L L^T (factored in M);
+    False when J is not certified regular (or M is not positive definite)."""
+    m, n = J.shape
+    if not certified_regular(J, limit, B) or not cholesky(M):
+        return False
+    for r in range(m):
+        for j in range(n):
+            Y[j, r] = J[r, j]
+    forward(M, Y)
+    for r in range(m):  # B = Y^T Y = J M^-1 J^T, lower triangle
+        for c in range(r + 1):
+            s = 0.0
+            for j in range(n):
+                s += Y[j, r] * Y[j, c]
+            B[r, c] = s
+    if not cholesky(B):
+        return False
+    for r in range(m):  # Lambda <- L_B^-1, lower triangular
+        for c in range(m):
+            Lambda[r, c] = 0.0
+        Lambda[r, r] = 1.0
+    forward(B, Lambda)
+    for r in range(m):  # Lambda = L_B^-T L_B^-1 (column r of L_B^-1 is zero above row r)
+        for c in range(r + 1):
+            s = 0.0
+            for k in range(r, m):
+                s += Lambda[k, r] * Lambda[k, c]
+            B[r, c] = s
+    for r in range(m):
+        for c in range(r + 1):
+            Lambda[r, c] = B[r, c]
+            Lambda[c, r] = B[r, c]
+    return True
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def rows_status(model: np.ndarray, rows: np.ndarray) -> int:
+    """0, or 8 for rows that are not 1 to n indices among 0-5."""
+    if not 0 < rows.shape[0] <= int(model[N_JOINTS]):
+        return 8
+    for r in range(rows.shape[0]):
+        if not 0 <= rows[r] <= 5:
+            return 8
+    return 0
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def select_rows(full: np.ndarray, rows: np.ndarray, J: np.ndarray) -> None:
+    for r in range(rows.shape[0]):
+        for j in range(full.shape[1]):
+            J[r, j] = full[rows[r], j]
+
+
+# The kinematics and dynamics come from the public one-state kernels (compiled once, shared):
+# inlining them here would multiply the compilation time, for no measurable gain at run time.
+@one_state(types.int64(MODEL, VECTOR, types.int64, ROWS, types.float64, MATRIX))
+def lambda_one(
+    model: np.ndarray, q: np.ndarray, target: int, rows: np.ndarray, limit: float, Lambda: np.ndarray
+) -> int:
+    """Lambda = (J M^-1 J^T)^-1 for one state; a status (SINGULAR: not certified regular)."""
+    n, m = int(model[N_JOINTS]), rows.shape[0]
+    status = rows_status(model, rows)
+    if status == 0 and (Lambda.shape[0] != m or Lambda.shape[1] != m):
+        status = 4
+    if status != 0:
+        return status
+    buffer = scratch(6 * n + 2 * m * n + n * n + m * m)
+    full = buffer[: 6 * n].reshape(6, n)
+    J = buffer[6 * n : 6 * n + m * n].reshape(m, n)
+    Y = buffer[6 * n + m * n : 6 * n + 2 * m * n].reshape(n, m)
+    M = buffer[6 * n + 2 * m * n : 6 * n + 2 * m * n + n * n].reshape(n, n)
+    B = buffer[6 * n + 2 * m * n + n * n :].reshape(m, m)
+    axes = WORLD
+    status = jacobian_one(model, q, target, axes, full)
+    if status == 0:
+        status = crba_one(model, q, M)
+    if status != 0:
+        return status
+    select_rows(full, rows, J)
+    return 0 if lambda_from(J, M, limit, Y, B, Lambda) else SINGULAR
+
+
+@one_state(types.int64(MODEL, VECTOR, VECTOR, types.int64, ROWS, types.float64, *(MATRIX,) * 3, *(VECTOR,) * 3, MATRIX))
+def operational_one(
+    model: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    target: int,
+    rows: np.ndarray,
+    limit: float,
+    J: np.ndarray,
+    Lambda: np.ndarray,
+    Jbar: np.ndarray,
+    mu: np.ndarray,
+    p: np.ndarray,
+    friction: np.ndarray,
+    Nproj: np.ndarray,
+) -> int:
+    """J, Lambda, Jbar, mu, p, friction and Nproj for one state; a status (SINGULAR: not certified)."""
+    n, m = int(model[N_JOINTS]), rows.shape[0]
+    status = rows_status(model, rows)
+    if status == 0 and (
+        J.shape[0] != m or J.shape[1] != n or Lambda.shape[0] != m or Lambda.shape[1] != m
+        or Jbar.shape[0] != n or Jbar.shape[1] != m or mu.shape[0] != m or p.shape[0] != m
+        or friction.shape[0] != m or Nproj.shape[0] != n or Nproj.shape[1] != n
+    ):  # fmt: skip
+        status = 4
+    if status != 0:
+        return status
+    buffer = scratch(6 * n + n * n + m * m + n * m + 3 * n + m)
+    full = buffer[: 6 * n].reshape(6, n)
+    M = buffer[6 * n : 6 * n + n * n].reshape(n, n)
+    B = buffer[6 * n + n * n : 6 * n + n * n + m * m].reshape(m, m)
+    at = 6 * n + n * n + m * m
+    Y = buffer[at : at + n * m].reshape(n, m)
+    coriolis, gravity = buffer[at + n * m : at + n * m + n], buffer[at + n * m + n : at + n * m + 2 * n]
+    force, bias = buffer[at + n * m + 2 * n : at + n * m + 3 * n], buffer[at + n * m + 3 * n :]
+    axes = WORLD
+    status = jacobian_one(model, q, target, axes, full)
+    if status == 0:
+        status = crba_one(model, q, M)
+    if status == 0:
+        status = coriolis_vector_one(model, q, qd, coriolis)
+    if status == 0:
+        status = gravity_one(model, q, gravity)
+    if status == 0:
+        status = friction_one(model, qd, force)
+    if status != 0:
+        return status
+    select_rows(full, rows, J)
+    if not lambda_from(J, M, limit, Y, B, Lambda):
+        return SINGULAR
+    for r in range(n):  # Jbar = M^-1 J^T Lambda = L^-T (Y Lambda)
+        for c in range(m):
+            s = 0.0
+            for k in range(m):
+                s += Y[r, k] * Lambda[k, c]
+            Jbar[r, c] = s
+    backward(M, Jbar)
+    jacobian_dot_one(model, q, qd, target, axes, full)
+    for r in range(m):
+        s = 0.0
+        for j in range(n):
+            s += full[rows[r], j] * qd[j]
+        bias[r] = s
+    for c in range(m):
+        sv, sg, sf, sb = 0.0, 0.0, 0.0, 0.0
+        for j in range(n):
+            sv += Jbar[j, c] * coriolis[j]
+            sg += Jbar[j, c] * gravity[j]
+            sf += Jbar[j, c] * force[j]
+        for k in range(m):
+            sb += Lambda[c, k] * bias[k]
+        mu[c], p[c], friction[c] = sv - sb, sg, sf
+    for r in range(n):
+        for c in range(n):
+            s = 0.0
+            for k in range(m):
+                s += Jbar[r, k] * J[k, c]
+            Nproj[r, c] = (1.0 if r == c else 0.0) - s
+    return 0
