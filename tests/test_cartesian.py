@@ -138,7 +138,7 @@ def test_skew_property_random_chain_tool_position(seed: int) -> None:
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_friction_and_regressor_in_task_coordinates(seed: int) -> None:
-    """Fbar = J^-T F, Vmbar ydot + Fbar + Gbar = Nbar, and Wbar phi = Mbar yddot + Nbar (a random chain with friction)."""
+    """Fbar = J^-T F, Vmbar ydot + Fbar + Gbar = Nbar and Wbar phi = Mbar yddot + Nbar (random chain, friction)."""
     arm, output = strategies.random_robot(seed, 3, chain=True), ct.ToolPosition()
     qs, qds = _regular_states(arm, output, seed, count=3, limit=100)
     yddot = np.random.default_rng(seed).normal(size=qs.shape)
@@ -462,13 +462,15 @@ def test_panda_operational_space_matches_pinocchio() -> None:
         assert np.abs(J @ space.Nproj[k]).max() < 1e-9 * np.abs(J).max()
 
 
-@pytest.mark.parametrize("output", [ct.ToolPose(), ct.ToolPosition(), ct.LinkPoint(4), ct.PlanarPosition((1, 2))], ids=repr)
+@pytest.mark.parametrize(
+    "output", [ct.ToolPose(), ct.ToolPosition(), ct.LinkPoint(4), ct.PlanarPosition((1, 2))], ids=repr
+)
 def test_compiled_one_state_path_equals_the_batch_path(output: ct.TaskOutput) -> None:
     """One state of a built-in row output runs a compiled kernel; a batch runs NumPy's solves: equal to 1e-12,
     on the Panda (7 joints) and on a 3-joint random chain, and a near-singular state still raises."""
     panda, _, _ = _panda_reduced()
     for arm in (panda, strategies.random_robot(4, 3, chain=True)):
-        if isinstance(output, ct.LinkPoint) and arm.n < 5 or output.jacobian(arm, np.zeros(arm.n)).shape[0] > arm.n:
+        if (isinstance(output, ct.LinkPoint) and arm.n < 5) or output.jacobian(arm, np.zeros(arm.n)).shape[0] > arm.n:
             continue
         qs, qds = _regular_states(arm, output, 2, count=3, limit=1e3)
         batch = ct.operational_space(arm, output, qs, qds)
@@ -519,7 +521,20 @@ def test_rr_arm_tracks_the_circle_of_example_4_2_1_under_task_space_computed_tor
 @pytest.mark.parametrize(
     ("build", "message"),
     [
-        (lambda: ct.ComputedTorque(ct.ToolPose(), ct.Circle((0, 0), 1, 1), 1, 1), "not ToolPose"),
+        (lambda: ct.ComputedTorque(ct.ToolPosition(), ct.Circle((0, 0), 1, 1), 1, 1)(0.0, np.ones(6), np.ones(6),
+                                                                                    plant=ad.models.puma560()),
+         "needs a square output"),
+        (lambda: ct.ComputedTorque(ct.PlanarPosition(), ct.Circle((0, 0), 1, 1), 1, 1)(
+            0.0, np.ones(3), np.ones(3), plant=ad.models.cylindrical()), "needs a square output"),
+        (lambda: ct.ComputedTorque(ct.PlanarPosition(), ct.Line((0, 0, 0), (1, 1, 1), 1), 1, 1)(
+            0.0, np.ones(2), np.ones(2), plant=ad.models.two_link_planar()), r"y_d must .* from path\(t\)"),
+        (lambda: ct.ComputedTorque(ct.PlanarPosition(), lambda t: (1, 2), 1, 1)(
+            0.0, np.ones(2), np.ones(2), plant=ad.models.two_link_planar()), "three arrays"),
+        (lambda: ct.Line((0, 0), (1, 1, 1), 1), "start and end of a Line"),
+        (lambda: ct.Line((0, 0), (1, 1), 0), "duration of a Line must be positive"),
+        (lambda: ct.PoseLine(np.eye(4), 2 * np.eye(4), 1), "homogeneous pose"),
+        (lambda: ct.PoseLine(np.eye(4), np.eye(3), 1), "end"),
+        (lambda: ct.ToolPose().error(ad.models.puma560(), np.zeros(6), np.zeros(5)), "y_d of output"),
         (lambda: ct.ComputedTorque(ct.PlanarPosition(), "circle", 1, 1), "path must be a callable"),
         (lambda: ct.ComputedTorque(ct.PlanarPosition(), ct.Circle((0, 0), 1, 1), -1, 1), "kp must be at least 0"),
         (lambda: ct.Circle((0, 0, 0), 1, 1), "centre"),
@@ -569,3 +584,98 @@ def test_panda_operational_space_control_keeps_the_tool_on_its_line_while_the_po
     assert np.abs(moving_q[:, 2] - start[2]).max() > 0.2  # the posture task did move joint 3
     assert np.abs(still_error).max() < 1e-4 and np.abs(moving_error).max() < 1e-4
     assert np.abs(moving_error - still_error).max() < 1e-6
+
+
+# ----- paths, pose tasks, the task record ------------------------------------------------------------
+def test_line_and_pose_line_rates_are_the_derivatives_of_their_positions() -> None:
+    """Line: quintic, at rest at both ends; PoseLine: [v; w] is the rate of [p; R] (w from dR/dt R^T)."""
+    from scipy.spatial.transform import Rotation
+
+    line = ct.Line((0.0, 1.0, 2.0), (1.0, 1.0, 0.0), 2.0, start_time=0.5)
+    assert_allclose(line(0.0)[0], [0, 1, 2]) and assert_allclose(line(3.0)[0], [1, 1, 0])
+    assert_allclose(line(0.5)[1:], 0.0, atol=1e-15) and assert_allclose(line(2.5)[1:], 0.0, atol=1e-15)
+    start, end = np.eye(4), np.eye(4)
+    start[:3, :3], start[:3, 3] = Rotation.from_rotvec([0.2, -0.4, 0.1]).as_matrix(), [0.4, 0.1, 0.5]
+    end[:3, :3], end[:3, 3] = Rotation.from_rotvec([-1.0, 0.5, 2.0]).as_matrix(), [0.1, -0.3, 0.7]
+    pose = ct.PoseLine(start, end, 1.5)
+    assert_allclose(Rotation.from_rotvec(pose(2.0)[0][3:]).as_matrix(), end[:3, :3], atol=1e-12)
+    h = 1e-6
+    for t in (0.3, 0.75, 1.2):
+        for path in (line, pose):
+            (y0, _, _), (_, yd, ydd), (y1, _, _) = path(t - h), path(t), path(t + h)
+            assert_allclose((y1[:3] - y0[:3]) / (2 * h), yd[:3], atol=1e-7)
+            assert_allclose((path(t + h)[1] - path(t - h)[1]) / (2 * h), ydd, atol=1e-6)
+        R0, R, R1 = (Rotation.from_rotvec(pose(s)[0][3:]).as_matrix() for s in (t - h, t, t + h))
+        W = (R1 - R0) / (2 * h) @ R.T
+        assert_allclose([W[2, 1], W[0, 2], W[1, 0]], pose(t)[1][3:], atol=1e-7)
+
+
+def test_ur5_tracks_a_pose_line_under_task_space_computed_torque() -> None:
+    """ToolPose (m = n = 6): from 0.05 rad off in each joint, the tool pose converges onto a PoseLine (position
+    and orientation, the orientation error the rotation vector of R_d R^T), and Result.task records it."""
+    from armdyn.simulation import PythonLoopWarning
+
+    arm, output = _ur5(), ct.ToolPose()
+    q_start, q_end = np.array([0.3, -1.2, 1.4, -1.6, -1.5, 0.4]), np.array([0.8, -1.0, 1.1, -1.3, -1.2, 0.9])
+    path = ct.PoseLine(arm.tool_pose(q_start), arm.tool_pose(q_end), 1.0, start_time=0.2)
+    law = ct.ComputedTorque(output, path, 400.0, 40.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PythonLoopWarning)
+        result = ad.simulate(arm, law, None, t_final=1.5, dt=1e-3, q0=q_start + 0.05)
+    track = result.task
+    assert track.output == "ToolPose()" and track.error.shape == (len(result.t), 6)
+    size = np.linalg.norm(track.error, axis=1)
+    assert size[0] > 0.05 and size[result.t >= 1.0].max() < 1e-4
+    # the record's error is the law's: position difference and the rotation vector of R_d R^T
+    k = 700
+    assert_allclose(track.error[k], output.error(arm, result.q[k], path(result.t[k])[0]), atol=1e-14)
+    assert_allclose(arm.tool_pose(result.q[-1]), arm.tool_pose(q_end), atol=1e-4)
+
+
+def test_result_carries_and_writes_the_task_record(tmp_path) -> None:
+    """A task-space run's Result: task y, y_d, error; to_csv and to_npz write them; plot_task draws the path."""
+    from armdyn.simulation import PythonLoopWarning
+
+    arm, output = ad.models.two_link_planar(1.0, 1.0, 2.0, 2.0, g=9.8), ct.PlanarPosition()
+    q0 = np.array([0.3, 1.2])
+    y0 = output.value(arm, q0)
+    law = ct.ComputedTorque(output, ct.Line(y0, y0 + [0.3, -0.2], 0.2), 400.0, 40.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PythonLoopWarning)
+        result = ad.simulate(arm, law, None, t_final=0.3, dt=1e-3, q0=q0)
+    assert_allclose(result.task.y, output.value(arm, result.q))
+    assert_allclose(result.task.y_d[-1], y0 + [0.3, -0.2])
+    assert np.abs(result.task.error).max() < 2e-3  # it starts on the line; the held torque lags it by O(dt)
+    result.to_csv(tmp_path / "run.csv")
+    header = (tmp_path / "run.csv").read_text().splitlines()[0].split(",")
+    assert header[-6:] == ["y1", "y2", "y_d1", "y_d2", "task_e1", "task_e2"]
+    result.to_npz(tmp_path / "run.npz")
+    assert_allclose(np.load(tmp_path / "run.npz")["task_error"], result.task.error)
+    result.plot_task(tmp_path / "task.png")
+    assert (tmp_path / "task.png").stat().st_size > 10_000
+    plain = ad.simulate(arm, None, None, t_final=0.01, dt=1e-3)
+    assert plain.task is None
+    with pytest.raises(ModelError, match="no task-space record"):
+        plain.plot_task()
+
+
+def test_puma_with_its_wrist_aligned_is_singular_unless_damped() -> None:
+    """q5 = 0 aligns the PUMA 560's joints 4 and 6: the tool pose's J loses rank; every call names the
+    condition number, damping gives finite results, and the forward dynamics need no inverse."""
+    arm, output = ad.models.puma560(), ct.ToolPose()
+    q, qd = np.array([0.2, -0.5, 0.3, 0.4, 0.0, -0.2]), np.full(6, 0.3)
+    assert ct.condition_number(arm, output, q) > 1e12
+    calls = {
+        "task_inertia": lambda **k: ct.task_inertia(arm, output, q, **k),
+        "task_coriolis": lambda **k: ct.task_coriolis(arm, output, q, qd, **k),
+        "task_gravity": lambda **k: ct.task_gravity(arm, output, q, **k),
+        "task_nonlinear": lambda **k: ct.task_nonlinear(arm, output, q, qd, **k),
+        "operational_space": lambda **k: ct.operational_space(arm, output, q, qd, **k).Lambda,
+        "operational_inertia": lambda **k: ct.operational_inertia(arm, output, q, **k),
+        "batch": lambda **k: ct.task_inertia(arm, output, np.stack([q + 0.3, q]), **k),
+    }
+    for name, call in calls.items():
+        with pytest.raises(ModelError, match="condition number"):
+            call()
+        assert np.isfinite(call(damping=1e-3)).all(), name
+    assert np.isfinite(ct.task_forward_dynamics(arm, output, q, qd, np.ones(6))).all()

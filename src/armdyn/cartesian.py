@@ -40,8 +40,10 @@ import numpy as np
 from numba.core.errors import NumbaError
 
 from armdyn import inputs, kinematics
+from armdyn.dynamics import operational as kernels
+from armdyn.dynamics.api import _launch
 from armdyn.dynamics.frames import TOOL
-from armdyn.dynamics.operational import lambda_one, operational_one
+from armdyn.dynamics.operational import lambda_one, operational_one, task_batch, task_one
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -51,13 +53,19 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_MAX_CONDITION",
     "Camera",
+    "Circle",
+    "ComputedTorque",
+    "Line",
     "LinkPoint",
     "OperationalSpace",
+    "OperationalSpaceControl",
     "Output",
     "PlanarPosition",
+    "PoseLine",
     "TaskOutput",
     "ToolPose",
     "ToolPosition",
+    "Tracking",
     "condition_number",
     "damped_inverse",
     "operational_coriolis",
@@ -146,6 +154,42 @@ class TaskOutput:
         arm = _check_arm(arm)
         batch, (flat,) = _states(arm, ("q",), (q,))
         return _shaped(self._value(arm, flat), batch)
+
+    def error(self, arm: Robot, q: ArrayLike, y_d: ArrayLike) -> np.ndarray:
+        """e = y_d - h(q), the task error a controller drives to zero; for ToolPose the
+        orientation part is the rotation vector of R_d R^T (see there).
+
+        Parameters
+        ----------
+        arm : Robot
+            The arm.
+        q : array_like
+            Joint positions, (n,) or a batch (..., n).
+        y_d : array_like
+            The desired output, (k,) or the batch's (..., k), as ``value`` gives it.
+
+        Returns
+        -------
+        numpy.ndarray
+            e, shape (..., m).
+
+        Raises
+        ------
+        ModelError
+            When ``arm``, q or y_d is invalid (y_d of the wrong length or batch names both).
+        """
+        arm = _check_arm(arm)
+        batch, (flat,) = _states(arm, ("q",), (q,))
+        y = self._value(arm, flat)
+        desired = inputs.numbers(y_d, "y_d")
+        if desired.shape[-1:] != y.shape[-1:] or (desired.ndim > 1 and desired.shape[:-1] != batch):
+            raise ModelError(f"y_d of output {self!r} must have shape {y.shape[-1:]} or {(*batch, y.shape[-1])}, "
+                             f"got {desired.shape}")  # fmt: skip
+        desired = np.broadcast_to(desired, y.shape)
+        return _shaped(self._difference(arm, flat, desired, y), batch)
+
+    def _difference(self, arm: Robot, q: np.ndarray, y_d: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return y_d - y
 
     def jacobian(self, arm: Robot, q: ArrayLike) -> np.ndarray:
         """J(q), with ydot = J qd.
@@ -282,8 +326,10 @@ class ToolPose(_Rows):
     any three orientation numbers, so Mbar, Vmbar and Nbar are with respect to the twist
     coordinates [v; w] (Khatib 1987, section III: the "generalized" velocities). ``value``
     returns [p; phi] with phi the rotation vector (axis times angle, in [0, pi]) of the
-    tool's world rotation R; its derivative is not w except at R = I (use the rotation
-    matrix from ``arm.tool_pose`` for orientation errors).
+    tool's world rotation R; its derivative is not w except at R = I. ``error`` therefore
+    takes the orientation error as the rotation vector of R_d R^T, the rotation (world axes)
+    that carries R onto R_d, whose rate is w_d - w to first order (Siciliano et al. 2009,
+    3.7.3): a pose task's controllers use it.
 
     Takes no parameters.
     """
@@ -298,6 +344,15 @@ class ToolPose(_Rows):
         result[:, :3] = pose[:, :3, 3]
         if q.shape[0]:
             result[:, 3:] = Rotation.from_matrix(pose[:, :3, :3]).as_rotvec()
+        return result
+
+    def _difference(self, arm: Robot, q: np.ndarray, y_d: np.ndarray, y: np.ndarray) -> np.ndarray:
+        from scipy.spatial.transform import Rotation
+
+        result = y_d - y
+        if q.shape[0]:
+            R, R_d = arm.tool_pose(q)[:, :3, :3], Rotation.from_rotvec(np.array(y_d[:, 3:])).as_matrix()
+            result[:, 3:] = Rotation.from_matrix(R_d @ np.swapaxes(R, 1, 2)).as_rotvec()
         return result
 
     def __repr__(self) -> str:
@@ -715,6 +770,53 @@ def _compiled(arm: object, output: object, m: int | None, damping: object, limit
     return None if m is not None and rows.shape[0] != m else (target, rows)
 
 
+def _kernel(
+    arm: object,
+    output: object,
+    kind: int,
+    names: tuple[str, ...],
+    values: tuple[object, ...],
+    damping: object,
+    limit: object,
+    trailing: str,
+) -> np.ndarray | None:
+    """The compiled route of a square quantity (operational.task_one, or task_batch for a batch);
+    None when the general path must take the call: another output, an argument to check, or a
+    state the kernel cannot certify regular. ``trailing``: "vector" (n,) or "matrix" (n, n)."""
+    fast = _compiled(arm, output, getattr(arm, "n", None), damping, limit)
+    if fast is None:
+        return None
+    target, rows = fast
+    n = arm.n
+    shape = (1, n) if trailing == "vector" else (n, n)
+    slot = {"q": 0, "qd": 1, "tau": 2, "yddot": 2}  # the kernel's (q, qd, v)
+    state = [values[0]] * 3
+    for name, value in zip(names, values, strict=True):
+        state[slot[name]] = value
+    result = np.empty(shape)
+    try:
+        if task_one(arm.packed, *state, target, rows, limit, kind, result) == 0:
+            return result[0] if trailing == "vector" else result
+    except _NOT_ONE_STATE:
+        pass
+    if arm.packed is None:
+        return None
+    try:
+        batch, flat = inputs.batch_states(names, values, n)
+    except ModelError:
+        return None  # the general path names the argument
+    arrays = [flat[0]] * 3
+    for name, array in zip(names, flat, strict=True):
+        arrays[slot[name]] = array
+    flat, count = arrays, flat[0].shape[0]
+    out, status = np.empty((count, *shape)), np.ones(count, dtype=np.int64)
+    if count:
+        _launch(task_batch, out.size, arm.packed, *flat, target, rows, limit, kind, out, status)
+    if status.any():
+        return None
+    return out.reshape(*batch, n) if trailing == "vector" else out.reshape(*batch, n, n)
+
+
 # ----- square outputs: Mbar, Vmbar, Gbar, Nbar (BOOK.md section 6) --------------------------------
 _T = np.swapaxes
 
@@ -754,14 +856,9 @@ def task_inertia(
         When an argument is invalid, m != n, or J is ill-conditioned at a state and no
         damping is given (the message names the state and the condition number).
     """
-    fast = _compiled(arm, output, getattr(arm, "n", None), damping, max_condition)
-    if fast is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
-        result = np.empty((arm.n, arm.n))
-        try:
-            if lambda_one(arm.packed, q, fast[0], fast[1], max_condition, result) == 0:
-                return result
-        except _NOT_ONE_STATE:
-            pass
+    result = _kernel(arm, output, kernels.LAMBDA, ("q",), (q,), damping, max_condition, "matrix")
+    if result is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
+        return result
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
     M = arm.inertia_matrix(task.states[0])
     Mbar = task.inverse_transpose(_T(task.inverse_transpose(M), 1, 2))  # J^-T (J^-T M)^T, M symmetric
@@ -804,6 +901,9 @@ def task_coriolis(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
+    result = _kernel(arm, output, kernels.CORIOLIS, ("q", "qd"), (q, qd), damping, max_condition, "matrix")
+    if result is not None:
+        return result
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
     fq, fqd = task.states
     M, Vm = arm.inertia_matrix(fq), arm.coriolis_matrix(fq, fqd)
@@ -844,6 +944,9 @@ def task_gravity(
     ModelError
         As for ``task_inertia``.
     """
+    result = _kernel(arm, output, kernels.GRAVITY, ("q",), (q,), damping, max_condition, "vector")
+    if result is not None:
+        return result
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
     G = arm.gravity_vector(task.states[0])
     return _shaped(task.inverse_transpose(G[:, :, None])[:, :, 0], task.batch)
@@ -885,6 +988,9 @@ def task_nonlinear(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
+    result = _kernel(arm, output, kernels.NONLINEAR, ("q", "qd"), (q, qd), damping, max_condition, "vector")
+    if result is not None:
+        return result
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
     fq, fqd = task.states
     M, N = arm.inertia_matrix(fq), arm.nonlinear_terms(fq, fqd)
@@ -929,6 +1035,9 @@ def task_friction(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
+    result = _kernel(arm, output, kernels.FRICTION, ("q", "qd"), (q, qd), damping, max_condition, "vector")
+    if result is not None:
+        return result
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
     F = arm.friction(task.states[1])
     return _shaped(task.inverse_transpose(F[:, :, None])[:, :, 0], task.batch)
@@ -1013,6 +1122,9 @@ def task_force(
     ModelError
         As for ``task_inertia``, and when tau is invalid.
     """
+    result = _kernel(arm, output, kernels.FORCE, ("q", "tau"), (q, tau), damping, max_condition, "vector")
+    if result is not None:
+        return result
     arm, output, task = _task(arm, output, ("q", "tau"), (q, tau), damping, max_condition, square=True)
     return _shaped(task.inverse_transpose(task.states[1][:, :, None])[:, :, 0], task.batch)
 
@@ -1044,6 +1156,15 @@ def task_forward_dynamics(arm: Robot, output: TaskOutput, q: ArrayLike, qd: Arra
     ModelError
         When an argument is invalid, or M(q) is singular at a state.
     """
+    fast = _compiled(arm, output, None, None, 1.0)  # J^T f needs no inverse of J: no singularity test
+    if fast is not None and type(f) is np.ndarray and f.shape == fast[1].shape and f.dtype == np.float64:
+        padded, result = np.zeros(arm.n), np.empty((1, arm.n))
+        padded[: f.shape[0]] = f
+        try:
+            if task_one(arm.packed, q, qd, padded, fast[0], fast[1], 1.0, kernels.FORWARD, result) == 0:
+                return result[0, : f.shape[0]]
+        except _NOT_ONE_STATE:
+            pass
     arm, output = _check_arm(arm), _check_output(output)
     states, (fq, fqd) = _states(arm, ("q", "qd"), (q, qd))
     J = output._jacobian(arm, fq)
@@ -1100,6 +1221,11 @@ def task_inverse_dynamics(
     ModelError
         As for ``task_inertia``, and when qd or yddot is invalid.
     """
+    result = _kernel(
+        arm, output, kernels.INVERSE, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, "vector"
+    )
+    if result is not None:
+        return result
     arm, output, task = _task(arm, output, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, True)
     fq, fqd, acc = task.states
     qdd = task.inverse((acc - output._bias(arm, fq, fqd))[:, :, None])[:, :, 0]
@@ -1381,38 +1507,232 @@ class Circle:
         return np.array(self.centre) + self.radius * ring, self.radius * w * turn, -self.radius * w * w * ring
 
 
+def _quintic(t: float, start_time: float, duration: float) -> tuple[float, float, float]:
+    """s(t) = 10 u^3 - 15 u^4 + 6 u^5, u = (t - t0) / T held in [0, 1], with its first two rates."""
+    u = min(max((t - start_time) / duration, 0.0), 1.0)
+    s = u**3 * (10.0 - 15.0 * u + 6.0 * u * u)
+    if u in (0.0, 1.0):
+        return s, 0.0, 0.0
+    return s, 30.0 * u * u * (1.0 - u) ** 2 / duration, 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) / duration**2
+
+
+@dataclass(frozen=True)
+class Line:
+    """A straight line in task coordinates with a quintic time law: y_d = a + s(t) (b - a),
+    s = 10 u^3 - 15 u^4 + 6 u^5, u = (t - start_time) / duration held in [0, 1], so the motion
+    starts and stops with zero velocity and acceleration.
+
+    Parameters
+    ----------
+    start, end : sequence of float
+        The end points a and b, of the output's length m (m for positions).
+    duration : float
+        The time of the motion (s), positive.
+    start_time : float, optional
+        When the motion starts (s); default 0. Before it y_d = a, after it y_d = b.
+    """
+
+    start: tuple[float, ...]
+    end: tuple[float, ...]
+    duration: float
+    start_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        start = inputs.numbers(self.start, "start", None, " of a Line")
+        end = inputs.numbers(self.end, "end", None, " of a Line")
+        if start.ndim != 1 or end.shape != start.shape or not start.size:
+            raise ModelError(f"start and end of a Line must be two points of one length, got shapes {start.shape} "
+                             f"and {end.shape}")  # fmt: skip
+        object.__setattr__(self, "start", tuple(start))
+        object.__setattr__(self, "end", tuple(end))
+        if not inputs.number(self.duration, "duration", " of a Line") > 0:
+            raise ModelError(f"duration of a Line must be positive, got {self.duration!r}")
+        object.__setattr__(self, "start_time", inputs.number(self.start_time, "start_time", " of a Line"))
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(y_d, yd_d, ydd_d) at time t (s), each (m,).
+
+        Parameters
+        ----------
+        t : float
+            The time (s).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The desired position, velocity and acceleration.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``t`` is not a finite number.
+        """
+        s, sd, sdd = _quintic(inputs.number(t, "t"), self.start_time, self.duration)
+        a, b = np.array(self.start), np.array(self.end)
+        return a + s * (b - a), sd * (b - a), sdd * (b - a)
+
+
+def _pose(pose: object, name: str) -> np.ndarray:
+    """A checked 4 x 4 homogeneous pose: finite, a proper rotation to 1e-6, last row [0, 0, 0, 1]."""
+    T = inputs.numbers(pose, name, (4, 4), " of a PoseLine")
+    R = T[:3, :3]
+    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0 or np.abs(T[3] - [0, 0, 0, 1]).max() > 0:
+        raise ModelError(f"{name} of a PoseLine must be a homogeneous pose: a rotation (R R^T = I, det R = 1) and "
+                         "the last row [0, 0, 0, 1]")  # fmt: skip
+    return T
+
+
+@dataclass(frozen=True)
+class PoseLine:
+    """A tool pose path for ToolPose: the position on the straight line from the start pose to the
+    end pose, the rotation about one fixed world axis, both with the quintic law of ``Line``.
+
+    R_d(t) = exp(s(t) [u]x) R_a with u the rotation vector of R_b R_a^T; the angular velocity is
+    sdot u and the angular acceleration sddot u (world axes). Gives (y_d, yd_d, ydd_d) in ToolPose's
+    coordinates: y_d = [p; rotation vector of R_d], yd_d = [v; w], ydd_d = [a; alpha].
+
+    Parameters
+    ----------
+    start, end : array_like
+        The 4 x 4 homogeneous start and end poses (e.g. from ``arm.tool_pose(q)``).
+    duration : float
+        The time of the motion (s), positive.
+    start_time : float, optional
+        When the motion starts (s); default 0.
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    duration: float
+    start_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        from scipy.spatial.transform import Rotation
+
+        start, end = _pose(self.start, "start"), _pose(self.end, "end")
+        object.__setattr__(self, "start", start)
+        object.__setattr__(self, "end", end)
+        if not inputs.number(self.duration, "duration", " of a PoseLine") > 0:
+            raise ModelError(f"duration of a PoseLine must be positive, got {self.duration!r}")
+        object.__setattr__(self, "start_time", inputs.number(self.start_time, "start_time", " of a PoseLine"))
+        object.__setattr__(self, "_axis", Rotation.from_matrix(end[:3, :3] @ start[:3, :3].T).as_rotvec())
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(y_d, yd_d, ydd_d) at time t (s), each (6,).
+
+        Parameters
+        ----------
+        t : float
+            The time (s).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The desired pose [p; rotation vector], twist [v; w] and its rate.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``t`` is not a finite number.
+        """
+        from scipy.spatial.transform import Rotation
+
+        s, sd, sdd = _quintic(inputs.number(t, "t"), self.start_time, self.duration)
+        a, b, u = self.start[:3, 3], self.end[:3, 3], self._axis
+        R = Rotation.from_rotvec(s * u).as_matrix() @ self.start[:3, :3]
+        y = np.concatenate([a + s * (b - a), Rotation.from_matrix(R).as_rotvec()])
+        return y, np.concatenate([sd * (b - a), sd * u]), np.concatenate([sdd * (b - a), sdd * u])
+
+
+def _desired(path: Callable, t: float, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """path(t), checked: three arrays of m finite values."""
+    try:
+        parts = tuple(path(t))
+    except TypeError as error:
+        raise ModelError(f"path(t) must return (y_d, yd_d, ydd_d): {error}") from None
+    if len(parts) != 3:
+        raise ModelError(f"path(t) must return three arrays (y_d, yd_d, ydd_d), got {len(parts)} items at t = {t:g}")
+    return tuple(inputs.numbers(part, name, (m,), f" from path(t) at t = {t:g}")
+                 for part, name in zip(parts, ("y_d", "yd_d", "ydd_d"), strict=True))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """The task-space record of a run under a task-space controller (``Result.task``).
+
+    Parameters
+    ----------
+    output : str
+        The output's description, e.g. "ToolPose()".
+    y : numpy.ndarray
+        The output at every sample, (T, k) as ``TaskOutput.value`` gives it.
+    y_d : numpy.ndarray
+        The desired output, (T, k).
+    error : numpy.ndarray
+        The task error e = y_d - y (ToolPose: its orientation part as in ``TaskOutput.error``), (T, m).
+    """
+
+    output: str
+    y: np.ndarray
+    y_d: np.ndarray
+    error: np.ndarray
+
+
 class ComputedTorque:
     """Computed-torque control in task coordinates (BOOK.md section 6):
     tau = J^T (Mbar (yddot_d + Kv edot + Kp e) + Nbar), e = y_d - y, edot = yd_d - J qd.
 
     It decouples the task coordinates into double integrators with PD feedback, for a square,
-    nonsingular J (a singular J is a ModelError, see ``task_inertia``). A controller for
-    ``armdyn.simulate`` (its Python loop): ``path(t)`` gives (y_d, yd_d, ydd_d); the model is
-    ``model`` or, inside simulate, the plant.
+    nonsingular J (a singular J is a ModelError, see ``task_inertia``). Computed as
+    J^T (Lambda a + mu + p + friction) from ``operational_space`` (one compiled call for the
+    built-in outputs), which is the same for m = n. For ToolPose the orientation error is the
+    rotation vector of R_d R^T (``TaskOutput.error``) and the rates are [v; w]. A controller for
+    ``armdyn.simulate``: ``path(t)`` gives (y_d, yd_d, ydd_d) (a Circle, Line or PoseLine); the
+    model is ``model`` or, inside simulate, the plant; simulate's Result then carries the task
+    error (``Result.task``).
 
     Parameters
     ----------
     output : TaskOutput
-        The task coordinates y = h(q) (PlanarPosition, ToolPosition, ToolPose is not supported:
-        its orientation error needs a rotation error, not a difference).
+        The task coordinates y = h(q), with m = n.
     path : callable
-        t -> (y_d, yd_d, ydd_d), e.g. a Circle.
+        t -> (y_d, yd_d, ydd_d), e.g. a Circle, Line or PoseLine.
     kp, kv : float
         The proportional and derivative gains (1/s^2, 1/s).
     model : Robot, optional
         The arm the law computes with; default the plant ``simulate`` passes.
     """
 
+    square = True
+
     def __init__(self, output: TaskOutput, path: Callable, kp: float, kv: float, model: Robot | None = None) -> None:
         self.output = _check_output(output)
-        if isinstance(output, ToolPose):
-            raise ModelError("ComputedTorque in task coordinates takes a position output, not ToolPose")
         if not callable(path) or isinstance(path, type):
             raise ModelError(f"path must be a callable t -> (y_d, yd_d, ydd_d), got {path!r}")
         self.path = path
         self.kp = inputs.number(kp, "kp", minimum=0.0)
         self.kv = inputs.number(kv, "kv", minimum=0.0)
         self.model = None if model is None else _check_arm(model)
+
+    def _arm(self, plant: Robot | None) -> Robot:
+        arm = self.model if self.model is not None else plant
+        if arm is None:
+            raise ModelError(f"{type(self).__name__} needs a model of the arm (model=...) outside simulate()")
+        return arm
+
+    def _task_force(self, arm: Robot, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[OperationalSpace, np.ndarray]:
+        """The operational space at (q, qd) and f = Lambda (yddot_d + kv edot + kp e) + mu + p + friction."""
+        space = operational_space(arm, self.output, q, qd)
+        m = space.J.shape[-2]
+        if self.square and m != arm.n:
+            raise ModelError(f"{type(self).__name__} needs a square output (m = n = {arm.n}); {self.output!r} has "
+                             f"{m} rows: use OperationalSpaceControl for a redundant arm")  # fmt: skip
+        y_d, yd_d, ydd_d = _desired(self.path, t, len(self.output.value(arm, q)))
+        e, edot = self.output.error(arm, q, y_d), yd_d[:m] - space.J @ qd if len(yd_d) == m else None
+        if edot is None:
+            raise ModelError(f"path(t) must give a velocity and an acceleration of {m} values for {self.output!r}")
+        force = space.Lambda @ (ydd_d + self.kv * edot + self.kp * e) + space.mu + space.p + space.friction
+        return space, force
 
     def __call__(
         self, t: float, q: np.ndarray, qd: np.ndarray, *joint_reference: object, plant: Robot | None = None
@@ -1439,18 +1759,39 @@ class ComputedTorque:
         Raises
         ------
         armdyn.ModelError
-            When there is no arm to compute with, or J is singular.
+            When there is no arm to compute with, J is singular, the output is not square, or
+            the path gives values of the wrong length.
         """
-        arm = self.model if self.model is not None else plant
-        if arm is None:
-            raise ModelError(
-                "ComputedTorque in task coordinates needs a model of the arm (model=...) outside simulate()"
-            )
-        y_d, yd_d, ydd_d = (np.asarray(part, dtype=float) for part in self.path(t))
-        J = self.output.jacobian(arm, q)
-        e, edot = y_d - self.output.value(arm, q), yd_d - J @ qd
-        f = task_inverse_dynamics(arm, self.output, q, qd, ydd_d + self.kv * edot + self.kp * e)
-        return J.T @ f
+        space, force = self._task_force(self._arm(plant), t, q, qd)
+        return space.J.T @ force
+
+    def tracking(self, arm: Robot, t: np.ndarray, q: np.ndarray) -> Tracking:
+        """The task-space record of a run: y, y_d and e at the times t.
+
+        Parameters
+        ----------
+        arm : Robot
+            The plant (used when the law has no model of its own).
+        t : numpy.ndarray
+            The times, (T,).
+        q : numpy.ndarray
+            The joint positions, (T, n).
+
+        Returns
+        -------
+        Tracking
+            The output, its desired value and the task error at every sample.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When there is no arm, or the path gives values of the wrong length.
+        """
+        arm = self._arm(arm)
+        y = self.output.value(arm, q)
+        k = y.shape[-1]
+        y_d = np.array([_desired(self.path, float(time), k)[0] for time in t]).reshape(len(t), k)
+        return Tracking(repr(self.output), y, y_d, self.output.error(arm, q, y_d))
 
     def describe(self) -> str:
         """The law and its gains, for titles and reports.
@@ -1459,11 +1800,16 @@ class ComputedTorque:
         -------
         str
             A short description.
+
+        Raises
+        ------
+        None
+            It only formats the gains.
         """
-        return f"task-space computed torque (kp = {self.kp:g}, kv = {self.kv:g})"
+        return f"task-space computed torque on {self.output!r} (kp = {self.kp:g}, kv = {self.kv:g})"
 
 
-class OperationalSpaceControl:
+class OperationalSpaceControl(ComputedTorque):
     """Operational-space control of a redundant arm (Khatib 1987): the task by computed torque
     in task coordinates, a joint posture in the null space,
     tau = J^T (Lambda (yddot_d + kv edot + kp e) + mu + p + friction) + Nproj^T tau_0,
@@ -1471,14 +1817,16 @@ class OperationalSpaceControl:
 
     The null-space torque leaves the task acceleration unchanged (J M^-1 Nproj^T = 0: the
     generalized inverse is dynamically consistent), so the task error obeys
-    edd + kv ed + kp e = 0 whatever the posture does. A controller for ``armdyn.simulate``.
+    edd + kv ed + kp e = 0 whatever the posture does. A controller for ``armdyn.simulate``,
+    whose Result then carries the task error (``Result.task``).
 
     Parameters
     ----------
     output : TaskOutput
-        The task coordinates (a position output: ToolPosition, LinkPoint, PlanarPosition).
+        The task coordinates (m <= n): ToolPosition, ToolPose (orientation error as in
+        ``TaskOutput.error``), LinkPoint, PlanarPosition or an Output.
     path : callable
-        t -> (y_d, yd_d, ydd_d).
+        t -> (y_d, yd_d, ydd_d), e.g. a Line or PoseLine.
     kp, kv : float
         The task gains (1/s^2, 1/s).
     posture : callable or array_like
@@ -1488,6 +1836,8 @@ class OperationalSpaceControl:
     model : Robot, optional
         The arm the law computes with; default the plant ``simulate`` passes.
     """
+
+    square = False
 
     def __init__(
         self,
@@ -1500,7 +1850,7 @@ class OperationalSpaceControl:
         kv0: float,
         model: Robot | None = None,
     ) -> None:
-        self.task = ComputedTorque(output, path, kp, kv, model)
+        super().__init__(output, path, kp, kv, model)
         self.posture = posture if callable(posture) else inputs.numbers(posture, "posture")
         self.kp0 = inputs.number(kp0, "kp0", minimum=0.0)
         self.kv0 = inputs.number(kv0, "kv0", minimum=0.0)
@@ -1529,16 +1879,11 @@ class OperationalSpaceControl:
         Raises
         ------
         armdyn.ModelError
-            When there is no arm to compute with, J is singular, or the posture has the wrong length.
+            When there is no arm to compute with, J is singular, the path gives values of the
+            wrong length, or the posture has the wrong length.
         """
-        task = self.task
-        arm = task.model if task.model is not None else plant
-        if arm is None:
-            raise ModelError("OperationalSpaceControl needs a model of the arm (model=...) outside simulate()")
-        y_d, yd_d, ydd_d = (np.asarray(part, dtype=float) for part in task.path(t))
-        space = operational_space(arm, task.output, q, qd)
-        e, edot = y_d - task.output.value(arm, q), yd_d - space.J @ qd
-        force = space.Lambda @ (ydd_d + task.kv * edot + task.kp * e) + space.mu + space.p + space.friction
+        arm = self._arm(plant)
+        space, force = self._task_force(arm, t, q, qd)
         target = np.asarray(self.posture(t) if callable(self.posture) else self.posture, dtype=float)
         if target.shape != q.shape:
             raise ModelError(f"posture must have {q.shape[0]} values, got shape {target.shape}")
@@ -1552,8 +1897,13 @@ class OperationalSpaceControl:
         -------
         str
             A short description.
+
+        Raises
+        ------
+        None
+            It only formats the gains.
         """
         return (
-            f"operational-space control (kp = {self.task.kp:g}, kv = {self.task.kv:g}; "
+            f"operational-space control on {self.output!r} (kp = {self.kp:g}, kv = {self.kv:g}; "
             f"posture kp0 = {self.kp0:g}, kv0 = {self.kv0:g})"
         )

@@ -5,6 +5,8 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
+import numpy as np
+
 TITLE_WIDTH = 100  # characters per title line: a 9 inch figure at 10 points holds about 110
 
 
@@ -73,3 +75,46 @@ def _title(result: object) -> str:
         parts.append(f"tracking a {info['trajectory']}")
     step = f", {info['method']}, dt = {info['dt'] * 1e3:g} ms" if "method" in info and "dt" in info else ""
     return ": ".join(parts[:2]) + (f", {parts[2]}" if len(parts) > 2 else "") + step
+
+
+def _task_units(output: str) -> str:
+    """The unit of a task output's coordinates, from its description."""
+    if output.startswith("Camera"):
+        return "px"
+    return "output units" if output.startswith("Output") else "m"
+
+
+def plot_task(result: object, path: str | Path | None = None, title: str | None = None) -> object:
+    """The task-space path drawn over the desired one (the first two coordinates), and the size of
+    the task error over time on a log scale (a pose task: its position and orientation parts apart)."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    task = result.task
+    unit = _task_units(task.output)
+    fig, (plane, error) = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
+    plane.plot(task.y_d[:, 0], task.y_d[:, 1], "k--", lw=1, label="desired")
+    plane.plot(task.y[:, 0], task.y[:, 1], color="C0", label="actual")
+    plane.plot(task.y[0, 0], task.y[0, 1], "o", color="C1", label="start")
+    plane.set(xlabel=f"y1 ({unit})", ylabel=f"y2 ({unit})", aspect="equal", title=f"path of {task.output}")
+    plane.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False, fontsize=8)
+    floor = 1e-12
+    if task.output.startswith("ToolPose"):
+        error.semilogy(result.t, np.maximum(np.linalg.norm(task.error[:, :3], axis=1), floor), label="position (m)")
+        error.semilogy(result.t, np.maximum(np.linalg.norm(task.error[:, 3:], axis=1), floor),
+                       label="orientation (rad)")  # fmt: skip
+        error.legend(frameon=False, fontsize=8)
+        error.set_ylabel("task error |e|")
+    else:
+        error.semilogy(result.t, np.maximum(np.linalg.norm(task.error, axis=1), floor), color="C0")
+        error.set_ylabel(f"task error |y_d - y| ({unit})")
+    error.set(xlabel="time (s)", title="task error", xlim=(result.t[0], result.t[-1]))
+    error.grid(True, alpha=0.3)
+    fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
+    if path is not None:
+        fig.savefig(path, dpi=150)
+        plt.close(fig)
+    return fig

@@ -79,6 +79,8 @@ class Result:
     arm: Robot
     info: dict = field(default_factory=dict)
     energy_of: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+    task: object = None
+    """The task-space record (armdyn.cartesian.Tracking: y, y_d, error) under a task-space controller."""
 
     @cached_property
     def energy(self) -> np.ndarray:
@@ -96,6 +98,15 @@ class Result:
 
         return plot_result(self, path, title)
 
+    def plot_task(self, path: str | Path | None = None, title: str | None = None) -> object:
+        """The task-space path over the desired one and the task error (a run under a task-space law)."""
+        from armdyn.plotting import plot_task
+
+        if self.task is None:
+            raise ModelError("this run has no task-space record: simulate it under a task-space controller "
+                             "(armdyn.cartesian.ComputedTorque or OperationalSpaceControl)")  # fmt: skip
+        return plot_task(self, path, title)
+
     def to_csv(self, path: str | Path) -> None:
         """One row per time: t, q_i, qd_i, qdd_i, tau_i (and q_d_i, e_i with a trajectory), energy."""
         n = self.q.shape[1]
@@ -106,6 +117,10 @@ class Result:
             columns["q_d"], columns["e"] = self.q_d, self.error
         header = ["t"] + [f"{name}{i + 1}" for name in list(columns)[1:] for i in range(n)] + ["energy"]
         table = np.hstack([*columns.values(), self.energy[:, None]])
+        if self.task is not None:
+            task = {"y": self.task.y, "y_d": self.task.y_d, "task_e": self.task.error}
+            header += [f"{name}{i + 1}" for name, values in task.items() for i in range(values.shape[1])]
+            table = np.hstack([table, *task.values()])
         with open(path, "w", newline="", encoding="utf-8") as handle:
             writer = csv.writer(handle)
             writer.writerow(header)
@@ -115,6 +130,8 @@ class Result:
         arrays = {"t": self.t, "q": self.q, "qd": self.qd, "qdd": self.qdd, "tau": self.tau, "energy": self.energy}
         if self.q_d is not None:
             arrays |= {"q_d": self.q_d, "error": self.error}
+        if self.task is not None:
+            arrays |= {"y": self.task.y, "y_d": self.task.y_d, "task_error": self.task.error}
         np.savez(path, **arrays)
 
 
@@ -514,6 +531,7 @@ def simulate(
     events = _events(arm, events)
     arms = [arm] + [e[1] for e in events]
     steps = _steps(t_final, dt, n, adaptive)
+    law = controller
     spec, period, controller = _unwrap(controller, n)
     if adaptive and period:
         raise ModelError("a Digital controller needs method='rk4' (the book's fixed-step TRESP)")
@@ -543,6 +561,8 @@ def simulate(
         result = _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
                              coulomb_smoothing)  # fmt: skip
     result.info.update(described)
+    if callable(getattr(law, "tracking", None)):  # a task-space law records its task error
+        result.task = law.tracking(arm, result.t, result.q)
     return result
 
 

@@ -16,14 +16,17 @@ the caller's general path decides with the exact condition number (and raises, o
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, types
+from numba import njit, prange, types
 
+from armdyn.dynamics.aba import aba_one
+from armdyn.dynamics.coriolis import coriolis_one
 from armdyn.dynamics.crba import crba_one
 from armdyn.dynamics.frames import WORLD, jacobian_dot_one, jacobian_one
 from armdyn.dynamics.friction import friction_one
 from armdyn.dynamics.packed import N_JOINTS
-from armdyn.dynamics.rnea import coriolis_vector_one, gravity_one
+from armdyn.dynamics.rnea import coriolis_vector_one, gravity_one, inverse_dynamics_one, nonlinear_one
 from armdyn.dynamics.spatial import MATRIX, MODEL, NUMBA_OPTIONS, VECTOR, one_state, scratch
+from armdyn.inputs import LARGEST_STATE
 
 SINGULAR = 7
 """Status of a state whose J is not certified regular: the caller's general path takes it."""
@@ -256,3 +259,255 @@ def operational_one(
                 s += Jbar[r, k] * J[k, c]
             Nproj[r, c] = (1.0 if r == c else 0.0) - s
     return 0
+
+
+# ----- square outputs and the task-space forward dynamics, one kernel for each quantity's state --
+LAMBDA, GRAVITY, FRICTION, FORCE, NONLINEAR, INVERSE, CORIOLIS, FORWARD = range(8)
+"""What ``task_one`` computes: Lambda (m <= n, out (m, m)); for m = n, J^-T times G, F(qd), v,
+N - M J^-1 Jdot qd, or the inverse dynamics at qdd = J^-1 (v - Jdot qd) (out (1, n)); Vmbar
+(out (n, n)); or yddot = J ABA(q, qd, J^T v) + Jdot qd (m <= n, out (1, m))."""
+NOT_SQUARE = 9
+"""Status of a square quantity asked of an output with m != n: the general path says so."""
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def lu(A: np.ndarray, pivots: np.ndarray) -> bool:
+    """P A = L U in place with partial pivoting (row k swapped with pivots[k]); False when singular."""
+    n = A.shape[0]
+    for k in range(n):
+        p, big = k, abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                p, big = i, abs(A[i, k])
+        if not big > 0.0:
+            return False
+        pivots[k] = p
+        if p != k:
+            for c in range(n):
+                A[k, c], A[p, c] = A[p, c], A[k, c]
+        inverse = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            factor = A[i, k] * inverse
+            A[i, k] = factor
+            for c in range(k + 1, n):
+                A[i, c] -= factor * A[k, c]
+    return True
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def lu_solve(A: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
+    """x <- J^-1 x for J factored by ``lu``."""
+    n = A.shape[0]
+    for k in range(n):
+        p = int(pivots[k])
+        x[k], x[p] = x[p], x[k]
+    for i in range(n):
+        for k in range(i):
+            x[i] -= A[i, k] * x[k]
+    for i in range(n - 1, -1, -1):
+        for k in range(i + 1, n):
+            x[i] -= A[i, k] * x[k]
+        x[i] /= A[i, i]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def lu_solve_transpose(A: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
+    """x <- J^-T x for J factored by ``lu``: J^T = U^T L^T P, solved in that order."""
+    n = A.shape[0]
+    for i in range(n):
+        for k in range(i):
+            x[i] -= A[k, i] * x[k]
+        x[i] /= A[i, i]
+    for i in range(n - 1, -1, -1):
+        for k in range(i + 1, n):
+            x[i] -= A[k, i] * x[k]
+    for k in range(n - 1, -1, -1):
+        p = int(pivots[k])
+        x[k], x[p] = x[p], x[k]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def row_times(full: np.ndarray, rows: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    """out = (the rows of full) x."""
+    for r in range(rows.shape[0]):
+        s = 0.0
+        for j in range(full.shape[1]):
+            s += full[rows[r], j] * x[j]
+        out[r] = s
+
+
+@njit(**NUMBA_OPTIONS)
+def task_core(
+    model: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    v: np.ndarray,
+    target: int,
+    rows: np.ndarray,
+    limit: float,
+    kind: int,
+    out: np.ndarray,
+    buffer: np.ndarray,
+) -> int:
+    """One state of ``kind`` (see LAMBDA...) into out; a status. ``buffer``: task_size(n) values."""
+    n, m = int(model[N_JOINTS]), rows.shape[0]
+    status = rows_status(model, rows)
+    if status != 0:
+        return status
+    full = buffer[: 6 * n].reshape(6, n)
+    J = buffer[6 * n : 6 * n + m * n].reshape(m, n)
+    M = buffer[6 * n + m * n : 6 * n + m * n + n * n].reshape(n, n)
+    A = buffer[6 * n + m * n + n * n : 6 * n + m * n + 2 * n * n].reshape(n, n)
+    K = buffer[6 * n + m * n + 2 * n * n : 6 * n + m * n + 3 * n * n].reshape(n, n)
+    at = 6 * n + m * n + 3 * n * n
+    Y, B = buffer[at : at + n * m].reshape(n, m), buffer[at + n * m : at + n * m + m * m].reshape(m, m)
+    at += n * m + m * m
+    pivots, x, y = buffer[at : at + n], buffer[at + n : at + 2 * n], buffer[at + 2 * n : at + 3 * n]
+    axes = WORLD
+    status = jacobian_one(model, q, target, axes, full)
+    if status != 0:
+        return status
+    select_rows(full, rows, J)
+    if kind == LAMBDA:
+        status = crba_one(model, q, M)
+        return status if status != 0 else 0 if lambda_from(J, M, limit, Y, B, out) else SINGULAR
+    if kind == FORWARD:  # yddot = J qdd + Jdot qd at qdd = ABA(q, qd, J^T f): no inverse of J
+        for j in range(n):
+            s = 0.0
+            for r in range(m):
+                s += J[r, j] * v[r]
+            x[j] = s
+        status = aba_one(model, q, qd, x, y)
+        if status == 0:
+            status = jacobian_dot_one(model, q, qd, target, axes, full)
+        if status == 0:
+            row_times(full, rows, qd, x)
+            for r in range(m):
+                s = x[r]
+                for j in range(n):
+                    s += J[r, j] * y[j]
+                out[0, r] = s
+        return status
+    if m != n:
+        return NOT_SQUARE
+    if not certified_regular(J, limit, B):
+        return SINGULAR
+    for r in range(n):
+        for c in range(n):
+            A[r, c] = J[r, c]
+    if not lu(A, pivots):
+        return SINGULAR
+    if kind == GRAVITY:
+        status = gravity_one(model, q, x)
+    elif kind == FRICTION:
+        status = friction_one(model, qd, x)
+    elif kind == FORCE:
+        for i in range(n):
+            if not abs(v[i]) < LARGEST_STATE:  # NaN, infinity or too large: the general path names it
+                return 12
+            x[i] = v[i]
+    elif kind == NONLINEAR:  # N - M J^-1 (Jdot qd)
+        status = nonlinear_one(model, q, qd, x)
+        if status == 0:
+            status = crba_one(model, q, M)
+        if status == 0:
+            status = jacobian_dot_one(model, q, qd, target, axes, full)
+        if status == 0:
+            row_times(full, rows, qd, y)
+            lu_solve(A, pivots, y)
+            for i in range(n):
+                s = x[i]
+                for j in range(n):
+                    s -= M[i, j] * y[j]
+                x[i] = s
+    elif kind == INVERSE:  # tau at qdd = J^-1 (v - Jdot qd)
+        status = jacobian_dot_one(model, q, qd, target, axes, full)
+        if status == 0:
+            row_times(full, rows, qd, y)
+            for r in range(n):
+                y[r] = v[r] - y[r]
+            lu_solve(A, pivots, y)
+            status = inverse_dynamics_one(model, q, qd, y, x)
+    else:  # CORIOLIS: J^-T (Vm - M J^-1 Jdot) J^-1
+        status = coriolis_one(model, q, qd, K)
+        if status == 0:
+            status = crba_one(model, q, M)
+        if status == 0:
+            status = jacobian_dot_one(model, q, qd, target, axes, full)
+        if status != 0:
+            return status
+        for c in range(n):  # K -= M (J^-1 Jdot), a column at a time
+            for r in range(n):
+                y[r] = full[rows[r], c]
+            lu_solve(A, pivots, y)
+            for i in range(n):
+                s = 0.0
+                for j in range(n):
+                    s += M[i, j] * y[j]
+                K[i, c] -= s
+        for r in range(n):  # K <- K J^-1, a row at a time: (K J^-1)^T = J^-T K^T
+            for c in range(n):
+                y[c] = K[r, c]
+            lu_solve_transpose(A, pivots, y)
+            for c in range(n):
+                K[r, c] = y[c]
+        for c in range(n):  # out = J^-T K, a column at a time
+            for r in range(n):
+                y[r] = K[r, c]
+            lu_solve_transpose(A, pivots, y)
+            for r in range(n):
+                out[r, c] = y[r]
+        return 0
+    if status == 0:
+        lu_solve_transpose(A, pivots, x)
+        for i in range(n):
+            out[0, i] = x[i]
+    return status
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def task_size(n: int, m: int) -> int:
+    return 6 * n + 2 * m * n + 3 * n * n + m * m + 3 * n
+
+
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, types.int64, ROWS, types.float64, types.int64, MATRIX))
+def task_one(
+    model: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    v: np.ndarray,
+    target: int,
+    rows: np.ndarray,
+    limit: float,
+    kind: int,
+    out: np.ndarray,
+) -> int:
+    """One state of ``kind`` (LAMBDA ... FORWARD) into out; a status (SINGULAR: the general path decides).
+    The caller gives out the kind's shape and v of n values (of which FORWARD reads m)."""
+    n = int(model[N_JOINTS])
+    if qd.shape[0] != n or v.shape[0] != n:
+        return 2
+    return task_core(model, q, qd, v, target, rows, limit, kind, out, scratch(task_size(n, rows.shape[0])))
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
+def task_batch(
+    model: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    v: np.ndarray,
+    target: int,
+    rows: np.ndarray,
+    limit: float,
+    kind: int,
+    out: np.ndarray,
+    status: np.ndarray,
+) -> None:
+    """Many states (B, n) of ``kind`` into out (B, r, c), each state's status into status (B,)."""
+    count = q.shape[0]
+    chunks = min(count, 64)
+    n = int(model[N_JOINTS])
+    for chunk in prange(chunks):
+        buffer = np.empty(task_size(n, rows.shape[0]))
+        for s in range(chunk * count // chunks, (chunk + 1) * count // chunks):
+            status[s] = task_core(model, q[s], qd[s], v[s], target, rows, limit, kind, out[s], buffer)
