@@ -537,7 +537,7 @@ def test_rr_arm_tracks_the_circle_of_example_4_2_1_under_task_space_computed_tor
         (lambda: ct.ToolPose().error(ad.models.puma560(), np.zeros(6), np.zeros(5)), "y_d of output"),
         (lambda: ct.ComputedTorque(ct.PlanarPosition(), "circle", 1, 1), "path must be a callable"),
         (lambda: ct.ComputedTorque(ct.PlanarPosition(), ct.Circle((0, 0), 1, 1), -1, 1), "kp must be at least 0"),
-        (lambda: ct.Circle((0, 0, 0), 1, 1), "centre"),
+        (lambda: ct.Circle((0, 0, 0, 0), 1, 1), "centre"),
         (lambda: ct.Circle((0, 0), 1, 0), "period of a Circle must be positive"),
         (lambda: ct.ComputedTorque(ct.PlanarPosition(), ct.Circle((0, 0), 1, 1), 1, 1)(0.0, np.zeros(2), np.zeros(2)),
          "needs a model of the arm"),

@@ -679,13 +679,13 @@ def _damping(damping: object) -> float | None:
 
 def _rows(arm: Robot, output: TaskOutput, J: np.ndarray, square: bool) -> int:
     m = J.shape[1] if J.ndim == 3 else 0
+    if m > arm.n:
+        raise ModelError(f"output {output!r} has {m} rows, more than the {arm.n} joints of arm '{arm.name}'")
     if square and m != arm.n:
         raise ModelError(
             f"output {output!r} has {m} rows but arm '{arm.name}' has {arm.n} joints: the square task-space "
             "dynamics need m = n (use operational_space for m < n)"
         )
-    if m > arm.n:
-        raise ModelError(f"output {output!r} has {m} rows, more than the {arm.n} joints of arm '{arm.name}'")
     return m
 
 
@@ -766,55 +766,53 @@ def _compiled(arm: object, output: object, m: int | None, damping: object, limit
         return None
     if damping is not None and not (type(damping) is float and damping > 0):
         return None
-    target, rows = output._compiled()
-    return None if m is not None and rows.shape[0] != m else (target, rows)
+    spec = output._compiled()
+    return None if m is not None and spec[1].shape[0] != m else spec
 
 
 def _kernel(
     arm: object,
     output: object,
     kind: int,
-    names: tuple[str, ...],
-    values: tuple[object, ...],
     damping: object,
     limit: object,
-    trailing: str,
+    matrix: bool,
+    q: object,
+    qd: object = None,
+    v: object = None,
+    v_name: str = "",
 ) -> np.ndarray | None:
-    """The compiled route of a square quantity (operational.task_one, or task_batch for a batch);
-    None when the general path must take the call: another output, an argument to check, or a
-    state the kernel cannot certify regular. ``trailing``: "vector" (n,) or "matrix" (n, n)."""
+    """The compiled route of a square quantity (operational.task_one, or task_batch for a batch):
+    (n, n) when ``matrix``, else (n,); None when the general path must take the call: another
+    output, an argument to check, or a state the kernel cannot certify regular."""
     fast = _compiled(arm, output, getattr(arm, "n", None), damping, limit)
     if fast is None:
         return None
-    target, rows = fast
     n = arm.n
-    shape = (1, n) if trailing == "vector" else (n, n)
-    slot = {"q": 0, "qd": 1, "tau": 2, "yddot": 2}  # the kernel's (q, qd, v)
-    state = [values[0]] * 3
-    for name, value in zip(names, values, strict=True):
-        state[slot[name]] = value
-    result = np.empty(shape)
+    result = np.empty((n, n) if matrix else (1, n))
     try:
-        if task_one(arm.packed, *state, target, rows, limit, kind, result) == 0:
-            return result[0] if trailing == "vector" else result
+        status = task_one(arm.packed, q, q if qd is None else qd, q if v is None else v, *fast, limit, kind, result)
+        if status == 0:
+            return result if matrix else result[0]
     except _NOT_ONE_STATE:
         pass
     if arm.packed is None:
         return None
+    named = [("q", q)] + ([("qd", qd)] if qd is not None else []) + ([(v_name, v)] if v is not None else [])
     try:
-        batch, flat = inputs.batch_states(names, values, n)
+        batch, flat = inputs.batch_states([name for name, _ in named], [value for _, value in named], n)
     except ModelError:
         return None  # the general path names the argument
-    arrays = [flat[0]] * 3
-    for name, array in zip(names, flat, strict=True):
-        arrays[slot[name]] = array
-    flat, count = arrays, flat[0].shape[0]
-    out, status = np.empty((count, *shape)), np.ones(count, dtype=np.int64)
+    q_flat = flat[0]
+    qd_flat = flat[1] if qd is not None else q_flat
+    v_flat = flat[-1] if v is not None else q_flat
+    count = q_flat.shape[0]
+    out, status = np.empty((count, *result.shape)), np.ones(count, dtype=np.int64)
     if count:
-        _launch(task_batch, out.size, arm.packed, *flat, target, rows, limit, kind, out, status)
+        _launch(task_batch, out.size, arm.packed, q_flat, qd_flat, v_flat, *fast, limit, kind, out, status)
     if status.any():
         return None
-    return out.reshape(*batch, n) if trailing == "vector" else out.reshape(*batch, n, n)
+    return out.reshape(*batch, n, n) if matrix else out.reshape(*batch, n)
 
 
 # ----- square outputs: Mbar, Vmbar, Gbar, Nbar (BOOK.md section 6) --------------------------------
@@ -856,7 +854,15 @@ def task_inertia(
         When an argument is invalid, m != n, or J is ill-conditioned at a state and no
         damping is given (the message names the state and the condition number).
     """
-    result = _kernel(arm, output, kernels.LAMBDA, ("q",), (q,), damping, max_condition, "matrix")
+    fast = _compiled(arm, output, getattr(arm, "n", None), damping, max_condition)
+    if fast is not None:  # one state through the leaner kernel of Lambda
+        result = np.empty((arm.n, arm.n))
+        try:
+            if lambda_one(arm.packed, q, *fast, max_condition, result) == 0:
+                return result
+        except _NOT_ONE_STATE:
+            pass
+    result = _kernel(arm, output, kernels.LAMBDA, damping, max_condition, True, q)
     if result is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
         return result
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
@@ -901,7 +907,7 @@ def task_coriolis(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
-    result = _kernel(arm, output, kernels.CORIOLIS, ("q", "qd"), (q, qd), damping, max_condition, "matrix")
+    result = _kernel(arm, output, kernels.CORIOLIS, damping, max_condition, True, q, qd)
     if result is not None:
         return result
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
@@ -944,7 +950,7 @@ def task_gravity(
     ModelError
         As for ``task_inertia``.
     """
-    result = _kernel(arm, output, kernels.GRAVITY, ("q",), (q,), damping, max_condition, "vector")
+    result = _kernel(arm, output, kernels.GRAVITY, damping, max_condition, False, q)
     if result is not None:
         return result
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
@@ -988,7 +994,7 @@ def task_nonlinear(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
-    result = _kernel(arm, output, kernels.NONLINEAR, ("q", "qd"), (q, qd), damping, max_condition, "vector")
+    result = _kernel(arm, output, kernels.NONLINEAR, damping, max_condition, False, q, qd)
     if result is not None:
         return result
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
@@ -1035,7 +1041,7 @@ def task_friction(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
-    result = _kernel(arm, output, kernels.FRICTION, ("q", "qd"), (q, qd), damping, max_condition, "vector")
+    result = _kernel(arm, output, kernels.FRICTION, damping, max_condition, False, q, qd)
     if result is not None:
         return result
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
@@ -1122,7 +1128,7 @@ def task_force(
     ModelError
         As for ``task_inertia``, and when tau is invalid.
     """
-    result = _kernel(arm, output, kernels.FORCE, ("q", "tau"), (q, tau), damping, max_condition, "vector")
+    result = _kernel(arm, output, kernels.FORCE, damping, max_condition, False, q, None, tau, "tau")
     if result is not None:
         return result
     arm, output, task = _task(arm, output, ("q", "tau"), (q, tau), damping, max_condition, square=True)
@@ -1221,9 +1227,7 @@ def task_inverse_dynamics(
     ModelError
         As for ``task_inertia``, and when qd or yddot is invalid.
     """
-    result = _kernel(
-        arm, output, kernels.INVERSE, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, "vector"
-    )
+    result = _kernel(arm, output, kernels.INVERSE, damping, max_condition, False, q, qd, yddot, "yddot")
     if result is not None:
         return result
     arm, output, task = _task(arm, output, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, True)
@@ -1459,12 +1463,13 @@ def operational_coriolis(
 # ----- control in task coordinates ------------------------------------------------------------------
 @dataclass(frozen=True)
 class Circle:
-    """A circle in a plane of task coordinates (Example 4.2-1): y_d = c + r [cos wt, sin wt],
-    w = 2 pi / period, with its velocity and acceleration.
+    """A circle in task coordinates (Example 4.2-1): y_d = c + r [cos wt, sin wt] in the first
+    two coordinates, w = 2 pi / period, with its velocity and acceleration; a third coordinate
+    of the centre, if given, is held (a circle parallel to the x-y plane, for ToolPosition).
 
     Parameters
     ----------
-    centre : sequence of 2 float
+    centre : sequence of 2 or 3 float
         The centre c (m).
     radius : float
         The radius r (m), at least 0.
@@ -1472,18 +1477,21 @@ class Circle:
         The time of one turn (s), positive.
     """
 
-    centre: tuple[float, float]
+    centre: tuple[float, ...]
     radius: float
     period: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "centre", tuple(inputs.numbers(self.centre, "centre", (2,), " of a Circle")))
+        centre = inputs.numbers(self.centre, "centre", None, " of a Circle")
+        if centre.shape not in ((2,), (3,)):
+            raise ModelError(f"centre of a Circle must have 2 or 3 coordinates, got shape {centre.shape}")
+        object.__setattr__(self, "centre", tuple(centre))
         object.__setattr__(self, "radius", inputs.number(self.radius, "radius", " of a Circle", minimum=0.0))
         if not inputs.number(self.period, "period", " of a Circle") > 0:
             raise ModelError(f"period of a Circle must be positive, got {self.period!r}")
 
     def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(y_d, yd_d, ydd_d) at time t (s), each (2,).
+        """(y_d, yd_d, ydd_d) at time t (s), each of the centre's length.
 
         Parameters
         ----------
@@ -1502,8 +1510,8 @@ class Circle:
         """
         w = 2.0 * np.pi / self.period
         angle = w * inputs.number(t, "t")
-        ring = np.array([np.cos(angle), np.sin(angle)])
-        turn = np.array([-np.sin(angle), np.cos(angle)])
+        ring, turn = np.zeros(len(self.centre)), np.zeros(len(self.centre))
+        ring[:2], turn[:2] = (np.cos(angle), np.sin(angle)), (-np.sin(angle), np.cos(angle))
         return np.array(self.centre) + self.radius * ring, self.radius * w * turn, -self.radius * w * w * ring
 
 

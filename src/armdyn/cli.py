@@ -653,16 +653,36 @@ def check(
     output: str | None = typer.Option(
         None, "--output", "-o", help="Also write the table to this file: .csv, .md or .txt (by its suffix)."
     ),
+    task: str | None = typer.Option(
+        None,
+        "--task",
+        help="Check in task coordinates (Section 3.5) instead of joint coordinates: 'position' (tool point, 3), "
+        "'pose' (tool position and angular velocity, 6) or 'planar' (tool x, y, 2); at most as many coordinates "
+        "as joints (fewer: Khatib's Lambda).",
+    ),
+    max_condition: float | None = typer.Option(
+        None,
+        "--max-condition",
+        help="With --task: keep only the sampled configurations where cond J is below this (default 1000), the "
+        "region the bounds hold over (they grow without bound near singularities).",
+    ),
 ) -> None:
     """Check the properties of Table 3.3.1 on an arm and compute its bounds (with units)."""
     from armdyn.properties import check as check_properties
 
     target = _table_file(output, "--output") if output else None
+    if max_condition is not None and task is None:
+        _fail("--max-condition applies to task coordinates only: give --task with it")
     arm = _arm(name, strict)
     ranges = _limits(limits, arm)
-    _activity.status(f"checking Table 3.3.1 on {arm.name} ({samples} samples, refined by L-BFGS-B)")
-    report = check_properties(arm, samples=samples, seed=seed, limits=ranges)
-    report.references.update(_book_values(arm, report.ranges))
+    chosen = None if task is None else _task_output(task)
+    options = {} if chosen is None else {"task": chosen, "max_condition": max_condition}
+    where = "" if chosen is None else f" in task coordinates {chosen!r}"
+    refined = "L-BFGS-B" if chosen is None else "SLSQP"
+    _activity.status(f"checking Table 3.3.1 on {arm.name}{where} ({samples} samples, refined by {refined})")
+    report = check_properties(arm, samples=samples, seed=seed, limits=ranges, **options)
+    if chosen is None:
+        report.references.update(_book_values(arm, report.ranges))
     console.print(report.table())
     bounds = "bounds: " + ", ".join(
         f"{key} = {value:.6g}" + (f" {report.units[key]}" if report.units.get(key) else "")
@@ -675,16 +695,25 @@ def check(
             "book values: Example 3.3-1 (BOOK.md section 4), the RR arm of Example 3.2-2 with |theta_i| <= pi/2"
         )
     for note in notes:
-        console.print(f"note: {note}", highlight=False)
+        console.print(f"note: {note}", highlight=False, markup=False)
     console.print("[green]all properties hold[/green]" if report.all_hold else "[red]some properties fail[/red]")
     if target is not None:
         columns, rows = report.records(digits=8)
-        ranges_text = ", ".join(f"[{lo:.8g}, {hi:.8g}]" for lo, hi in report.ranges)
-        sheet = _Sheet(f"Table 3.3.1 for {report.arm}, joint ranges {ranges_text}", columns, rows)
+        sheet = _Sheet(report.title(8), columns, rows)
         _write_sheets(target, [sheet], [bounds, *(f"note: {note}" for note in notes)])
         console.print(f"wrote {output}")
     if not report.all_hold:
         raise typer.Exit(1)
+
+
+def _task_output(coordinates: str, option: str = "--task") -> object:
+    """The task output that ``check --task``, ``simulate --task`` and ``task --coordinates`` name (TASK_OUTPUTS)."""
+    from armdyn import cartesian
+
+    outputs = {"position": cartesian.ToolPosition, "pose": cartesian.ToolPose, "planar": cartesian.PlanarPosition}
+    if coordinates not in outputs:
+        _fail(f"{option} must be one of {', '.join(TASK_OUTPUTS)}, got {coordinates!r}")
+    return outputs[coordinates]()
 
 
 def _limits(text: str, arm: Robot) -> list[tuple[float, float]] | None:
@@ -942,6 +971,90 @@ SIMULATE_OUTPUT_HELP = (
 )
 
 
+SIMULATE_TASK_HELP = (
+    "Control in task coordinates instead of joints: position (the tool point), pose (the tool's position and "
+    "orientation) or planar (its x, y). --controller computed-torque needs as many coordinates as joints, "
+    "operational-space (redundant arms) as many or fewer, with the start as the null-space posture; --kp, --kv "
+    "are one number each; --trajectory line (by --move and --turn over 1/--frequency s, a quintic law), circle "
+    "(radius --amplitude, one turn in 1/--frequency s, starting at the tool) or none (hold the tool)."
+)
+
+
+def _default_start(arm: Robot) -> np.ndarray:
+    return np.asarray(arm.configurations.get("qn", arm.configurations.get("qz", np.zeros(arm.n))), dtype=float)
+
+
+def _one_number(text: str, option: str) -> float:
+    values = _values(text, option)
+    if len(values) != 1:
+        _fail(f"{option} takes one number with --task (the task coordinates share the gain), got {len(values)}")
+    return float(values[0])
+
+
+def _three(text: str, option: str) -> np.ndarray:
+    values = np.asarray(_values(text, option), dtype=float)
+    if values.shape != (3,):
+        _fail(f"{option} takes three numbers x,y,z, got {len(values)}")
+    return values
+
+
+def _task_controller(
+    arm: Robot, task: str, controller: str, kp: str, kv: str, trajectory: str, amplitude: float, frequency: float,
+    start: np.ndarray, move: str, turn: str,
+) -> object:  # fmt: skip
+    """The task-space law of ``simulate --task``: the output, a path from the tool's start, and the law."""
+    from armdyn import cartesian
+
+    output = _task_output(task)
+    gains = [_one_number(value, option) for value, option in ((kp, "--kp"), (kv, "--kv"))]
+    y0 = output.value(arm, start)
+    if not (np.isfinite(frequency) and frequency > 0):
+        _fail(f"--frequency must be positive and finite for a task path (it lasts 1/frequency s), got {frequency}")
+    if trajectory == "line":
+        shift = _three(move, "--move")
+        if task == "pose":
+            from scipy.spatial.transform import Rotation
+
+            begin = arm.tool_pose(start)
+            end = begin.copy()
+            end[:3, 3] += shift
+            end[:3, :3] = Rotation.from_rotvec(_three(turn, "--turn")).as_matrix() @ begin[:3, :3]
+            path = cartesian.PoseLine(begin, end, 1.0 / frequency)
+        else:
+            path = cartesian.Line(y0, y0 + shift[: len(y0)], 1.0 / frequency)
+    elif trajectory == "circle":
+        if task == "pose":
+            _fail("--trajectory circle takes --task position or planar (a pose follows a line)")
+        centre = y0.copy()
+        centre[0] -= amplitude
+        path = cartesian.Circle(tuple(centre), amplitude, 1.0 / frequency)
+    elif trajectory == "none":
+        path = cartesian.Line(y0, y0, 1.0) if task != "pose" else cartesian.PoseLine(*[arm.tool_pose(start)] * 2, 1.0)
+    else:
+        _fail(f"--trajectory with --task must be line, circle or none, got {trajectory!r}")
+    if controller == "computed-torque":
+        return cartesian.ComputedTorque(output, path, *gains)
+    if controller == "operational-space":
+        return cartesian.OperationalSpaceControl(output, path, *gains, start, gains[0] / 4, gains[1] / 2)
+    _fail(f"--controller with --task must be computed-torque or operational-space, got {controller!r}")
+
+
+def _task_report(result: object) -> _Sheet:
+    """Print the report of a task-space run (a row per task coordinate) and return it."""
+    task = result.task
+    unit = "m, rad" if task.output.startswith("ToolPose") else "m"
+    labels = ["x", "y", "z", "rx", "ry", "rz"][: task.error.shape[1]]
+    late = result.t >= min(1.0, result.t[-1])
+    title = (f"{result.arm.name}, task {task.output}: {result.info['controller']}; {result.info['method']}, "
+             f"{len(result.t) - 1} steps of {result.info['dt']:g} s")  # fmt: skip
+    columns = ["coordinate", f"final y ({unit})", f"final error ({unit})", f"max |error| after 1 s ({unit})"]
+    rows = [[label, f"{task.y[-1, i]:.6g}", f"{task.error[-1, i]:.3g}", f"{np.abs(task.error[late, i]).max():.3g}"]
+            for i, label in enumerate(labels)]  # fmt: skip
+    sheet = _Sheet(title, columns, rows)
+    console.print(sheet.rich())
+    return sheet
+
+
 @app.command()
 def simulate(
     name: str = typer.Argument(..., help=ARM_HELP),
@@ -949,7 +1062,11 @@ def simulate(
     kp: str = typer.Option("100", help=f"Proportional gain: {PER_JOINT} (400,400,400,50,50,50)."),
     kv: str = typer.Option("20", help=f"Derivative gain: {PER_JOINT}."),
     ki: str = typer.Option("0", help=f"Integral gain: {PER_JOINT}."),
-    trajectory: str = typer.Option("sine", help="sine (about the start), quintic (from it) or none (hold it)."),
+    trajectory: str | None = typer.Option(
+        None,
+        help="sine (about the start, the default), quintic (from it) or none (hold it); with --task: line "
+        "(the default), circle or none.",
+    ),
     amplitude: float = typer.Option(0.1, help="Trajectory amplitude (rad or m)."),
     frequency: float = typer.Option(0.5, help="Trajectory frequency (Hz)."),
     t_final: float = typer.Option(5.0, "--t-final", help="Simulated time (s)."),
@@ -962,40 +1079,52 @@ def simulate(
     disturbance: str = typer.Option("0", help=f"A constant disturbance torque tau_d (N m or N): {PER_JOINT}."),
     q0: str | None = typer.Option(None, "--q0", help=Q0_HELP),
     qd0: str | None = typer.Option(None, "--qd0", help=f"Start velocities (rad/s or m/s): {PER_JOINT}. Default 0."),
+    task: str | None = typer.Option(None, "--task", help=SIMULATE_TASK_HELP),
+    move: str = typer.Option("0.1,0,0", "--move", help="Task line: the tool's displacement dx,dy,dz (m)."),
+    turn: str = typer.Option("0,0,0", "--turn", help="Task line of a pose: the tool's rotation rx,ry,rz (rad)."),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
     plot: str | None = typer.Option(None, help="Write the figure to this PNG file."),
     csv: str | None = typer.Option(None, help="Write the samples to this CSV file."),
     output: str | None = typer.Option(None, "--output", "-o", help=SIMULATE_OUTPUT_HELP),
 ) -> None:
-    """Simulate an arm under control and report the tracking errors (with units)."""
+    """Simulate an arm under control and report the tracking errors (with units); with --task, control
+    in task coordinates (Section 3.5) along a line or a circle of the tool."""
     from armdyn.simulation import simulate as run
 
     plot_file = _output_file(plot, "--plot") if plot else None
     csv_file = _output_file(csv, "--csv") if csv else None
     folder = _output_folder(output, "--output") if output else None
     arm = _arm(name, strict)
-    gains = [_per_joint(value, option, arm.n) for value, option in ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))]
-    law = _controller(controller, *gains, period, _per_joint(torque_limit, "--torque-limit", arm.n))
     start = _joint_state(q0, "--q0", arm) if q0 is not None else None
     velocity = _joint_state(qd0, "--qd0", arm) if qd0 is not None else None
     tau_d = np.broadcast_to(_per_joint(disturbance, "--disturbance", arm.n), (arm.n,))
-    desired = _trajectory(trajectory, arm, amplitude, frequency, start)
+    if task is not None:
+        if period != 0 or torque_limit != "inf":
+            _fail("--period and --torque-limit apply to joint-space control, not to --task")
+        start = start if start is not None else _default_start(arm)
+        path = "line" if trajectory is None else trajectory
+        law = _task_controller(arm, task, controller, kp, kv, path, amplitude, frequency, start, move, turn)
+        desired = None
+    else:
+        gains = [_per_joint(value, option, arm.n) for value, option in ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))]
+        law = _controller(controller, *gains, period, _per_joint(torque_limit, "--torque-limit", arm.n))
+        desired = _trajectory("sine" if trajectory is None else trajectory, arm, amplitude, frequency, start)
     if start is None and desired is not None and controller == "none":
         start = desired(0.0, arm.n)[0]
     progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
     result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
                  disturbance=None if not np.any(tau_d) else tau_d.copy(), progress=progress)  # fmt: skip
     _check_finite(result)
-    report = _report(result)
+    report = _report(result) if result.task is None else _task_report(result)
     if folder is not None:
         folder.mkdir(exist_ok=True)
         stem = re.sub(r"[^\w-]+", "_", arm.name).strip("_") or "arm"
-        result.plot(folder / f"{stem}.png")
+        (result.plot if result.task is None else result.plot_task)(folder / f"{stem}.png")
         result.to_csv(folder / f"{stem}.csv")
         _write_sheets(folder / f"{stem}-report.md", [report])
         console.print(f"wrote {folder / f'{stem}.png'}, {folder / f'{stem}.csv'} and {folder / f'{stem}-report.md'}")
     if plot_file is not None:
-        result.plot(plot_file)
+        (result.plot if result.task is None else result.plot_task)(plot_file)
         console.print(f"wrote {plot}")
     if csv_file is not None:
         result.to_csv(csv_file)
@@ -1097,7 +1226,7 @@ def task(
         "--coordinates",
         "-c",
         help="The task coordinates: 'position' (tool point, 3), 'pose' (tool position and angular velocity, 6) or "
-        "'planar' (tool x, y, 2). Square J is needed: as many coordinates as joints.",
+        "'planar' (tool x, y, 2). With fewer coordinates than joints, Khatib's Lambda, mu and p instead.",
     ),
     q: str | None = typer.Option(None, "--q", help=f"The configuration (rad or m): a named one, or {PER_JOINT}."),
     qd: str | None = typer.Option(None, "--qd", help=f"Joint velocities (rad/s or m/s): {PER_JOINT}. Default 0."),
@@ -1112,23 +1241,36 @@ def task(
 
     target = _table_file(output, "--output") if output else None
     arm = _arm(name, strict)
-    outputs = {"position": cartesian.ToolPosition, "pose": cartesian.ToolPose, "planar": cartesian.PlanarPosition}
-    if coordinates not in outputs:
-        raise ModelError(f"--coordinates must be one of {', '.join(TASK_OUTPUTS)}, got {coordinates!r}")
-    chosen = outputs[coordinates]()
+    chosen = _task_output(coordinates, "--coordinates")
     start = _joint_state(q, "--q", arm) if q is not None else np.zeros(arm.n)
     rates = np.broadcast_to(_per_joint(qd, "--qd", arm.n), (arm.n,)).copy() if qd is not None else np.zeros(arm.n)
     options = {} if damping is None else {"damping": damping}
-    Mbar = cartesian.task_inertia(arm, chosen, start, **options)
-    Nbar = cartesian.task_nonlinear(arm, chosen, start, rates, **options)
-    Gbar = cartesian.task_gravity(arm, chosen, start, **options)
-    condition = float(cartesian.condition_number(arm, chosen, start))
     labels = {"position": ["x", "y", "z"], "pose": ["x", "y", "z", "wx", "wy", "wz"], "planar": ["x", "y"]}[coordinates]
+    if len(labels) < arm.n:  # a redundant arm: Khatib's operational space
+        space = cartesian.operational_space(arm, chosen, start, rates, **options)
+        inertia, names = (
+            space.Lambda,
+            (
+                f"Lambda = (J M^-1 J^T)^-1 ({arm.name}, {coordinates}, m = {len(labels)} < n = {arm.n})",
+                "mu = Jbar^T Vm qd - Lambda Jdot qd and p = Jbar^T G",
+            ),
+        )
+        bias, gravity, heads = space.mu, space.p, ["coordinate", "mu", "p"]
+    else:
+        inertia = cartesian.task_inertia(arm, chosen, start, **options)
+        bias = cartesian.task_nonlinear(arm, chosen, start, rates, **options)
+        gravity = cartesian.task_gravity(arm, chosen, start, **options)
+        names = (
+            f"Mbar = J^-T M J^-1 ({arm.name}, {coordinates})",
+            "Nbar = J^-T (N - M J^-1 Jdot qd) and Gbar = J^-T G",
+        )
+        heads = ["coordinate", "Nbar", "Gbar"]
+    condition = float(cartesian.condition_number(arm, chosen, start))
     sheets = [
-        _Sheet(f"Mbar = J^-T M J^-1 ({arm.name}, {coordinates})", ["", *labels],
-               [[label, *(_number(v, 6) for v in row)] for label, row in zip(labels, Mbar, strict=True)]),
-        _Sheet("Nbar = J^-T (N - M J^-1 Jdot qd) and Gbar = J^-T G", ["coordinate", "Nbar", "Gbar"],
-               [[label, _number(n, 6), _number(g, 6)] for label, n, g in zip(labels, Nbar, Gbar, strict=True)]),
+        _Sheet(names[0], ["", *labels],
+               [[label, *(_number(v, 6) for v in row)] for label, row in zip(labels, inertia, strict=True)]),
+        _Sheet(names[1], heads,
+               [[label, _number(n, 6), _number(g, 6)] for label, n, g in zip(labels, bias, gravity, strict=True)]),
     ]  # fmt: skip
     for sheet in sheets:
         console.print(sheet.rich())

@@ -388,6 +388,9 @@ def describe(controller: object) -> str:
         belief = f", model '{model.name}'" if model is not None else ""
         label = {"ComputedTorque": "computed torque", "PDGravity": "PD plus gravity", "PID": "joint PID"}
         return f"{label[type(controller).__name__]} ({', '.join(gains)}{belief})"
+    own = getattr(type(controller), "describe", None)  # a law that describes itself (armdyn.cartesian's)
+    if callable(own):
+        return str(own(controller))
     return getattr(controller, "__name__", type(controller).__name__)
 
 

@@ -101,15 +101,18 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
     plane.plot(task.y[0, 0], task.y[0, 1], "o", color="C1", label="start")
     plane.set(xlabel=f"y1 ({unit})", ylabel=f"y2 ({unit})", aspect="equal", title=f"path of {task.output}")
     plane.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False, fontsize=8)
-    floor = 1e-12
+
+    def size(e: np.ndarray) -> np.ndarray:  # a zero error (a start on the path) has no place on a log scale
+        norm = np.linalg.norm(e, axis=1)
+        return np.where(norm > 0, norm, np.nan)
+
     if task.output.startswith("ToolPose"):
-        error.semilogy(result.t, np.maximum(np.linalg.norm(task.error[:, :3], axis=1), floor), label="position (m)")
-        error.semilogy(result.t, np.maximum(np.linalg.norm(task.error[:, 3:], axis=1), floor),
-                       label="orientation (rad)")  # fmt: skip
+        error.semilogy(result.t, size(task.error[:, :3]), label="position (m)")
+        error.semilogy(result.t, size(task.error[:, 3:]), label="orientation (rad)")
         error.legend(frameon=False, fontsize=8)
         error.set_ylabel("task error |e|")
     else:
-        error.semilogy(result.t, np.maximum(np.linalg.norm(task.error, axis=1), floor), color="C0")
+        error.semilogy(result.t, size(task.error), color="C0")
         error.set_ylabel(f"task error |y_d - y| ({unit})")
     error.set(xlabel="time (s)", title="task error", xlim=(result.t[0], result.t[-1]))
     error.grid(True, alpha=0.3)

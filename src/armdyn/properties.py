@@ -5,17 +5,26 @@ Every bound is computed: the quantity is evaluated on random samples of the join
 lower limit for prismatic joints without limits, where bounds depend on q), and the
 extremes are then refined by a bounded local optimizer (scipy.optimize, L-BFGS-B) started
 from the best samples. The report says for each bound how it was found.
+
+With ``check(..., task=output)`` the properties are evaluated in the coordinates y = h(q) of
+a task output of ``armdyn.cartesian`` (BOOK.md section 6): Mbar = J^-T M J^-1, Vmbar, Fbar,
+Gbar and Wbar for a square output (m = n), Khatib's Lambda = (J M^-1 J^T)^-1 and mu_x for a
+redundant one (m < n). These grow without bound as J(q) approaches a singularity, so the
+bounds are computed over the regular part of the joint ranges only: the sampled
+configurations whose condition number of J is below ``max_condition`` (default
+DEFAULT_MAX_CONDITION = 1e3); the extremes are refined by SLSQP under the same constraint.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize
 
-from armdyn import inputs
+from armdyn import cartesian, inputs
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -131,6 +140,12 @@ class Report:
         Values to compare the computed bounds with, by the same names: the book's (e.g.
         Example 3.3-1's m1 = 4, m2 = 7); shown in the table's "book value" column. Empty
         unless the caller sets them.
+    task : str or None, optional
+        For a report in task coordinates (``check(..., task=output)``, BOOK.md section 6), the
+        output's repr, e.g. "ToolPosition()"; None (default) for joint coordinates.
+    max_condition : float or None, optional
+        For a report in task coordinates, the condition number of J below which the sampled
+        configurations were kept: the bounds hold over that region of ``ranges``; else None.
     """
 
     arm: str
@@ -140,6 +155,8 @@ class Report:
     notes: list[str] = field(default_factory=list)
     units: dict[str, str] = field(default_factory=dict)
     references: dict[str, float] = field(default_factory=dict)
+    task: str | None = None
+    max_condition: float | None = None
 
     @property
     def all_hold(self) -> bool:
@@ -212,8 +229,28 @@ class Report:
             rows.append([row.name, row.statement, holds, bound, references, extreme, residual, row.how])
         return list(COLUMNS), rows
 
+    def title(self, digits: int = 4) -> str:
+        """The report's title: the arm, the coordinates and the region the bounds hold over.
+
+        Parameters
+        ----------
+        digits : int, optional
+            Significant digits of the joint ranges (default 4).
+
+        Returns
+        -------
+        str
+            E.g. "Table 3.3.1 for two_link_planar, joint ranges [-3.142, 3.142], [-3.142, 3.142]";
+            in task coordinates also the output and the condition-number limit of the region.
+        """
+        ranges = ", ".join(f"[{lo:.{digits}g}, {hi:.{digits}g}]" for lo, hi in self.ranges)
+        if self.task is None:
+            return f"Table 3.3.1 for {self.arm}, joint ranges {ranges}"
+        region = "" if self.max_condition is None else f" where cond J < {self.max_condition:g}"
+        return f"Table 3.3.1 for {self.arm} in task coordinates {self.task}, joint ranges {ranges}{region}"
+
     def table(self) -> object:
-        """A rich Table of the report (the columns of ``records``).
+        """A rich Table of the report (the columns of ``records``), titled by ``title``.
 
         Returns
         -------
@@ -223,9 +260,8 @@ class Report:
         """
         from rich.table import Table
 
-        ranges = ", ".join(f"[{lo:.4g}, {hi:.4g}]" for lo, hi in self.ranges)
         table = Table(
-            title=f"Table 3.3.1 for {self.arm}, joint ranges {ranges}",
+            title=self.title(),
             caption="residual: the largest relative error of an identity (0 is exact); "
             "margin: the largest lhs - rhs of an inequality found (<= 0 where it holds)",
         )
@@ -365,6 +401,19 @@ MAX_SAMPLES = 1_000_000
 """The most random configurations ``check`` samples: beyond it a check takes minutes and the
 sampled extremes no longer change."""
 
+DEFAULT_MAX_CONDITION = 1e3
+"""The condition number of J(q) below which ``check(..., task=...)`` keeps a sampled configuration
+by default: the task-space bounds hold over that regular region of the joint ranges."""
+
+MIN_REGULAR = 4
+"""The fewest regular samples (cond J(q) below ``max_condition``) ``check(..., task=...)`` computes
+bounds from."""
+
+FD_TOLERANCE = 1e-6
+"""The relative tolerance of the task-space skew-symmetry row, whose Mbar_dot (Lambda_dot) is a
+4th-order central difference along the motion (rounding-limited rows use TOLERANCE); both scale
+with cond J / DEFAULT_MAX_CONDITION where the region is worse conditioned than the default."""
+
 
 def check(
     robot: Robot,
@@ -372,11 +421,34 @@ def check(
     seed: int = 0,
     limits: Sequence[tuple[float, float]] | None = None,
     only: Sequence[str] | None = None,
+    *,
+    task: cartesian.TaskOutput | None = None,
+    max_condition: float | None = None,
 ) -> Report:
     """Evaluate the properties of Table 3.3.1 on ``robot`` (see the module docstring).
 
     Every bound is computed on random samples of the joint range, its extremes refined by
     L-BFGS-B; passivity is checked along a simulated trajectory (RK4, 1 ms steps, 1 s).
+
+    With ``task``, the properties are those of the robot equation in the output's coordinates
+    (BOOK.md section 6), Mbar yddot + Nbar = f with Mbar = J^-T M J^-1. They are evaluated
+    over the regular part of the joint ranges: the sampled configurations whose condition
+    number of J(q) is below ``max_condition`` (the bounds blow up at a singularity), the
+    extremes refined by SLSQP under the same constraint; ``Report.notes`` says how many
+    samples were rejected and ``Report.title`` names the output and the region. For a square
+    output (m = n) the rows are: Mbar symmetric, positive definite, mu1 I <= Mbar <= mu2 I and
+    m1 <= ||Mbar||_1 <= m2; Vmbar(q, s ydot) s ydot quadratic in s, ||Vmbar|| <= vb ||ydot||
+    and Christoffel symmetry; Mbar_dot - 2 Vmbar skew (Mbar_dot by a 4th-order central
+    difference along the motion, so the row's tolerance is FD_TOLERANCE); when the arm has
+    friction ||Fbar|| <= v ||ydot|| + k and ydot^T Fbar >= 0; ||Gbar|| <= gb; and
+    Mbar yddot + Nbar = Wbar phi with phi = robot.parameters(). For a redundant output
+    (m < n), Khatib's Lambda = (J M^-1 J^T)^-1 takes the place of Mbar, Lambda_dot - 2 mu_x
+    (``cartesian.operational_coriolis``) that of Mbar_dot - 2 Vmbar and p = Jbar^T G that of
+    Gbar; Vmbar, Fbar and Wbar are defined for square outputs only, so the Coriolis, friction
+    and linearity rows are skipped with the reason in the notes. Passivity is not checked in
+    task coordinates (the power ydot^T f equals qd^T tau). The units are the output's: kg and
+    N for a position output, "output units" where the coordinates mix units (ToolPose) or
+    have their own (Camera, Output).
 
     Parameters
     ----------
@@ -391,6 +463,14 @@ def check(
     only : str or sequence of str, optional
         Restrict to some groups, for speed: one name or several of "inertia", "coriolis",
         "skew", "friction", "gravity", "linearity", "passivity" (GROUPS); default None, all.
+    task : armdyn.cartesian.TaskOutput, optional
+        Evaluate the properties in the coordinates of this output (ToolPosition, ToolPose,
+        LinkPoint, PlanarPosition, Camera or Output, with m <= n rows); default None: in joint
+        coordinates.
+    max_condition : float, optional
+        With ``task``: the condition number of J(q) below which a sampled configuration is
+        kept (the region the bounds hold over); greater than 1, default
+        DEFAULT_MAX_CONDITION = 1e3. Only with ``task``.
 
     Returns
     -------
@@ -402,7 +482,13 @@ def check(
     armdyn.ModelError
         When ``samples`` is below 4 or above MAX_SAMPLES, ``seed`` is negative, ``limits`` is not
         n finite (lower, upper) pairs with lower <= upper, ``only`` is empty or names a group not in
-        GROUPS (the message lists them), or when the arm has symbolic parameters.
+        GROUPS (the message lists them), or when the arm has symbolic parameters. With ``task``:
+        when it is not a task output of armdyn.cartesian or has more rows than the arm has
+        joints, when ``max_condition`` is not a finite number greater than 1 (or is given
+        without ``task``), when fewer than MIN_REGULAR samples have cond J(q) below it (the
+        ranges are singular or nearly so almost everywhere), or when the output cannot give what
+        a row needs (an Output without ``jacobian_dot`` for the Coriolis and skew rows, a Camera
+        the tool point passes behind).
     TypeError
         When ``robot`` is not a Robot, ``samples`` or ``seed`` is not an integer, or ``only``
         is neither a string nor a sequence of them.
@@ -413,6 +499,8 @@ def check(
     groups = _groups(only)
     n = robot.n
     ranges = joint_ranges(robot, limits)
+    if task is not None or max_condition is not None:
+        return _check_task(robot, task, max_condition, samples, seed, ranges, groups)
     box = [(lo, hi) for lo, hi in ranges]
     rng = np.random.default_rng(seed)
     low, high = np.array(ranges).T
@@ -590,3 +678,452 @@ def _passivity_rows(robot: Robot, ranges: list[tuple[float, float]], rows: list[
             rows.append(Row("passivity with friction", "K(t) - K(0) <= integral qd^T (tau - G) dt",
                             gained <= supplied + 1e-9 * scale, (gained - supplied) / scale, None,
                             "the same run with the arm's friction", "", "margin"))  # fmt: skip
+
+
+# ----- task coordinates (BOOK.md section 6) ---------------------------------------------------------
+_STEP = 5e-3
+"""The central difference's step along the motion: ||h qd|| = _STEP / cond J(q), which keeps the
+stencil as far inside the regular region, relative to the distance to the singularity, everywhere."""
+
+_TINY = 1e-300
+
+
+def _task_output(task: object) -> cartesian.TaskOutput:
+    if not isinstance(task, cartesian.TaskOutput):
+        raise ModelError(
+            "task must be a task output of armdyn.cartesian (ToolPosition, ToolPose, LinkPoint, PlanarPosition, "
+            f"Camera or Output), got {type(task).__name__}"
+        )
+    return task
+
+
+def _max_condition(value: object, task: object) -> float:
+    """The checked ``max_condition`` (DEFAULT_MAX_CONDITION for None)."""
+    if task is None:
+        raise ModelError("max_condition applies to task coordinates only: give task=... with it")
+    if value is None:
+        return DEFAULT_MAX_CONDITION
+    limit = inputs.number(value, "max_condition")
+    ceiling = cartesian.DEFAULT_MAX_CONDITION
+    if not 1.0 < limit <= ceiling:
+        raise ModelError(
+            f"max_condition must be greater than 1 (a condition number is at least 1) and at most {ceiling:g} "
+            f"(armdyn.cartesian's limit, above which J counts as singular), got {limit:g}"
+        )
+    return limit
+
+
+def _task_units(output: cartesian.TaskOutput) -> tuple[dict[str, str], str | None]:
+    """The units of Mbar, f, vb and v in the output's coordinates, and a note where they need one."""
+    if isinstance(output, (cartesian.ToolPosition, cartesian.LinkPoint, cartesian.PlanarPosition)):
+        return {"inertia": "kg", "force": "N", "vb": "N/(m/s)^2", "v": "N/(m/s)"}, None
+    if isinstance(output, cartesian.Camera):
+        units = {"inertia": "J s^2/u^2", "force": "J/u", "vb": "J s^2/u^3", "v": "J s/u^2"}
+        return units, (
+            "u is the camera's image unit (that of its focal length, e.g. pixels): f = J^-T tau is work per "
+            "image unit (J/u) and Mbar is in J s^2/u^2"
+        )
+    generic = dict.fromkeys(("inertia", "force", "vb", "v"), "output units")
+    if isinstance(output, cartesian.ToolPose):
+        return generic, (
+            f"{output!r} mixes units: y = [p (m); orientation (rad)] with the rate [v (m/s); w (rad/s)] and "
+            "f = [force (N); moment (N m)], so Mbar has blocks in kg, kg m and kg m^2: its values are labelled "
+            "'output units'"
+        )
+    return generic, (
+        f"the coordinates of {output!r} have their own units ('output units'); f = J^-T tau is the force dual "
+        "to them (f^T ydot is a power in W)"
+    )
+
+
+def _solve(J: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """J^-1 v for (k, n, n) J and (k, n) v."""
+    return np.linalg.solve(J, v[..., None])[..., 0]
+
+
+def _units_rows(v: np.ndarray) -> np.ndarray:
+    """The rows of v scaled to unit length."""
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _TINY)
+
+
+@dataclass
+class _Region:
+    """The regular samples of the joint ranges (cond J(q) < limit) and the task quantities on them."""
+
+    robot: Robot
+    output: cartesian.TaskOutput
+    limit: float
+    box: list[tuple[float, float]]
+    q: np.ndarray
+    cond: np.ndarray
+    J: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.n, self.m = self.robot.n, self.J.shape[-2]
+        self.square = self.m == self.n
+        self.guard = float(max(1e3 * self.limit, cartesian.DEFAULT_MAX_CONDITION))
+        scale = max(1.0, float(self.cond.max()) / DEFAULT_MAX_CONDITION)
+        self.tolerance, self.fd_tolerance = TOLERANCE * scale, FD_TOLERANCE * scale
+        self.symbol = "Mbar" if self.square else "Lambda"
+
+    def inertia(self, q: np.ndarray) -> np.ndarray:
+        """Mbar (square) or Lambda (redundant) at q, (n,) or (k, n)."""
+        if self.square:
+            return cartesian.task_inertia(self.robot, self.output, q, max_condition=self.guard)
+        return cartesian.operational_inertia(self.robot, self.output, q, max_condition=self.guard)
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        return self.output.jacobian(self.robot, q)
+
+    def margin(self, q: np.ndarray) -> float:
+        """limit / cond J(q) - 1: positive inside the region, -1 where J is singular."""
+        try:
+            return float(self.limit / cartesian.condition_number(self.robot, self.output, q) - 1.0)
+        except ModelError:
+            return -1.0
+
+    def _inside(self, point: np.ndarray, start: np.ndarray) -> np.ndarray:
+        """``point`` if it lies in the region, else the farthest point of the segment from ``start`` found inside."""
+        n = self.n
+        if self.margin(point[:n]) > 0:
+            return point
+        inside, outside = 0.0, 1.0
+        for _ in range(50):
+            middle = 0.5 * (inside + outside)
+            if self.margin((start + middle * (point - start))[:n]) > 0:
+                inside = middle
+            else:
+                outside = middle
+        return start + inside * (point - start)
+
+    def refine(
+        self,
+        f: Callable[[np.ndarray], float],
+        starts: np.ndarray,
+        values: np.ndarray,
+        largest: bool,
+        box: list | None = None,
+    ) -> tuple[float, str]:
+        """The extreme of f over the region: the sampled one, refined by SLSQP under cond J(q) < limit
+        from the best 3 samples; every value kept is f at a point of the region. (value, how).
+
+        A positive f is optimized as log f: near a singularity it grows by orders of magnitude."""
+        box = self.box if box is None else box
+        sign = -1.0 if largest else 1.0
+        best = float(values.max() if largest else values.min())
+        lower, upper = np.array(box, dtype=float).T
+        failed = (np.linalg.LinAlgError, ModelError)
+        positive = bool(np.all(values > 0))
+        scale = 1.0 if positive else abs(best) + _TINY
+        worse = sign * (np.log(best) if positive else best / scale) + 1.0
+
+        def objective(p: np.ndarray) -> float:
+            try:
+                value = float(f(p))
+            except failed:
+                return worse
+            if positive:
+                value = np.log(value) if value > 0 else -np.inf
+            value = sign * value / scale
+            return value if np.isfinite(value) else worse
+
+        constraint = {"type": "ineq", "fun": lambda p: self.margin(p[: self.n])}
+        for start in starts[np.argsort(sign * values)[:3]]:
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
+                warnings.simplefilter("ignore")
+                result = minimize(objective, start, method="SLSQP", bounds=box, constraints=[constraint],
+                                  options={"maxiter": 60})  # fmt: skip
+            if not np.all(np.isfinite(result.x)):
+                continue
+            point = self._inside(np.clip(result.x, lower, upper), start)
+            try:
+                value = float(f(point))
+            except failed:
+                continue
+            if np.isfinite(value):
+                best = max(best, value) if largest else min(best, value)
+        how = f"{len(values)} regular samples, refined by SLSQP under cond J < {self.limit:g} from the best 3"
+        return best, how
+
+    def rate(self, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """d/dt of Mbar (Lambda) along the motion qd, by a 4th-order central difference, (k, m, m), and
+        the size below which it is rounding (eps |Mbar| / h, per sample)."""
+        speed = np.linalg.norm(qd, axis=-1)
+        h = _STEP / (self.cond * np.maximum(speed, _TINY))
+        A = [self.inertia(self.q + k * h[:, None] * qd) for k in (-2, -1, 1, 2)]
+        rounding = np.finfo(float).eps * np.abs(A[0]).max(axis=(-2, -1)) / h
+        return (A[0] - 8 * A[1] + 8 * A[2] - A[3]) / (12 * h[:, None, None]), rounding
+
+    def parts(self, qd: np.ndarray) -> np.ndarray:
+        """The sizes of the two terms of Vmbar = J^-T Vm J^-1 - Mbar Jdot J^-1 (of mu_x = Jbar^T Vm Jbar -
+        Lambda Jdot Jbar) added, per sample: the scale of the Coriolis residuals, as the terms can cancel
+        (for a point mass at a position output, Vmbar = 0)."""
+        robot, output, q = self.robot, self.output, self.q
+        if self.square:
+            inverse, A = np.linalg.solve(self.J, np.broadcast_to(np.eye(self.n), self.J.shape)), self.inertia(q)
+        else:
+            space = cartesian.operational_space(robot, output, q, qd, max_condition=self.guard)
+            inverse, A = space.Jbar, space.Lambda
+        first = np.swapaxes(inverse, -1, -2) @ robot.coriolis_matrix(q, qd) @ inverse
+        second = A @ output.jacobian_dot(robot, q, qd) @ inverse
+        return np.abs(first).max(axis=(-2, -1)) + np.abs(second).max(axis=(-2, -1))
+
+
+def _check_task(
+    robot: Robot,
+    task: object,
+    max_condition: object,
+    samples: int,
+    seed: int,
+    ranges: list[tuple[float, float]],
+    groups: set[str],
+) -> Report:
+    """``check`` in the coordinates of a task output (see ``check``)."""
+    limit = _max_condition(max_condition, task)
+    output = _task_output(task)
+    n = robot.n
+    rng = np.random.default_rng(seed)
+    low, high = np.array(ranges).T
+    candidates = rng.uniform(low, high, (samples, n))
+    cond = np.asarray(cartesian.condition_number(robot, output, candidates))
+    regular = cond < limit
+    kept = int(regular.sum())
+    if kept < MIN_REGULAR:
+        raise ModelError(
+            f"only {kept} of {samples} sampled configurations of arm '{robot.name}' have cond J(q) below "
+            f"max_condition = {limit:g} for output {output!r}: the joint ranges are singular or nearly so almost "
+            f"everywhere, and the task-space bounds need at least {MIN_REGULAR} regular samples; change the "
+            "limits, raise max_condition or sample more"
+        )
+    q = candidates[regular]
+    region = _Region(robot, output, limit, [(lo, hi) for lo, hi in ranges], q, cond[regular], output.jacobian(robot, q))
+    units, unit_note = _task_units(output)
+    rows: list[Row] = []
+    bounds: dict[str, float] = {}
+    notes = [
+        f"in task coordinates of {output!r} (BOOK.md section 6): the bounds hold over the configurations of the "
+        f"joint ranges where cond J(q) < max_condition = {limit:g}, and grow without bound near singularities; "
+        f"{kept} of {samples} samples kept, {samples - kept} rejected as singular or nearly so"
+    ]
+    if unit_note:
+        notes.append(unit_note)
+    prismatic = [i for i, kind in enumerate(robot.kinds) if kind == "prismatic"]
+    if prismatic:
+        notes.append(
+            "the arm has prismatic joints, so its bounds depend on q; they hold over the range "
+            + ", ".join(f"q{i + 1} in [{ranges[i][0]:.3g}, {ranges[i][1]:.3g}]" for i in prismatic)
+        )
+    if not region.square:
+        labels = {"coriolis": "Coriolis", "friction": "friction", "linearity": "linearity"}
+        skipped = [label for group, label in labels.items() if group in groups]
+        named = ", ".join(skipped[:-1]) + (" and " if len(skipped) > 1 else "") + (skipped[-1] if skipped else "")
+        notes.append(
+            f"{output!r} has m = {region.m} coordinates for n = {n} joints (redundant): the inertia rows are for "
+            "Khatib's Lambda = (J M^-1 J^T)^-1, the skew row for Lambda_dot - 2 mu_x (cartesian.operational_coriolis) "
+            "and the gravity row for p = Jbar^T G"
+            + (
+                f"; the {named} rows are skipped: Vmbar, Fbar and Wbar are defined for square outputs "
+                "(m = n) only, and Jbar^T Vm qd and Jbar^T F(qd) depend on the null-space velocity, not on ydot alone"
+                if skipped
+                else ""
+            )
+        )
+    if "inertia" in groups:
+        _task_inertia_rows(region, rows, bounds, units["inertia"])
+    if region.square and ("coriolis" in groups or "skew" in groups):
+        _task_coriolis_rows(region, rng, rows, bounds, groups, units)
+        if "coriolis" in groups and isinstance(output, cartesian.ToolPose):
+            notes.append(
+                f"the rate of {output!r} is the twist [v; w], and w is not the derivative of any coordinates, so "
+                "Vmbar is not a Christoffel form: the Christoffel symmetry row is skipped (the skew row holds)"
+            )
+    elif "skew" in groups:
+        qd = _units_rows(rng.normal(size=(kept, n)))
+        mu_x, _ = cartesian.operational_coriolis(robot, output, q, qd, max_condition=region.guard)
+        _skew_row(region, qd, mu_x, "mu_x", rows, units["force"])
+    if region.square and "friction" in groups:
+        if np.any(robot.viscous_friction) or np.any(robot.coulomb_friction):
+            _task_friction_rows(region, rng, rows, bounds, units)
+        else:
+            notes.append("the arm has no friction (F = 0, so Fbar = 0): the friction rows are skipped")
+    if "gravity" in groups:
+        _task_gravity_row(region, rows, bounds, units["force"])
+    if region.square and "linearity" in groups:
+        _task_linearity_row(region, rng, rows, units["force"])
+    if "passivity" in groups:
+        notes.append(
+            "passivity is not checked in task coordinates: the power ydot^T f equals qd^T tau, so it is the "
+            "joint-space balance (check without task)"
+        )
+    kinds = {"mu1": "inertia", "mu2": "inertia", "m1": "inertia", "m2": "inertia", "vb": "vb", "v": "v", "k": "force",
+             "gb": "force"}  # fmt: skip
+    return Report(robot.name, rows, bounds, ranges, notes, {key: units[kinds[key]] for key in bounds},
+                  task=repr(output), max_condition=limit)  # fmt: skip
+
+
+def _task_inertia_rows(region: _Region, rows: list[Row], bounds: dict[str, float], unit: str) -> None:
+    robot, q, J, A = region.robot, region.q, region.J, region.symbol
+    M = robot.inertia_matrix(q)
+    if region.square:
+        inverse = np.linalg.solve(J, np.broadcast_to(np.eye(region.n), J.shape))
+        direct, formula = np.swapaxes(inverse, -1, -2) @ M @ inverse, "J^-T M J^-1"
+    else:
+        direct, formula = np.linalg.inv(J @ np.linalg.solve(M, np.swapaxes(J, -1, -2))), "(J M^-1 J^T)^-1"
+    scale = np.abs(direct).max(axis=(-2, -1)) + _TINY
+    asymmetry = float((np.abs(direct - np.swapaxes(direct, -1, -2)).max(axis=(-2, -1)) / scale).max())
+    rows.append(Row("symmetry", f"{A}(q) = {A}(q)^T, {A} = {formula}", asymmetry < region.tolerance, asymmetry, None,
+                    f"{len(q)} regular samples, {formula} by linear solves", unit, "residual"))  # fmt: skip
+    inertia = region.inertia(q)
+    eig = np.linalg.eigvalsh(inertia)
+
+    def smallest(p: np.ndarray) -> float:
+        return float(np.linalg.eigvalsh(region.inertia(p))[0])
+
+    def largest(p: np.ndarray) -> float:
+        return float(np.linalg.eigvalsh(region.inertia(p))[-1])
+
+    mu1, how1 = region.refine(smallest, q, eig[:, 0], False)
+    mu2, how2 = region.refine(largest, q, eig[:, -1], True)
+    bounds["mu1"], bounds["mu2"] = mu1, mu2
+    rows.append(Row("positive definite", f"{A}(q) > 0", mu1 > 0, float(eig[:, 0].min()), mu1, how1, unit, "extreme",
+                    ("mu1",)))  # fmt: skip
+    rows.append(Row("inertia bounds", f"mu1 I <= {A}(q) <= mu2 I, (1/mu2) I <= {A}^-1 <= (1/mu1) I",
+                    mu1 > 0 and mu1 <= eig[:, 0].min() * (1 + 1e-12) and eig[:, -1].max() <= mu2 * (1 + 1e-12),
+                    float(eig[:, -1].max()), mu2, how2, unit, "extreme", ("mu1", "mu2"),
+                    float(eig[:, 0].min())))  # fmt: skip
+    ones = np.abs(inertia).sum(axis=-2).max(axis=-1)
+
+    def norm1(p: np.ndarray) -> float:
+        return float(np.abs(region.inertia(p)).sum(axis=0).max())
+
+    m1, _ = region.refine(norm1, q, ones, False)
+    m2, how = region.refine(norm1, q, ones, True)
+    bounds["m1"], bounds["m2"] = m1, m2
+    rows.append(Row("norm bounds", f"m1 <= ||{A}(q)||_1 <= m2 (induced 1-norm)", 0 < m1 <= m2, float(ones.max()), m2,
+                    how, unit, "extreme", ("m1", "m2"), float(ones.min())))  # fmt: skip
+
+
+def _skew_row(region: _Region, qd: np.ndarray, C: np.ndarray, name: str, rows: list[Row], unit: str) -> None:
+    """Mbar_dot - 2 Vmbar (Lambda_dot - 2 mu_x) skew along the motion qd, relative to the largest of its
+    terms, and at least 100 times the rounding of the difference over the tolerance."""
+    A = region.symbol
+    rate, rounding = region.rate(qd)
+    S = rate - 2 * C
+    scale = np.maximum(np.abs(rate).max(axis=(-2, -1)), 2 * np.abs(C).max(axis=(-2, -1)))
+    scale = np.maximum(np.maximum(scale, 2 * region.parts(qd)), 100 * rounding / region.fd_tolerance) + _TINY
+    skew = float((np.abs(S + np.swapaxes(S, -1, -2)).max(axis=(-2, -1)) / scale).max())
+    how = (f"{len(rate)} regular samples, {A}_dot by a 4th-order central difference along the motion "
+           f"(step ||h qd|| = {_STEP:g} / cond J), tolerance {region.fd_tolerance:.3g}")  # fmt: skip
+    rows.append(Row("skew symmetry", f"{A}_dot - 2 {name} is skew: x^T ({A}_dot - 2 {name}) x = 0",
+                    skew < region.fd_tolerance, skew, None, how, unit, "residual"))  # fmt: skip
+
+
+def _task_coriolis_rows(
+    region: _Region, rng: np.random.Generator, rows: list[Row], bounds: dict, groups: set, units: dict[str, str]
+) -> None:
+    robot, output, q, J, n, m = region.robot, region.output, region.q, region.J, region.n, region.m
+    k = len(q)
+    x = _units_rows(rng.normal(size=(k, m)))
+    y = _units_rows(rng.normal(size=(k, m)))
+
+    def coriolis(p: np.ndarray, ydot: np.ndarray) -> np.ndarray:
+        return cartesian.task_coriolis(robot, output, p, _solve(J, ydot), max_condition=region.guard)
+
+    Vx = coriolis(q, x)
+    V = np.einsum("...ij,...j->...i", Vx, x)
+    scale = np.maximum(np.abs(Vx).max(axis=(-2, -1)), region.parts(_solve(J, x))) + _TINY
+    if "coriolis" in groups:
+        stretched = np.einsum("...ij,...j->...i", coriolis(q, 2.5 * x), 2.5 * x)
+        quadratic = float((np.abs(stretched - 6.25 * V).max(axis=-1) / (6.25 * scale)).max())
+        rows.append(Row("quadratic", "Vbar(q, s ydot) = s^2 Vbar(q, ydot), Vbar = Vmbar ydot",
+                        quadratic < region.tolerance, quadratic, None, f"{k} regular samples, s = 2.5", units["force"],
+                        "residual"))  # fmt: skip
+        norms = np.linalg.norm(Vx, ord=2, axis=(-2, -1))
+
+        def vm_norm(p: np.ndarray) -> float:
+            qp = p[:n]
+            qd = np.linalg.solve(region.jacobian(qp), _unit(p[n:]))
+            return float(np.linalg.norm(cartesian.task_coriolis(robot, output, qp, qd, max_condition=region.guard), 2))
+
+        vb, how = region.refine(vm_norm, np.hstack([q, x]), norms, True, region.box + [(-1.0, 1.0)] * m)
+        bounds["vb"] = vb
+        v_ratio = np.linalg.norm(V, axis=-1)
+        holds = bool(np.all(v_ratio <= vb * (1 + 1e-9)) and np.all(norms <= vb * (1 + 1e-9)))
+        rows.append(Row("Coriolis bound", "||Vbar|| <= vb ||ydot||^2 and ||Vmbar(q, ydot)||_2 <= vb ||ydot||", holds,
+                        float(norms.max()), vb, how + ", ||ydot|| = 1", units["vb"], "extreme", ("vb",)))  # fmt: skip
+    if "coriolis" in groups and not isinstance(output, cartesian.ToolPose):
+        Vy = coriolis(q, y)
+        symmetric = np.abs(np.einsum("...ij,...j->...i", Vx, y) - np.einsum("...ij,...j->...i", Vy, x)).max(axis=-1)
+        other = np.maximum(np.abs(Vy).max(axis=(-2, -1)), region.parts(_solve(J, y)))
+        symmetric = float((symmetric / np.maximum(scale, other)).max())
+        rows.append(Row("Christoffel symmetry", "Vmbar(q, x) y = Vmbar(q, y) x", symmetric < region.tolerance,
+                        symmetric, None, f"{k} regular samples", units["force"], "residual"))  # fmt: skip
+    if "skew" in groups:
+        _skew_row(region, _solve(J, x), Vx, "Vmbar", rows, units["force"])
+
+
+def _task_friction_rows(
+    region: _Region, rng: np.random.Generator, rows: list[Row], bounds: dict, units: dict[str, str]
+) -> None:
+    robot, output, q, J = region.robot, region.output, region.q, region.J
+    k = len(q)
+    speeds = _units_rows(rng.normal(size=(k, region.m))) * rng.uniform(0.0, 5.0, (k, 1))
+    F = cartesian.task_friction(robot, output, q, _solve(J, speeds), max_condition=region.guard)
+    viscous = robot.viscous_friction
+    coulomb = float(np.linalg.norm(np.abs(robot.coulomb_friction).max(axis=1)))
+
+    def inverse(p: np.ndarray) -> np.ndarray:
+        J = region.jacobian(p)
+        return np.linalg.solve(J, np.broadcast_to(np.eye(J.shape[-1]), J.shape))
+
+    def coupled(p: np.ndarray) -> np.ndarray:
+        Jinv = inverse(p)
+        return np.linalg.norm(np.swapaxes(Jinv, -1, -2) @ (viscous[:, None] * Jinv), ord=2, axis=(-2, -1))
+
+    def compliance(p: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(inverse(p), ord=2, axis=(-2, -1))
+
+    v, how = region.refine(lambda p: float(coupled(p)), q, coupled(q), True)
+    largest, _ = region.refine(lambda p: float(compliance(p)), q, compliance(q), True)
+    bounds["v"], bounds["k"] = v, coulomb * largest
+    lhs = np.linalg.norm(F, axis=-1)
+    rhs = v * np.linalg.norm(speeds, axis=-1) + bounds["k"]
+    rows.append(Row("friction bound", "||Fbar(q, ydot)|| <= v ||ydot|| + k, Fbar = J^-T F(J^-1 ydot)",
+                    bool(np.all(lhs <= rhs * (1 + 1e-9) + 1e-15)), float((lhs - rhs).max()), None,
+                    "v = max ||J^-T Fv J^-1||_2, k = ||max |Fd_i||| max ||J^-T||_2; " + how, units["force"], "margin",
+                    ("v", "k")))  # fmt: skip
+    power = np.einsum("...i,...i->...", speeds, F)
+    rows.append(Row("dissipation", "ydot^T Fbar(q, ydot) >= 0 (= qd^T F(qd))", bool(np.all(power >= -1e-12)),
+                    float(power.min()), 0.0, f"{k} regular samples", "W"))  # fmt: skip
+
+
+def _task_gravity_row(region: _Region, rows: list[Row], bounds: dict, unit: str) -> None:
+    robot, output, guard = region.robot, region.output, region.guard
+
+    def gravity(p: np.ndarray) -> np.ndarray:
+        if region.square:
+            return cartesian.task_gravity(robot, output, p, max_condition=guard)
+        return cartesian.operational_space(robot, output, p, np.zeros_like(p), max_condition=guard).p
+
+    norms = np.linalg.norm(gravity(region.q), axis=-1)
+    gb, how = region.refine(lambda p: float(np.linalg.norm(gravity(p))), region.q, norms, True)
+    bounds["gb"] = gb
+    statement = "||Gbar(q)|| <= gb, Gbar = J^-T G" if region.square else "||p(q)|| <= gb, p = Jbar^T G"
+    rows.append(Row("gravity bound", statement, bool(np.all(norms <= gb * (1 + 1e-12))), float(norms.max()), gb, how,
+                    unit, "extreme", ("gb",)))  # fmt: skip
+
+
+def _task_linearity_row(region: _Region, rng: np.random.Generator, rows: list[Row], unit: str) -> None:
+    robot, output, q, guard = region.robot, region.output, region.q, region.guard
+    ydot, yddot = rng.uniform(-2, 2, (2, len(q), region.m))
+    qd = _solve(region.J, ydot)
+    W = cartesian.task_regressor(robot, output, q, qd, yddot, max_condition=guard)
+    phi = robot.parameters()
+    lhs = np.einsum("...ij,...j->...i", region.inertia(q), yddot)
+    lhs = lhs + cartesian.task_nonlinear(robot, output, q, qd, max_condition=guard)
+    scale = (np.abs(W) @ np.abs(phi)).max(axis=-1) + _TINY
+    error = float((np.abs(W @ phi - lhs).max(axis=-1) / scale).max())
+    rows.append(Row("linearity", "Mbar yddot + Nbar = Wbar(q, qd, yddot) phi, phi = arm.parameters()",
+                    error < region.tolerance, error, None,
+                    f"{len(q)} regular samples, Wbar = J^-T W at qdd = J^-1 (yddot - Jdot qd)", unit,
+                    "residual"))  # fmt: skip

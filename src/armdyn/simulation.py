@@ -378,7 +378,11 @@ def _is_time(value: object) -> bool:
 
 
 def _users_own(item: object) -> bool:
-    return item is not None and type(item).__module__ not in ("armdyn.control", "armdyn.trajectories")
+    return item is not None and type(item).__module__ not in (
+        "armdyn.control",
+        "armdyn.trajectories",
+        "armdyn.cartesian",
+    )
 
 
 def _seconds(t_final: object, dt: object) -> tuple[float, float]:
