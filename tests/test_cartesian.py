@@ -679,3 +679,27 @@ def test_puma_with_its_wrist_aligned_is_singular_unless_damped() -> None:
             call()
         assert np.isfinite(call(damping=1e-3)).all(), name
     assert np.isfinite(ct.task_forward_dynamics(arm, output, q, qd, np.ones(6))).all()
+
+
+def test_out_receives_the_result_and_a_wrong_out_is_refused() -> None:
+    arm, output = ad.models.puma560(), ct.ToolPose()
+    q, qd = np.array([0.1, 0.7, -2.5, 0.3, 0.6, 0.2]), np.full(6, 0.2)
+    qs = np.stack([q, q + 0.1])
+    for call, shape in (
+        (lambda out: ct.task_inertia(arm, output, q, out=out), (6, 6)),
+        (lambda out: ct.task_inertia(arm, output, qs, out=out), (2, 6, 6)),
+        (lambda out: ct.task_coriolis(arm, output, q, qd, out=out), (6, 6)),
+        (lambda out: ct.task_gravity(arm, output, qs, out=out), (2, 6)),
+        (lambda out: ct.task_nonlinear(arm, output, q, qd, out=out), (6,)),
+        (lambda out: ct.task_friction(arm, output, q, qd, out=out), (6,)),
+        (lambda out: ct.task_force(arm, output, q, qd, out=out), (6,)),
+        (lambda out: ct.task_inverse_dynamics(arm, output, q, qd, qd, out=out), (6,)),
+        (lambda out: ct.task_forward_dynamics(arm, output, q, qd, qd, out=out), (6,)),
+        (lambda out: ct.task_regressor(arm, output, q, qd, qd, out=out), (6, 6 * 14)),
+        (lambda out: ct.operational_inertia(arm, ct.ToolPosition(), qs, out=out), (2, 3, 3)),
+    ):
+        out = np.empty(shape)
+        assert call(out) is out
+        assert_allclose(out, call(None))
+        with pytest.raises(ModelError, match="out must be a writable C-contiguous float64 array"):
+            call(np.empty((3, *shape)))

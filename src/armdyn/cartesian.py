@@ -108,6 +108,15 @@ def _states(arm: Robot, names: tuple[str, ...], values: tuple[object, ...]) -> t
     return inputs.batch_states(names, values, arm.n)
 
 
+def _into(out: np.ndarray | None, value: np.ndarray) -> np.ndarray:
+    """value, or value written into ``out`` (checked against its shape) when one is given."""
+    if out is None:
+        return value
+    target = inputs.result(out, value.shape)
+    target[...] = value
+    return target
+
+
 def _shaped(array: np.ndarray, batch: tuple[int, ...]) -> np.ndarray:
     """A (B, ...) result as (*batch, ...)."""
     return array.reshape(*batch, *array.shape[1:])
@@ -826,6 +835,7 @@ def task_inertia(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Mbar = J^-T M J^-1, the inertia in the output's coordinates (BOOK.md section 6).
 
@@ -842,6 +852,8 @@ def task_inertia(
         condition number above ``max_condition``; default None: such states raise.
     max_condition : float, optional
         The condition number above which J counts as singular (default 1e8).
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -859,16 +871,16 @@ def task_inertia(
         result = np.empty((arm.n, arm.n))
         try:
             if lambda_one(arm.packed, q, *fast, max_condition, result) == 0:
-                return result
+                return _into(out, result)
         except _NOT_ONE_STATE:
             pass
     result = _kernel(arm, output, kernels.LAMBDA, damping, max_condition, True, q)
     if result is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
     M = arm.inertia_matrix(task.states[0])
     Mbar = task.inverse_transpose(_T(task.inverse_transpose(M), 1, 2))  # J^-T (J^-T M)^T, M symmetric
-    return _shaped(0.5 * (Mbar + _T(Mbar, 1, 2)), task.batch)
+    return _into(out, _shaped(0.5 * (Mbar + _T(Mbar, 1, 2)), task.batch))
 
 
 def task_coriolis(
@@ -879,6 +891,7 @@ def task_coriolis(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Vmbar = J^-T (Vm - M J^-1 Jdot) J^-1, with Mbar_dot - 2 Vmbar skew (BOOK.md section 6).
 
@@ -896,6 +909,8 @@ def task_coriolis(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -909,12 +924,12 @@ def task_coriolis(
     """
     result = _kernel(arm, output, kernels.CORIOLIS, damping, max_condition, True, q, qd)
     if result is not None:
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
     fq, fqd = task.states
     M, Vm = arm.inertia_matrix(fq), arm.coriolis_matrix(fq, fqd)
     K = Vm - M @ task.inverse(output._jacobian_dot(arm, fq, fqd))
-    return _shaped(task.inverse_transpose(_T(task.inverse_transpose(_T(K, 1, 2)), 1, 2)), task.batch)
+    return _into(out, _shaped(task.inverse_transpose(_T(task.inverse_transpose(_T(K, 1, 2)), 1, 2)), task.batch))
 
 
 def task_gravity(
@@ -924,6 +939,7 @@ def task_gravity(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Gbar = J^-T G (BOOK.md section 6).
 
@@ -939,6 +955,8 @@ def task_gravity(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -952,10 +970,10 @@ def task_gravity(
     """
     result = _kernel(arm, output, kernels.GRAVITY, damping, max_condition, False, q)
     if result is not None:
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
     G = arm.gravity_vector(task.states[0])
-    return _shaped(task.inverse_transpose(G[:, :, None])[:, :, 0], task.batch)
+    return _into(out, _shaped(task.inverse_transpose(G[:, :, None])[:, :, 0], task.batch))
 
 
 def task_nonlinear(
@@ -966,6 +984,7 @@ def task_nonlinear(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Nbar = J^-T (N - M J^-1 Jdot qd), N = Vm qd + F + G (BOOK.md section 6).
 
@@ -983,6 +1002,8 @@ def task_nonlinear(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -996,12 +1017,12 @@ def task_nonlinear(
     """
     result = _kernel(arm, output, kernels.NONLINEAR, damping, max_condition, False, q, qd)
     if result is not None:
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
     fq, fqd = task.states
     M, N = arm.inertia_matrix(fq), arm.nonlinear_terms(fq, fqd)
     a = task.inverse(output._bias(arm, fq, fqd)[:, :, None])
-    return _shaped(task.inverse_transpose(N[:, :, None] - M @ a)[:, :, 0], task.batch)
+    return _into(out, _shaped(task.inverse_transpose(N[:, :, None] - M @ a)[:, :, 0], task.batch))
 
 
 def task_friction(
@@ -1012,6 +1033,7 @@ def task_friction(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Fbar = J^-T F(qd), the friction in output coordinates (BOOK.md section 6).
 
@@ -1030,6 +1052,8 @@ def task_friction(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -1043,10 +1067,10 @@ def task_friction(
     """
     result = _kernel(arm, output, kernels.FRICTION, damping, max_condition, False, q, qd)
     if result is not None:
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
     F = arm.friction(task.states[1])
-    return _shaped(task.inverse_transpose(F[:, :, None])[:, :, 0], task.batch)
+    return _into(out, _shaped(task.inverse_transpose(F[:, :, None])[:, :, 0], task.batch))
 
 
 def task_regressor(
@@ -1058,6 +1082,7 @@ def task_regressor(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Wbar = J^-T W(q, qd, qdd) at qdd = J^-1 (yddot - Jdot qd): f = Wbar phi (BOOK.md section 6).
 
@@ -1077,6 +1102,8 @@ def task_regressor(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -1091,7 +1118,7 @@ def task_regressor(
     arm, output, task = _task(arm, output, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, True)
     fq, fqd, acc = task.states
     qdd = task.inverse((acc - output._bias(arm, fq, fqd))[:, :, None])[:, :, 0]
-    return _shaped(task.inverse_transpose(arm.regressor(fq, fqd, qdd)), task.batch)
+    return _into(out, _shaped(task.inverse_transpose(arm.regressor(fq, fqd, qdd)), task.batch))
 
 
 def task_force(
@@ -1102,6 +1129,7 @@ def task_force(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """f = J^-T tau, the output-space force equivalent to joint forces tau (tau = J^T f).
 
@@ -1117,6 +1145,8 @@ def task_force(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -1130,12 +1160,14 @@ def task_force(
     """
     result = _kernel(arm, output, kernels.FORCE, damping, max_condition, False, q, None, tau, "tau")
     if result is not None:
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "tau"), (q, tau), damping, max_condition, square=True)
-    return _shaped(task.inverse_transpose(task.states[1][:, :, None])[:, :, 0], task.batch)
+    return _into(out, _shaped(task.inverse_transpose(task.states[1][:, :, None])[:, :, 0], task.batch))
 
 
-def task_forward_dynamics(arm: Robot, output: TaskOutput, q: ArrayLike, qd: ArrayLike, f: ArrayLike) -> np.ndarray:
+def task_forward_dynamics(
+    arm: Robot, output: TaskOutput, q: ArrayLike, qd: ArrayLike, f: ArrayLike, *, out: np.ndarray | None = None
+) -> np.ndarray:
     """yddot under the output-space force f: qdd = forward_dynamics(q, qd, J^T f), yddot = J qdd + Jdot qd.
 
     Equal to Mbar^-1 (f - Nbar) for a square nonsingular J, but computed without inverting
@@ -1151,6 +1183,8 @@ def task_forward_dynamics(arm: Robot, output: TaskOutput, q: ArrayLike, qd: Arra
         Joint positions and velocities, (n,) or a batch (..., n).
     f : array_like
         The output-space force, (m,) or a batch (..., m); the batch shapes broadcast.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -1168,7 +1202,7 @@ def task_forward_dynamics(arm: Robot, output: TaskOutput, q: ArrayLike, qd: Arra
         padded[: f.shape[0]] = f
         try:
             if task_one(arm.packed, q, qd, padded, fast[0], fast[1], 1.0, kernels.FORWARD, result) == 0:
-                return result[0, : f.shape[0]]
+                return _into(out, result[0, : f.shape[0]])
         except _NOT_ONE_STATE:
             pass
     arm, output = _check_arm(arm), _check_output(output)
@@ -1188,7 +1222,7 @@ def task_forward_dynamics(arm: Robot, output: TaskOutput, q: ArrayLike, qd: Arra
     force = np.broadcast_to(force, (*batch, m)).reshape(-1, m)
     tau = np.einsum("bmi,bm->bi", J, force)
     qdd = arm.forward_dynamics(fq, fqd, tau)
-    return _shaped(_mv(J, qdd) + output._bias(arm, fq, fqd), batch)
+    return _into(out, _shaped(_mv(J, qdd) + output._bias(arm, fq, fqd), batch))
 
 
 def task_inverse_dynamics(
@@ -1200,6 +1234,7 @@ def task_inverse_dynamics(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """f = Mbar yddot + Nbar, computed as J^-T RNEA(q, qd, J^-1 (yddot - Jdot qd)).
 
@@ -1216,6 +1251,8 @@ def task_inverse_dynamics(
         As for ``task_inertia``.
     max_condition : float, optional
         As for ``task_inertia``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -1229,12 +1266,12 @@ def task_inverse_dynamics(
     """
     result = _kernel(arm, output, kernels.INVERSE, damping, max_condition, False, q, qd, yddot, "yddot")
     if result is not None:
-        return result
+        return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, True)
     fq, fqd, acc = task.states
     qdd = task.inverse((acc - output._bias(arm, fq, fqd))[:, :, None])[:, :, 0]
     tau = arm.inverse_dynamics(fq, fqd, qdd)
-    return _shaped(task.inverse_transpose(tau[:, :, None])[:, :, 0], task.batch)
+    return _into(out, _shaped(task.inverse_transpose(tau[:, :, None])[:, :, 0], task.batch))
 
 
 # ----- redundant outputs: Khatib's operational space ----------------------------------------------
@@ -1287,6 +1324,7 @@ def operational_inertia(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Lambda = (J M^-1 J^T)^-1, the inertia an output with m <= n presents (Khatib 1987, eq. 12).
 
@@ -1307,6 +1345,8 @@ def operational_inertia(
         As for ``operational_space``.
     max_condition : float, optional
         As for ``operational_space``.
+    out : numpy.ndarray, optional
+        Where to write the result: C-contiguous float64 of the result's shape.
 
     Returns
     -------
@@ -1324,12 +1364,12 @@ def operational_inertia(
         result = np.empty((m, m))
         try:
             if lambda_one(arm.packed, q, fast[0], fast[1], max_condition, result) == 0:
-                return result
+                return _into(out, result)
         except _NOT_ONE_STATE:
             pass
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=False)
     Lambda, _ = _lambda(arm, task)
-    return _shaped(Lambda, task.batch)
+    return _into(out, _shaped(Lambda, task.batch))
 
 
 def _lambda(arm: Robot, task: _Task) -> tuple[np.ndarray, np.ndarray]:

@@ -99,7 +99,8 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
     plane.plot(task.y_d[:, 0], task.y_d[:, 1], "k--", lw=1, label="desired")
     plane.plot(task.y[:, 0], task.y[:, 1], color="C0", label="actual")
     plane.plot(task.y[0, 0], task.y[0, 1], "o", color="C1", label="start")
-    plane.set(xlabel=f"y1 ({unit})", ylabel=f"y2 ({unit})", aspect="equal", title=f"path of {task.output}")
+    plane.set(xlabel=f"y1 ({unit})", ylabel=f"y2 ({unit})", title=f"path of {task.output}")
+    plane.set_aspect("equal", adjustable="datalim")  # a straight path keeps a readable box
     plane.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False, fontsize=8)
 
     def size(e: np.ndarray) -> np.ndarray:  # a zero error (a start on the path) has no place on a log scale
@@ -115,6 +116,9 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
         error.semilogy(result.t, size(task.error), color="C0")
         error.set_ylabel(f"task error |y_d - y| ({unit})")
     error.set(xlabel="time (s)", title="task error", xlim=(result.t[0], result.t[-1]))
+    sizes = np.linalg.norm(task.error, axis=1)
+    if np.any(sizes > 0):  # eight decades below the largest error: a start on the path is not a scale
+        error.set_ylim(bottom=max(sizes[sizes > 0].min() * 0.5, sizes.max() * 1e-8))
     error.grid(True, alpha=0.3)
     fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
     if path is not None:
