@@ -7,6 +7,8 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 import armdyn as ad
@@ -703,3 +705,48 @@ def test_out_receives_the_result_and_a_wrong_out_is_refused() -> None:
         assert_allclose(out, call(None))
         with pytest.raises(ModelError, match="out must be a writable C-contiguous float64 array"):
             call(np.empty((3, *shape)))
+
+
+# ----- the skew property on random trees, with an analytic Mbar_dot -----------------------------------
+def _tree_output(arm: ad.Robot, q: np.ndarray) -> ct.Output:
+    """A square output of a random tree: n rows, chosen greedily for rank at q, among the position rows of
+    every link frame's origin (each branch's joints move only their own branch's points)."""
+    candidates = [(link, row) for link in range(arm.n) for row in range(3)]
+    chosen: list[tuple[int, int]] = []
+    for link, row in candidates:
+        trial = [*chosen, (link, row)]
+        rows = np.array([arm.jacobian(q, link=k)[r] for k, r in trial])
+        if np.linalg.matrix_rank(rows, tol=1e-3) == len(trial):
+            chosen = trial
+        if len(chosen) == arm.n:
+            break
+
+    def stack(matrices: dict) -> np.ndarray:
+        return np.array([matrices[k][r] for k, r in chosen])
+
+    links = sorted({k for k, _ in chosen})
+    return ct.Output(
+        lambda x: np.array([arm.link_transforms(x)[k, r, 3] for k, r in chosen]),
+        lambda x: stack({k: arm.jacobian(x, link=k) for k in links}),
+        jacobian_dot=lambda x, v: stack({k: arm.jacobian_dot(x, v, link=k) for k in links}),
+    )
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 5))
+def test_skew_property_on_random_trees_with_square_outputs(seed: int, n: int) -> None:
+    """Mbar_dot - 2 Vmbar is skew to 1e-10 relative, with Mbar_dot = J^-T Mdot J^-1 - Mbar Jdot J^-1 -
+    (Mbar Jdot J^-1)^T exact (from the arm's Mdot and Jdot): trees with friction and motors."""
+    arm = strategies.random_robot(seed, n)
+    rng = np.random.default_rng(seed)
+    q, qd = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
+    output = _tree_output(arm, q)
+    J = output.jacobian(arm, q)
+    assume(J.shape == (n, n) and np.linalg.cond(J) < 1e3)
+    Ji = np.linalg.inv(J)
+    Mbar = ct.task_inertia(arm, output, q)
+    K = Mbar @ output.jacobian_dot(arm, q, qd) @ Ji
+    Mbar_dot = Ji.T @ arm.inertia_matrix_dot(q, qd) @ Ji - K - K.T
+    Vmbar = ct.task_coriolis(arm, output, q, qd)
+    S = Mbar_dot - 2 * Vmbar
+    assert np.abs(S + S.T).max() <= 1e-10 * max(np.abs(Mbar_dot).max(), np.abs(Vmbar).max())
