@@ -62,3 +62,15 @@ def test_task_prints_lambda_for_a_redundant_output() -> None:
 def test_simulate_task_refuses_bad_options(args: list[str], fragments: list[str]) -> None:
     result = invoke("simulate", "two_link_planar", "--q0", "0.3,1.2", "--t-final", "0.01", *args)
     assert_one_error_line(result, *fragments)
+
+
+def test_derive_in_task_coordinates_prints_example_3_5_1(tmp_path: Path) -> None:
+    """armdyn derive cylindrical --task position: Mbar as the book writes it (J s1^2 / q3^2 + m2 ...), in LaTeX too."""
+    result = invoke("derive", "cylindrical", "--task", "position")
+    assert result.exit_code == 0, result.output
+    assert "Mbar(q)" in result.output and "m₁ + m₂" in result.output
+    latex = invoke("derive", "cylindrical", "--task", "position", "--latex", "-o", tmp_path / "mbar.tex")
+    assert latex.exit_code == 0, latex.output
+    assert "\\bar{M}(q)" in (tmp_path / "mbar.tex").read_text()
+    assert_one_error_line(invoke("derive", "puma560", "--task", "pose"), "ToolPose is not supported")
+    assert_one_error_line(invoke("derive", "cylindrical", "--task", "position", "--code", "c"), "--task and --code")

@@ -596,6 +596,12 @@ def derive(
         True, help="For the book's arms: keep their parameters as symbols (m1, m2, a1, ...)."
     ),
     method: str = typer.Option("auto", help="'lagrange' (the book's trace formula), 'recursive' or 'auto'."),
+    task: str | None = typer.Option(
+        None,
+        "--task",
+        help="Task coordinates instead (Section 3.5): position or planar, as many as joints: "
+        "Mbar, Vmbar, Gbar, Fbar, Nbar.",
+    ),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
 ) -> None:
     """Derive an arm's robot equation in closed form: M, Vm, V, G (and F), as text, LaTeX or code."""
@@ -603,6 +609,9 @@ def derive(
 
     if code is not None and code not in ("python", "c"):
         _fail(f"--code must be 'python' or 'c', got '{code}'")
+    if task is not None and code is not None:
+        _fail("--task and --code exclude each other: code is generated for the joint-space equation")
+    chosen = _task_output(task) if task is not None else None
     if code is not None and latex:
         _fail(f"--latex and --code {code} exclude each other: give --latex for the equations in LaTeX, "
               f"or --code {code} for {'Python' if code == 'python' else 'C'} source")  # fmt: skip
@@ -610,15 +619,13 @@ def derive(
     book = {"two_link_planar", "polar_rp", "cylindrical"}
     arm = getattr(catalog, name.lower())(symbolic=True) if symbolic and name.lower() in book else _arm(name, strict)
     progress = _activity.bar(f"deriving the closed form of {arm.name}")
-    if progress is None:
-        form = derive_closed_form(arm, method=method)
-    else:
-        form = derive_closed_form(arm, method=method, progress=progress)
+    options = {"method": method} | ({} if progress is None else {"progress": progress})
+    form = derive_closed_form(arm, **options) if chosen is None else derive_closed_form(arm, output=chosen, **options)
     _activity.status(f"writing the equations of {arm.name}" + (f" as {code} code" if code else ""))
     if code is not None:
         text = form.to_python() if code == "python" else form.to_c()
     elif latex:
-        text = form.latex_document() if target is not None else form.latex()
+        text = form.latex_document() if target is not None and chosen is None else form.latex()
     else:  # the terminal gets a summary of long entries; a file gets every entry in full
         text = form.pretty(limit=None) if target is not None else form.pretty()
     _activity.stop()

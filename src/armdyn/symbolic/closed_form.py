@@ -7,7 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import symengine as se
@@ -18,6 +18,10 @@ from armdyn.robot import Robot
 from armdyn.symbolic import codegen
 from armdyn.symbolic.algebra import collapse_sums
 from armdyn.symbolic.derive import Derivation, derive_raw
+
+if TYPE_CHECKING:
+    from armdyn.cartesian import TaskOutput
+    from armdyn.symbolic.task import TaskClosedForm
 
 _DERIVED = 0.5  # the share of derive's progress taken by the derivation, before the conversion to SymPy
 _FACTOR_LIMIT = 4  # joints up to which common factors are taken out (a2 m2 (a1 c2 + a2)); slow for six
@@ -545,7 +549,8 @@ def derive(
     method: str = "auto",
     friction: str | bool = True,
     progress: Callable[[float, str], object] | None = None,
-) -> ClosedForm:
+    output: TaskOutput | None = None,
+) -> ClosedForm | TaskClosedForm:
     """The closed-form robot equation of ``robot`` (numeric, symbolic or mixed parameters).
 
     M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md sections 1 and 4), with the
@@ -571,25 +576,50 @@ def derive(
         Called as progress(fraction, stage) as the derivation proceeds: the fraction done
         (0 to 1) and the stage starting ("kinematics", "inertia matrix", "gravity",
         "Christoffel symbols", "Coriolis matrix", "tau", then "SymPy form of M" and so
-        on), last with (1.0, "done").
+        on, and "task space" with ``output``), last with (1.0, "done").
+    output : TaskOutput, optional
+        An output y = h(q) of ``armdyn.cartesian`` (ToolPosition, LinkPoint,
+        PlanarPosition or Camera, with as many rows as the arm has joints): the result is
+        then the equation in its coordinates, Mbar yddot + Nbar = f (BOOK.md section 6).
+        Default None, the joint-space equation.
 
     Returns
     -------
-    ClosedForm
-        M, Vm, V, G, F and tau as SymPy matrices, with printing and code generation.
+    ClosedForm or TaskClosedForm
+        M, Vm, V, G, F and tau as SymPy matrices, with printing and code generation; with
+        ``output``, a TaskClosedForm (armdyn.symbolic.task) of h, J, Mbar, Vmbar, Gbar,
+        Fbar and Nbar.
 
     Raises
     ------
     armdyn.ModelError
-        When ``method`` is not "auto", "lagrange" or "recursive".
+        When ``method`` is not "auto", "lagrange" or "recursive", or ``output`` is not a
+        supported output with m = n (ToolPose and outputs of other sizes are not).
     """
     chosen = "recursive" if method == "auto" else method
-    inner = None
+    if output is not None:
+        from armdyn.symbolic.task import TaskClosedForm, check_output
+
+        check_output(robot, output)
+    share = 1.0 if output is None else 0.8  # of the progress, the joint-space form's share
+    inner = outer = None
     if progress is not None:
 
         def inner(fraction: float, stage: str) -> None:
             if stage != "done":
-                progress(_DERIVED * fraction, stage)
+                progress(share * _DERIVED * fraction, stage)
+
+        def outer(fraction: float, stage: str) -> None:
+            if stage != "done" or output is None:
+                progress(share * fraction, stage)
 
     raw = derive_raw(robot, chosen, friction, inner)
-    return ClosedForm(robot, raw, friction, chosen, progress)
+    form = ClosedForm(robot, raw, friction, chosen, outer)
+    if output is None:
+        return form
+    if progress is not None:
+        progress(share, "task space")
+    task = TaskClosedForm(form, output)
+    if progress is not None:
+        progress(1.0, "done")
+    return task
