@@ -39,6 +39,7 @@ MODULES = (
     "armdyn.model",
     "armdyn.excitation",
     "armdyn.cartesian",
+    "armdyn.actuators",
 )
 # Entry points named one by one (their modules are not walked in full); all of them need Raises.
 ENTRY_POINTS = (

@@ -14,6 +14,7 @@ __version__ = "0.1.0"
 
 
 _LAZY_MODULES = (
+    "actuators",
     "cartesian",
     "symbolic",
     "properties",
@@ -28,7 +29,7 @@ _LAZY_MODULES = (
 
 def __getattr__(name: str) -> object:
     """The heavier parts load on first use: armdyn.symbolic (SymPy), armdyn.properties (SciPy),
-    armdyn.simulation and its companions; ``armdyn.simulate`` is armdyn.simulation.simulate."""
+    armdyn.actuators, armdyn.simulation and its companions; ``armdyn.simulate`` is armdyn.simulation.simulate."""
     import importlib
 
     if name in _LAZY_MODULES:

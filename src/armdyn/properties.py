@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from armdyn import cartesian, inputs
+from armdyn import actuators, cartesian, inputs
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -450,10 +450,13 @@ def check(
     N for a position output, "output units" where the coordinates mix units (ToolPose) or
     have their own (Camera, Output).
 
+    An ``armdyn.actuators.ActuatedArm`` is checked through its reduced model (its
+    ``reduced_robot()``, BOOK.md section 7), and ``Report.notes`` says so.
+
     Parameters
     ----------
-    robot : Robot
-        The arm.
+    robot : Robot or armdyn.actuators.ActuatedArm
+        The arm, or an arm with its drives.
     samples : int, optional
         Number of random joint configurations (default 300, from 4 to MAX_SAMPLES = 1,000,000).
     seed : int, optional
@@ -488,11 +491,18 @@ def check(
         without ``task``), when fewer than MIN_REGULAR samples have cond J(q) below it (the
         ranges are singular or nearly so almost everywhere), or when the output cannot give what
         a row needs (an Output without ``jacobian_dot`` for the Coriolis and skew rows, a Camera
-        the tool point passes behind).
+        the tool point passes behind). For an ActuatedArm, when a drive is flexible (no reduced model).
     TypeError
-        When ``robot`` is not a Robot, ``samples`` or ``seed`` is not an integer, or ``only``
+        When ``robot`` is not a Robot (or ActuatedArm), ``samples`` or ``seed`` is not an integer, or ``only``
         is neither a string nor a sequence of them.
     """
+    notes = []
+    if isinstance(robot, actuators.ActuatedArm):
+        notes.append(
+            "evaluated on the reduced arm-plus-actuator model (BOOK.md section 7, inductance neglected) in joint "
+            "torques: M' = M + R^-2 J_M, V' = Vm, F' = F + R^-1 F_M + R^-2 B qd, G' = G, input K' v"
+        )
+        robot = robot.reduced_robot()
     _check_robot(robot)
     samples = inputs.integer(samples, "samples", 4, MAX_SAMPLES, " (each sample is evaluated and refined)")
     seed = inputs.integer(seed, "seed", 0)
@@ -500,7 +510,9 @@ def check(
     n = robot.n
     ranges = joint_ranges(robot, limits)
     if task is not None or max_condition is not None:
-        return _check_task(robot, task, max_condition, samples, seed, ranges, groups)
+        report = _check_task(robot, task, max_condition, samples, seed, ranges, groups)
+        report.notes[:0] = notes
+        return report
     box = [(lo, hi) for lo, hi in ranges]
     rng = np.random.default_rng(seed)
     low, high = np.array(ranges).T
@@ -509,7 +521,6 @@ def check(
     y = np.array([_unit(v) for v in rng.normal(size=(samples, n))])
     rows: list[Row] = []
     bounds: dict[str, float] = {}
-    notes = []
     torque = _si(robot, "N m", "N")
     prismatic = [i for i, kind in enumerate(robot.kinds) if kind == "prismatic"]
     if prismatic:
