@@ -81,6 +81,8 @@ class Result:
     energy_of: Callable[[], np.ndarray] | None = field(default=None, repr=False)
     task: object = None
     """The task-space record (armdyn.cartesian.Tracking: y, y_d, error) under a task-space controller."""
+    drives: object = None
+    """The drives' record (armdyn.actuators.DriveRecord: state, voltages, currents) of an arm with actuators."""
 
     @cached_property
     def energy(self) -> np.ndarray:
@@ -518,6 +520,9 @@ def simulate(
         When M(q) becomes singular or the state non-finite during the run (its ``result``
         holds the run up to then).
     """
+    if type(arm).__name__ == "ActuatedArm":  # the arm with its drives' electrics
+        return _with_drives(arm, controller, trajectory, t_final, dt, method, q0, qd0, disturbance, events,
+                            coulomb_smoothing, progress)  # fmt: skip
     if not isinstance(arm, Robot):
         raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
     n = arm.n
@@ -568,6 +573,19 @@ def simulate(
     if callable(getattr(law, "tracking", None)):  # a task-space law records its task error
         result.task = law.tracking(arm, result.t, result.q)
     return result
+
+
+def _with_drives(arm, controller, trajectory, t_final, dt, method, q0, qd0, disturbance, events, eps, progress):
+    """simulate() of an ActuatedArm: armdyn.actuators.simulate, which takes fewer options."""
+    from armdyn import actuators
+
+    unsupported = [name for name, value, default in (("method", method, "rk4"), ("disturbance", disturbance, None),
+                   ("events", tuple(events), ()), ("coulomb_smoothing", eps, "auto"), ("progress", progress, None))
+                   if not (value is default or value == default)]  # fmt: skip
+    if unsupported:
+        raise ModelError(f"an arm with actuators is simulated by armdyn.actuators.simulate (RK4 with its electrics), "
+                         f"which does not take {', '.join(unsupported)}")  # fmt: skip
+    return actuators.simulate(arm, controller, trajectory, t_final, dt, q0, qd0)
 
 
 def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):

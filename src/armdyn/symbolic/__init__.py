@@ -1,6 +1,7 @@
-"""Closed-form equations: symbolic derivation, LaTeX, and code generation (BOOK.md sections 4 and 6)."""
+"""Closed-form equations: symbolic derivation, LaTeX, and code generation (BOOK.md sections 4, 6 and 7)."""
 
+from armdyn.symbolic.actuated import ActuatedClosedForm, SymbolicMotor, motor_symbols
 from armdyn.symbolic.closed_form import ClosedForm, derive
 from armdyn.symbolic.task import TaskClosedForm
 
-__all__ = ["ClosedForm", "TaskClosedForm", "derive"]
+__all__ = ["ActuatedClosedForm", "ClosedForm", "SymbolicMotor", "TaskClosedForm", "derive", "motor_symbols"]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -20,7 +20,9 @@ from armdyn.symbolic.algebra import collapse_sums
 from armdyn.symbolic.derive import Derivation, derive_raw
 
 if TYPE_CHECKING:
+    from armdyn.actuators import ActuatedArm
     from armdyn.cartesian import TaskOutput
+    from armdyn.symbolic.actuated import ActuatedClosedForm
     from armdyn.symbolic.task import TaskClosedForm
 
 _DERIVED = 0.5  # the share of derive's progress taken by the derivation, before the conversion to SymPy
@@ -545,12 +547,13 @@ def _plain(name: str) -> str:
 
 
 def derive(
-    robot: Robot,
+    robot: Robot | ActuatedArm,
     method: str = "auto",
     friction: str | bool = True,
     progress: Callable[[float, str], object] | None = None,
     output: TaskOutput | None = None,
-) -> ClosedForm | TaskClosedForm:
+    drives: Sequence[object] | None = None,
+) -> ClosedForm | TaskClosedForm | ActuatedClosedForm:
     """The closed-form robot equation of ``robot`` (numeric, symbolic or mixed parameters).
 
     M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md sections 1 and 4), with the
@@ -559,10 +562,15 @@ def derive(
     see ``armdyn.symbolic.algebra.exact_float``), so the algebra cancels exactly and no
     round-off terms appear; a numeric arm's coefficients are shown as decimals.
 
+    With ``drives`` (or an ActuatedArm), the arm-plus-actuator system
+    M' qdd + V' qd + F' + G' = K' v instead (BOOK.md section 7; see
+    ``armdyn.symbolic.actuated``).
+
     Parameters
     ----------
-    robot : Robot
-        The arm; its parameters may be numbers, SymPy expressions, or both.
+    robot : Robot or ActuatedArm
+        The arm; its parameters may be numbers, SymPy expressions, or both. An
+        ``armdyn.actuators.ActuatedArm`` gives the closed form of the arm with its drives.
     method : str, optional
         "lagrange" (the book's trace formula with pseudo-inertia matrices), "recursive"
         (composite rigid bodies) or "auto" (default, the recursive route for any arm:
@@ -582,20 +590,37 @@ def derive(
         PlanarPosition or Camera, with as many rows as the arm has joints): the result is
         then the equation in its coordinates, Mbar yddot + Nbar = f (BOOK.md section 6).
         Default None, the joint-space equation.
+    drives : sequence, optional
+        One DC motor drive per joint of an arm without motors of its own: a rigid
+        ``armdyn.actuators.DCMotor``, an ``armdyn.symbolic.SymbolicMotor`` (parameters may
+        be SymPy expressions; ``armdyn.symbolic.motor_symbols`` makes them) or a dict of
+        its fields. Default None, the arm alone.
 
     Returns
     -------
-    ClosedForm or TaskClosedForm
+    ClosedForm or TaskClosedForm or ActuatedClosedForm
         M, Vm, V, G, F and tau as SymPy matrices, with printing and code generation; with
         ``output``, a TaskClosedForm (armdyn.symbolic.task) of h, J, Mbar, Vmbar, Gbar,
-        Fbar and Nbar.
+        Fbar and Nbar; with ``drives`` or an ActuatedArm, an ActuatedClosedForm
+        (armdyn.symbolic.actuated) of M', V', G', F' and K'.
 
     Raises
     ------
     armdyn.ModelError
         When ``method`` is not "auto", "lagrange" or "recursive", or ``output`` is not a
-        supported output with m = n (ToolPose and outputs of other sizes are not).
+        supported output with m = n (ToolPose and outputs of other sizes are not); with
+        drives, when ``output`` is given too, the arm has motors of its own, the number of
+        drives is not the number of joints, or a drive is hydraulic (not supported),
+        flexible or not a drive.
     """
+    from armdyn.actuators import ActuatedArm
+
+    if drives is not None or isinstance(robot, ActuatedArm):
+        from armdyn.symbolic.actuated import derive_actuated
+
+        if output is not None:
+            raise ModelError("derive: task coordinates (output=...) of an arm with drives are not supported")
+        return derive_actuated(robot, drives, method, friction, progress)
     chosen = "recursive" if method == "auto" else method
     if output is not None:
         from armdyn.symbolic.task import TaskClosedForm, check_output
