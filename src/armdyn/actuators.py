@@ -1082,6 +1082,9 @@ class ActuatedArm:
         A, B = self.linearize(x0, v0)
         return control.ss(A, B, np.eye(self.n_states), np.zeros(B.shape))
 
+    def _simulate(self, *arguments: object) -> object:
+        return simulate(self, *arguments)
+
     def __repr__(self) -> str:
         kinds = ", ".join(type(drive).__name__ for drive in self.drives)
         return f"ActuatedArm('{self.name}', n={self.n}, drives=[{kinds}])"

@@ -576,16 +576,15 @@ def simulate(
 
 
 def _with_drives(arm, controller, trajectory, t_final, dt, method, q0, qd0, disturbance, events, eps, progress):
-    """simulate() of an ActuatedArm: armdyn.actuators.simulate, which takes fewer options."""
-    from armdyn import actuators
-
+    """simulate() of an ActuatedArm: armdyn.actuators.simulate (through the arm, which knows its module),
+    which takes fewer options."""
     unsupported = [name for name, value, default in (("method", method, "rk4"), ("disturbance", disturbance, None),
                    ("events", tuple(events), ()), ("coulomb_smoothing", eps, "auto"), ("progress", progress, None))
                    if not (value is default or value == default)]  # fmt: skip
     if unsupported:
         raise ModelError(f"an arm with actuators is simulated by armdyn.actuators.simulate (RK4 with its electrics), "
                          f"which does not take {', '.join(unsupported)}")  # fmt: skip
-    return actuators.simulate(arm, controller, trajectory, t_final, dt, q0, qd0)
+    return arm._simulate(controller, trajectory, t_final, dt, q0, qd0)
 
 
 def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):

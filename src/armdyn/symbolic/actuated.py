@@ -687,6 +687,7 @@ def derive_actuated(
     method: str = "auto",
     friction: str | bool = True,
     progress: Callable[[float, str], object] | None = None,
+    joint_space: Callable[..., ClosedForm] | None = None,
 ) -> ActuatedClosedForm:
     """The arm-plus-actuator system in closed form: ``derive``'s route for drives (BOOK.md section 7).
 
@@ -707,6 +708,9 @@ def derive_actuated(
     progress : callable, optional
         As ``derive``'s, for the arm's derivation.
 
+    joint_space : callable, optional
+        The joint-space derivation, derive(robot, method, friction, progress) -> ClosedForm;
+        ``armdyn.symbolic.derive`` passes itself; None raises (call ``derive`` instead).
     Returns
     -------
     ActuatedClosedForm
@@ -723,8 +727,11 @@ def derive_actuated(
         When ``robot`` is neither a Robot nor an ActuatedArm.
     """
     from armdyn.actuators import ActuatedArm
-    from armdyn.symbolic.closed_form import derive
 
+    if joint_space is None:
+        raise ModelError(
+            "derive_actuated needs the joint-space derivation: call armdyn.symbolic.derive(robot, drives=...)"
+        )
     if isinstance(robot, ActuatedArm):
         if drives is not None:
             raise ModelError("derive: an ActuatedArm carries its drives; drives=... is for a Robot")
@@ -734,4 +741,4 @@ def derive_actuated(
     elif drives is None:
         raise ModelError(f"derive: robot '{robot.name}' needs drives=[...], one per joint")
     motors = checked_motors(robot, drives)
-    return ActuatedClosedForm(derive(robot, method, friction, progress), motors)
+    return ActuatedClosedForm(joint_space(robot, method, friction, progress), motors)

@@ -620,7 +620,7 @@ def derive(
 
         if output is not None:
             raise ModelError("derive: task coordinates (output=...) of an arm with drives are not supported")
-        return derive_actuated(robot, drives, method, friction, progress)
+        return derive_actuated(robot, drives, method, friction, progress, derive)
     chosen = "recursive" if method == "auto" else method
     if output is not None:
         from armdyn.symbolic.task import TaskClosedForm, check_output
