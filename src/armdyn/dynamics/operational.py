@@ -24,7 +24,7 @@ from armdyn.dynamics.crba import crba_one
 from armdyn.dynamics.frames import WORLD, jacobian_dot_one, jacobian_one
 from armdyn.dynamics.friction import friction_one
 from armdyn.dynamics.packed import N_JOINTS
-from armdyn.dynamics.rnea import coriolis_vector_one, gravity_one, inverse_dynamics_one, nonlinear_one
+from armdyn.dynamics.rnea import BATCH_CHUNKS, coriolis_vector_one, gravity_one, inverse_dynamics_one, nonlinear_one
 from armdyn.dynamics.spatial import MATRIX, MODEL, NUMBA_OPTIONS, VECTOR, one_state, scratch
 from armdyn.inputs import LARGEST_STATE
 
@@ -505,7 +505,7 @@ def task_batch(
 ) -> None:
     """Many states (B, n) of ``kind`` into out (B, r, c), each state's status into status (B,)."""
     count = q.shape[0]
-    chunks = min(count, 64)
+    chunks = min(count, BATCH_CHUNKS)
     n = int(model[N_JOINTS])
     for chunk in prange(chunks):
         buffer = np.empty(task_size(n, rows.shape[0]))
