@@ -30,7 +30,7 @@ def test_compiled_run_converges_to_the_numpy_full_model_integrated_tightly() -> 
     range at the default 1 ms samples (3 RK4 steps each), and fourth order as the step shrinks."""
     arm = _puma()
     q0 = np.array(ad.models.puma560().configurations["qn"])
-    path, law = tr.Sinusoid(0.1, 0.5, 0.0, q0), act.VoltagePD(20.0, 0.5)
+    path, law = tr.Sinusoid(0.1, 0.5, 0.0, q0), act.DrivePID(20.0, 0.5)
     r = arm._r
 
     def rates(t: float, x: np.ndarray) -> np.ndarray:
@@ -57,19 +57,188 @@ def test_compiled_run_converges_to_the_numpy_full_model_integrated_tightly() -> 
 
 def test_simulate_with_drives_refuses_what_it_does_not_run() -> None:
     arm = _puma()
-    law = act.VoltagePD(20.0, 0.5)
+    law = act.DrivePID(20.0, 0.5)
     cases = [
         (lambda: ad.simulate(arm, lambda t, q, qd: q, None, t_final=0.01), "controller must be an armdyn.actuators"),
         (lambda: ad.simulate(arm, law, lambda t: t, t_final=0.01), "trajectory must be None"),
         (lambda: ad.simulate(arm, law, None, t_final=0.01, method="rk45"), "does not take method"),
         (lambda: ad.simulate(arm, law, None, t_final=-1.0), "t_final"),
-        (lambda: ad.simulate(arm, act.VoltagePD(-1.0, 0.5), None, t_final=0.01), "kp"),
+        (lambda: ad.simulate(arm, act.DrivePID(-1.0, 0.5), None, t_final=0.01), "kp"),
         (lambda: ad.simulate(arm, law, None, t_final=0.01, q0=np.zeros(5)), "q0"),
     ]
     for call, message in cases:
         with pytest.raises(ModelError, match=message):
             call()
-    bare = ad.models.two_link_planar()
-    flexible = act.with_actuators(bare, [act.DCMotor(1e-3, 1e-4, 0.1, 0.1, 1.0, 1e-3, 0.1, stiffness=100.0)] * 2)
-    with pytest.raises(ModelError, match="flexible or hydraulic"):
-        ad.simulate(flexible, law, None, t_final=0.01)
+
+
+def _drive_pid(arm: act.ActuatedArm, kp: float, kv: float, ki: float, path: object):
+    """The DrivePID law written out in NumPy on y = [x, z]: the error on each drive's own coordinate (q / r,
+    the flexible rotor's q_M, the hydraulic joint's q), the integral held while the input is clipped in
+    the error's direction."""
+    names, n, m = arm.state_names, arm.n, arm.n_states
+    joints = arm.robot.joint_names
+
+    def coordinate(y: np.ndarray, j: int, q_d: np.ndarray, qd_d: np.ndarray) -> tuple[float, float]:
+        drive = arm.drives[j]
+        if isinstance(drive, act.Hydraulic):
+            return q_d[j] - y[j], qd_d[j] - y[n + j]
+        r = drive.gear_ratio
+        if drive.flexible:
+            angle, speed = names.index(f"qM {joints[j]}"), names.index(f"qdM {joints[j]}")
+            return q_d[j] / r - y[angle], qd_d[j] / r - y[speed]
+        return (q_d[j] - y[j]) / r, (qd_d[j] - y[n + j]) / r
+
+    limits = np.array([d.voltage_limit if isinstance(d, act.DCMotor) else d.current_limit for d in arm.drives])
+
+    def rates(t: float, y: np.ndarray) -> np.ndarray:
+        q_d, qd_d, _ = path(t, n)
+        errors = np.array([coordinate(y, j, q_d, qd_d) for j in range(n)])
+        u = kp * errors[:, 0] + kv * errors[:, 1] + ki * y[m:]
+        wound = (np.abs(u) >= limits) & (u * errors[:, 0] > 0)
+        return np.concatenate([arm.state_derivative(y[:m], u), np.where(wound, 0.0, errors[:, 0])])
+
+    return rates
+
+
+@pytest.mark.parametrize(
+    ("name", "kind", "gains"),
+    [("two_link_planar", "flexible", (20.0, 0.5, 10.0)), ("polar_rp", "hydraulic", (0.1, 0.002, 0.05))],
+)
+def test_flexible_and_hydraulic_runs_converge_to_the_numpy_full_model(name: str, kind: str, gains: tuple) -> None:
+    """ad.simulate on representative flexible and hydraulic drives (PID with its integral, square-root
+    orifices) against solve_ivp (DOP853, 1e-11) on state_derivative with the law in NumPy: within 1e-3 of
+    each state's range at the default step, converging as the step shrinks (fourth order where the
+    right-hand side is smooth)."""
+    arm = act.representative_drives(ad.models.load(name), kind)
+    q0 = np.full(arm.n, 0.2)
+    path = tr.Sinusoid(0.1, 0.5, 0.0, q0)
+    law = act.DrivePID(*gains)
+    times = np.linspace(0.0, 0.5, 11)
+    y0 = np.concatenate([arm.initial_state(q0), np.zeros(arm.n)])
+    reference = solve_ivp(_drive_pid(arm, *gains, path), (0, 0.5), y0, method="DOP853", rtol=1e-11, atol=1e-13,
+                          t_eval=times).y.T[:, : arm.n_states]  # fmt: skip
+    scale = np.abs(reference).max(axis=0) + 1e-12
+    default = ad.simulate(arm, law, path, t_final=0.5, dt=1e-3, q0=q0)
+    errors = []
+    for step in (None, default.info["step"] / 2, default.info["step"] / 4):
+        result = act.simulate(arm, law, path, t_final=0.5, dt=1e-3, q0=q0, step=step)
+        errors.append(np.max(np.abs(result.drives.x[::50] - reference) / scale))
+    print(f"{name} {kind}: substeps {default.info['substeps']}, relative errors {errors}")
+    assert errors[0] < 1e-3
+    if kind == "flexible":
+        assert errors[1] / errors[2] > 2**3.5 or errors[2] < 1e-9  # fourth order, down to rounding
+    else:  # the orifice's flow gain jumps where the spool crosses zero: RK4 drops to first order there
+        assert errors[0] > errors[1] > 1.8 * errors[2]
+    if kind == "hydraulic":
+        assert default.drives.pressure.shape == (501, 2) and default.drives.spool.shape == (501, 2)
+        assert np.allclose(default.tau, [d.area for d in arm.drives] * default.drives.pressure)
+        assert np.abs(default.drives.v).max() <= 0.01
+    else:
+        assert default.drives.pressure is None and default.drives.i.shape == (501, 2)
+
+
+def test_integral_action_removes_the_gravity_offset_that_pd_leaves() -> None:
+    """The book's independent joint control: under PD on the voltages, gravity (the coupling d_i) leaves
+    a steady error r R_a G / (K_M kp) at the motor; the integral removes it. (Without Coulomb friction,
+    which would hold an offset of its own.)"""
+    arm = _puma()
+    q0 = np.array(ad.models.puma560().configurations["qn"])
+    pd = ad.simulate(arm, act.DrivePID(20.0, 0.5), None, t_final=3.0, q0=q0)
+    pid = ad.simulate(arm, act.DrivePID(20.0, 0.5, 40.0), None, t_final=3.0, q0=q0)
+    offset = np.abs(pd.q[-1] - q0)
+    gravity = np.abs(arm.robot.gravity_vector(pd.q[-1]))
+    r, R_a, K_M = (np.array([getattr(d, key) for d in arm.drives]) for key in ("gear_ratio", "resistance",
+                                                                               "torque_constant"))  # fmt: skip
+    predicted = r**2 * R_a * gravity / (K_M * 20.0)  # at the joint
+    assert np.allclose(offset, predicted, rtol=0.05, atol=1e-6)
+    assert offset[1] > 1e-3 and np.abs(pid.q[-1] - q0).max() < 1e-2 * offset[1]
+    assert "PID" in pid.info["controller"] and "PD" in pd.info["controller"]
+
+
+def test_current_computed_torque_becomes_computed_torque_as_the_current_loop_speeds_up() -> None:
+    """Computed torque through current commands against Chapter 4's computed torque on the torque-driven
+    mechanics (mechanical_robot): the difference falls as the current loop's bandwidth rises."""
+    arm = _puma()
+    q0 = np.array(ad.models.puma560().configurations["qn"])
+    path = tr.Sinusoid(0.1, 0.5, 0.0, q0)
+    ideal = ad.simulate(arm.mechanical_robot(), ad.control.ComputedTorque(100.0, 20.0), path, t_final=1.0,
+                        dt=1e-4, q0=q0)  # fmt: skip
+    differences = []
+    for bandwidth in (1e3, 1e4):
+        run = ad.simulate(arm, act.CurrentComputedTorque(100.0, 20.0, bandwidth=bandwidth), path, t_final=1.0,
+                          dt=1e-4, q0=q0)  # fmt: skip
+        differences.append(np.abs(run.q - ideal.q).max())
+        assert np.abs(run.drives.i).max() < 8.0  # no current limit reached
+    print(f"|q - q_ideal| max: {differences} (bandwidth 1e3, 1e4 rad/s)")
+    assert differences[1] < 1e-4 and differences[0] / differences[1] > 5  # about 1 / bandwidth
+    assert np.abs(ideal.error[-1]).max() < 1e-4  # the start's velocity error decays
+
+
+def test_the_rk4_step_comes_from_the_drives_time_constants() -> None:
+    arm = act.puma560()
+    q0 = np.zeros(6)
+    step = act.rk4_step(arm, q0)
+    assert step == pytest.approx(0.5 * 1e-3 / 6.7)  # half the wrist armatures' L / R_a
+    result = ad.simulate(arm, act.DrivePID(20.0, 0.5), None, t_final=0.01, q0=q0)
+    assert result.info["step"] <= step and result.info["substeps"] == int(np.ceil(1e-3 / step))
+    assert act.rk4_step(arm, q0, bandwidth=np.full(6, 2e4)) == pytest.approx(0.5 / 2e4)
+    flexible = act.representative_drives(ad.models.two_link_planar(), "flexible")
+    shafts = act.rk4_step(flexible, np.zeros(2))
+    assert shafts <= 0.5 * np.min([d.inductance / d.resistance for d in flexible.drives])
+    bare = act.with_actuators(ad.models.two_link_planar(), [act.Hydraulic(5e-3, 0.1, 1.0, 1e-12, 1e-4, 1e-12, 1e-4,
+                                                                          1e9, 1e7, rotary=True)] * 2)  # fmt: skip
+    column = np.sqrt(1e-8 / (1e-4 / 4e9) / np.diag(np.linalg.inv(bare.mechanical_robot().inertia_matrix(np.zeros(2))))
+                     ** -1)  # fmt: skip
+    assert act.rk4_step(bare, np.zeros(2)) == pytest.approx(min(0.5 * 5e-3, 0.15 / column.max()))
+
+
+def test_representative_drives_hold_every_built_in_arm() -> None:
+    """Each kind of representative drive on each built-in arm holds its start under gravity (PID), and the
+    reduced model exists for the rigid drives."""
+    for name in ad.models.names():
+        robot = ad.models.load(name)
+        q0 = np.asarray(robot.configurations.get("qn", robot.configurations.get("qz", np.zeros(robot.n))), float)
+        for kind, law in (("dc", act.DrivePID(20.0, 0.5, 20.0)), ("flexible", act.DrivePID(20.0, 0.5, 20.0)),
+                          ("hydraulic", act.DrivePID(0.1, 0.0, 0.1))):  # fmt: skip
+            arm = act.representative_drives(robot, kind)
+            kinds = {"hydraulic" if isinstance(d, act.Hydraulic) else "flexible" if d.flexible else "dc"
+                     for d in arm.drives}  # fmt: skip
+            assert arm.n == robot.n and kinds == {kind}
+            if kind != "flexible":
+                assert arm.reduced_robot().n == robot.n
+            result = ad.simulate(arm, law, None, t_final=2.0, q0=q0)
+            assert np.abs(result.q[-1] - q0).max() < 2e-2, (name, kind)
+
+
+def test_bad_laws_and_steps_are_refused() -> None:
+    arm = _puma()
+    flexible = act.representative_drives(ad.models.two_link_planar(), "flexible")
+    cases = [
+        (lambda: ad.simulate(flexible, act.CurrentComputedTorque(100.0, 20.0), None, t_final=0.01), "rigid DC"),
+        (
+            lambda: ad.simulate(arm, act.CurrentComputedTorque(100.0, 20.0, bandwidth=0.0), None, t_final=0.01),
+            "bandwidth",
+        ),
+        (lambda: act.simulate(arm, act.DrivePID(1.0, 0.1), None, t_final=0.01, step=-1e-4), "step"),
+        (lambda: act.simulate(arm, act.DrivePID(1.0, 0.1), None, 0.01, 1e-3, None, None, float("nan")), "step"),
+        (lambda: act.representative_drives(ad.models.two_link_planar(), "pneumatic"), "kind must be one of"),
+        (lambda: act.rk4_step(arm, np.zeros((2, 6))), "one configuration"),
+        (
+            lambda: ad.simulate(
+                act.representative_drives(ad.models.polar_rp(), "hydraulic"), act.DrivePID(0.1, 0.0), None, t_final=0.1
+            ),
+            "M\\(q\\) is singular at q = \\[0. 0.\\]",
+        ),
+    ]
+    for call, message in cases:
+        with pytest.raises(ModelError, match=message):
+            call()
+    with pytest.raises(TypeError):
+        act.representative_drives("puma560")
+
+
+def test_the_built_in_puma_drives() -> None:
+    arm = act.puma560()
+    assert arm.n == 6 and arm.drives[0].name == "motor q1"
+    assert np.allclose(arm.reduced_robot().inertia_matrix(np.zeros(6)), ad.models.puma560().inertia_matrix(np.zeros(6)))
+    assert [d.torque_constant for d in arm.drives] == list(act.PUMA560_ELECTRICS["torque_constant"])

@@ -442,7 +442,7 @@ def test_cli_writes_tables_by_suffix(tmp_path: Path) -> None:
     assert header == list(ad.properties.COLUMNS)
     demo = invoke("demo", "-o", tmp_path / "demo")
     assert demo.exit_code == 0, demo.output
-    assert {p.name for p in (tmp_path / "demo").iterdir()} == {"demo.png", "demo.csv"}
+    assert {p.name for p in (tmp_path / "demo").iterdir()} == {"demo.png", "demo.csv", "demo-drives.png"}
 
 
 def test_cli_tables_carry_units() -> None:

@@ -194,6 +194,8 @@ def test_demo_is_the_main_job(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert (tmp_path / "demo.png").exists() and (tmp_path / "demo.csv").exists()
     assert "final tracking errors" in result.output and "Table 3.3.1" in result.output
+    assert "Section 3.5" in result.output and "Mbar" in result.output
+    assert "poles -8.702, -2.298" in result.output and (tmp_path / "demo-drives.png").exists()
 
 
 def test_the_top_level_names() -> None:

@@ -45,12 +45,17 @@ from armdyn.robot import Robot
 
 __all__ = [
     "ActuatedArm",
+    "CurrentComputedTorque",
     "DCMotor",
+    "DrivePID",
     "DriveRecord",
     "Hydraulic",
     "VoltagePD",
     "example_3_6_1",
     "motor_drives",
+    "puma560",
+    "representative_drives",
+    "rk4_step",
     "simulate",
     "transfer_function",
     "with_actuators",
@@ -392,9 +397,10 @@ def _load_flow(
     sqrt_gain: np.ndarray,
 ) -> np.ndarray:
     """Q_L = K_q x_v - K_c P_L, or C_d w x_v sqrt((P_s - sgn(x_v) P_L) / rho) where ``orifice`` is True
-    (``sqrt_gain`` = C_d w / sqrt(rho); no flow once the pressure drop is gone) (Merritt 1967)."""
-    drop = np.maximum(P_s - np.sign(x_v) * P_L, 0.0)
-    return np.where(orifice, sqrt_gain * x_v * np.sqrt(drop), K_q * x_v - K_c * P_L)
+    (``sqrt_gain`` = C_d w / sqrt(rho); where the load drives the pressure past the supply, the drop
+    changes sign and the flow reverses: sgn(drop) sqrt(|drop|)) (Merritt 1967)."""
+    drop = P_s - np.sign(x_v) * P_L
+    return np.where(orifice, sqrt_gain * x_v * np.sign(drop) * np.sqrt(np.abs(drop)), K_q * x_v - K_c * P_L)
 
 
 def _pressure_rate(
@@ -573,6 +579,25 @@ class ActuatedArm:
         if isinstance(drive, Hydraulic) and reduced:
             return dataclasses.replace(link, viscous=link.viscous + drive.area**2 / drive.total_coefficient)
         return link
+
+    def mechanical_robot(self) -> Robot:
+        """The links with the rigid DC drives' rotors, gears and friction as Link motors, without the electrics.
+
+        The mechanics M qdd + Vm qd + F + G = tau that the drives' joint torques act on in the full
+        model (the flexible drives' rotors and the hydraulic drives are not in it): driving it with
+        the torques a current loop delivers is the torque-controlled arm of Chapter 4.
+
+        Returns
+        -------
+        Robot
+            The arm with Jm = J_M, G = 1/r and the motor-side B and Tc of its rigid DC drives.
+
+        Raises
+        ------
+        None
+            It returns the model the full model is built on.
+        """
+        return self._mechanical
 
     # ----- the reduced model ---------------------------------------------------------------------------
     def reduced_robot(self) -> Robot:
@@ -1235,6 +1260,162 @@ def motor_drives(
     return robot.replace(bare), drives
 
 
+# ----- built-in drives -----------------------------------------------------------------------------------
+PUMA560_ELECTRICS = {
+    "torque_constant": (0.22, 0.22, 0.22, 0.075, 0.075, 0.075),
+    "back_emf": (0.22, 0.22, 0.22, 0.075, 0.075, 0.075),
+    "resistance": (2.1, 2.1, 2.1, 6.7, 6.7, 6.7),
+    "inductance": (2e-3, 2e-3, 2e-3, 1e-3, 1e-3, 1e-3),
+    "voltage_limit": 40.0,
+    "current_limit": (8.0, 8.0, 8.0, 4.0, 4.0, 4.0),
+}
+"""The PUMA 560's motor electrics, per joint (K_M N m/A, K_b V s/rad, R_a ohm, L H, limits V and A):
+representative values for its two motor sizes (joints 1-3 and 4-6), not published data (no
+source with all of them for this arm could be confirmed); K_b = K_M in SI units."""
+
+
+def puma560() -> ActuatedArm:
+    """The PUMA 560 (armdyn.models.puma560: Armstrong, Khatib and Burdick 1986 and Corke's motor
+    inertias, gears and friction) with its motors as DC drives and representative electrics
+    (``PUMA560_ELECTRICS``, stated as such: not published data).
+
+    Returns
+    -------
+    ActuatedArm
+        Six rigid DC drives, named "motor joint1" ... "motor joint6".
+
+    Raises
+    ------
+    armdyn.ModelError
+        Never for the built-in data.
+    """
+    from armdyn import models
+
+    return with_actuators(*motor_drives(models.puma560(), **PUMA560_ELECTRICS))
+
+
+_KINDS = ("dc", "flexible", "hydraulic")
+_SUPPLY = 21e6  # Pa: a common industrial supply pressure
+
+
+def _configurations(robot: Robot, samples: int = 256) -> np.ndarray:
+    """Configurations drawn within the joint limits (+-pi, +-0.5 m where unlimited), seeded."""
+    rng = np.random.default_rng(0)
+    limits = np.array([link.limits for link in robot.links], dtype=float)
+    span = np.where(np.array(robot.kinds) == "revolute", np.pi, 0.5)
+    low, high = (
+        np.where(np.isfinite(limits[:, 0]), limits[:, 0], -span),
+        np.where(np.isfinite(limits[:, 1]), limits[:, 1], span),
+    )
+    return rng.uniform(low, high, (samples, robot.n))
+
+
+def _representative_motor(link: Link, revolute: bool, load: float, name: str) -> DCMotor:
+    """A DC motor and gear for a joint that must hold ``load`` (N m or N): the link's own gear and its
+    friction (G, B, Tc) where it has one, else a 50:1 gear (a 10 mm-lead screw on a prismatic joint);
+    the link's rotor Jm (with G = 1, Jm is the rotor seen at the joint: J_M = r^2 Jm), else 1e-4 kg m^2;
+    K_M = K_b = 0.2, R_a = 2, L = 2e-3; the current limit three times the holding current (at least 5 A), the
+    voltage limit that current through R_a plus the back-emf at 2 rad/s (m/s)."""
+    geared = link.gear_ratio != 1.0
+    r = 1 / link.gear_ratio if geared else (1 / 50 if revolute else 0.01 / (2 * math.pi))
+    rotor = link.motor_inertia * (1.0 if geared else r**2)  # without a gear Jm is seen at the joint
+    rotor = rotor if rotor > 0 else 1e-4
+    K_M, R_a = 0.2, 2.0
+    current = max(5.0, 3 * load * abs(r) / K_M)
+    voltage = R_a * current + K_M * 2.0 / abs(r)
+    coulomb = _joint_sense(link.coulomb, r) if geared else (0.0, 0.0)
+    viscous = link.viscous if geared else 0.0
+    return DCMotor(rotor, viscous, K_M, K_M, R_a, 2e-3, r, voltage, current, coulomb, name=name)
+
+
+def _representative_valve(revolute: bool, load: float, inertia: float, name: str) -> Hydraulic:
+    """A servo valve and actuator that hold ``load`` at a quarter of the 21 MPa supply: a rotary motor on a
+    revolute joint, a piston on a prismatic one, moving at 1 rad/s (0.5 m/s) at full spool opening
+    (1 mm, 10 mA); square-root orifice, 5 ms valve, oil at 1.4 GPa and 850 kg/m^3, the trapped volume
+    that of a half-turn (a 0.4 m stroke). A cross-port bypass sets the leakage C_tp (and K_c) for a
+    damping ratio of 0.3 of the oil column on ``inertia``: zeta_h = (K_ce / A) sqrt(beta_e m / V_t)
+    (Merritt 1967), without which the column rings."""
+    area = max(4 * load, 50.0) / _SUPPLY  # D_m (m^3/rad) or A (m^2)
+    speed, opening = (1.0, 1e-3) if revolute else (0.5, 1e-3)
+    K_q = area * speed / opening
+    width = K_q / (0.61 * math.sqrt(_SUPPLY / 850.0))
+    volume = area * (math.pi if revolute else 0.4)
+    leakage = 0.3 * area * math.sqrt(volume / (1.4e9 * inertia)) / 2  # K_c + C_tp, half each
+    return Hydraulic(5e-3, 0.1, None, leakage, area, leakage, volume, 1.4e9, _SUPPLY, rotary=revolute, orifice="sqrt",
+                     discharge_coefficient=0.61, orifice_width=width, density=850.0, current_limit=0.01,
+                     stroke=opening, name=name)  # fmt: skip
+
+
+def representative_drives(robot: Robot, kind: str = "dc") -> ActuatedArm:
+    """The arm with a representative drive on every joint, sized from its gravity load (stated as such:
+    not a product's data).
+
+    ``kind`` "dc": a rigid DC motor per joint, with the link's own gear and friction (G, B, Tc)
+    where it has a gear (else a 50:1 gear, or a 10 mm-lead screw on a prismatic joint, the joint
+    friction staying at the joint) and its rotor Jm (without a gear, Jm is taken as seen at the
+    joint, J_M = r^2 Jm; else 1e-4 kg m^2), K_M = K_b = 0.2 N m/A, R_a = 2 ohm,
+    L = 2 mH, the current limit three times what holds the largest gravity torque (at least 5 A).
+    "flexible": the same motors behind shafts whose spring puts the joint's locked-rotor
+    resonance at 10 Hz (K = (2 pi 10)^2 m_j, m_j the mean of M_jj over the configurations, or the
+    rotor's J_M / r^2 where the link moves no inertia) with 5 % damping. "hydraulic": a servo valve
+    with a rotary motor (revolute joints) or a piston (prismatic ones) that holds four times the
+    gravity load at the 21 MPa supply (Merritt 1967's square-root orifice), with a bypass leakage
+    that damps the oil column on the joint's mean inertia to a ratio of 0.3. The gravity
+    torque's peak is taken over 256 configurations drawn within the joint limits (seeded).
+
+    Parameters
+    ----------
+    robot : Robot
+        The arm (its motors, where it has them, become the DC drives).
+    kind : str, optional
+        "dc" (default), "flexible" or "hydraulic".
+
+    Returns
+    -------
+    ActuatedArm
+        The arm, without its own motors and friction where they moved into the drives.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``kind`` is not one of the three, or the arm has symbolic parameters.
+    TypeError
+        When ``robot`` is not a Robot.
+    """
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be an armdyn Robot, got {type(robot).__name__}")
+    if kind not in _KINDS:
+        raise ModelError(f"kind must be one of {', '.join(_KINDS)}, got {reprlib.repr(kind)}")
+    samples = _configurations(robot)
+    loads = np.abs(robot.gravity_vector(samples)).max(axis=0)
+    revolute = [k == "revolute" for k in robot.kinds]
+    names = robot.joint_names
+    if kind == "hydraulic":
+        bare_robot = robot.replace([dataclasses.replace(link, motor_inertia=0.0, gear_ratio=1.0)
+                                    for link in robot.links])  # fmt: skip
+        inertia = np.diagonal(bare_robot.inertia_matrix(samples), axis1=-2, axis2=-1).mean(axis=0)
+        drives = [_representative_valve(revolute[j], loads[j], max(inertia[j], 1e-3), f"valve {names[j]}")
+                  for j in range(robot.n)]  # fmt: skip
+        return with_actuators(bare_robot, drives)
+    drives = [_representative_motor(link, revolute[j], loads[j], f"motor {names[j]}")
+              for j, link in enumerate(robot.links)]  # fmt: skip
+    bare = [
+        dataclasses.replace(link, motor_inertia=0.0, gear_ratio=1.0, viscous=0.0, coulomb=(0.0, 0.0))
+        if link.gear_ratio != 1.0
+        else dataclasses.replace(link, motor_inertia=0.0)
+        for link in robot.links
+    ]
+    bare_robot = robot.replace(bare)
+    if kind == "flexible":
+        inertia = np.diagonal(bare_robot.inertia_matrix(samples), axis1=-2, axis2=-1).mean(axis=0)
+        rotors = np.array([drive.rotor_inertia / drive.gear_ratio**2 for drive in drives])
+        inertia = np.where(inertia > 1e-9 * rotors, inertia, rotors)  # a link that moves no inertia of its own
+        stiffness = (2 * math.pi * 10.0) ** 2 * inertia
+        drives = [dataclasses.replace(drive, stiffness=K, shaft_damping=2 * 0.05 * math.sqrt(K * m))
+                  for drive, K, m in zip(drives, stiffness, inertia, strict=True)]  # fmt: skip
+    return with_actuators(bare_robot, drives)
+
+
 # ----- Example 3.6-1 ----------------------------------------------------------------------------------------
 def transfer_function(motor: DCMotor, load_inertia: float, load_damping: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """H(s) = qd(s) / v(s): one DC motor driving an inertia through its gear (BOOK.md section 7).
@@ -1313,28 +1494,34 @@ def example_3_6_1(flexible: bool = False) -> tuple[np.ndarray, np.ndarray]:
     return transfer_function(motor, load_inertia=0.1)
 
 
-# ----- simulation with the electrics --------------------------------------------------------------------
+# ----- simulation with the drives ---------------------------------------------------------------------
 @dataclass(frozen=True)
-class VoltagePD:
-    """Independent joint control on the motor voltages (BOOK.md section 7): v = kp (q_Md - q_M) +
-    kv (qd_Md - qd_M), the PD on each motor's own angle q_M = q / r.
+class DrivePID:
+    """Independent joint control on each drive's input (BOOK.md section 7): u = kp e + kv de/dt + ki z,
+    dz/dt = e, with e the error on the drive's own coordinate.
 
-    Each motor sees only its own joint's error; the coupling from the other joints acts as a
-    disturbance (the book's d_i). On the motor's angle, the law keeps its sign whatever the
-    gear's direction. Gains in V per rad and V per rad/s of the motor (a joint error e is
-    e / r at the motor: with r = 1/62, 1 mrad at the joint is 62 mrad at the motor).
+    For a DC drive u is the voltage and e the motor angle's error: (q_d - q) / r for a rigid
+    shaft, q_d / r - q_M for a flexible one (the collocated motor angle). For a hydraulic drive u
+    is the valve current and e the joint's error. Each drive sees only its own error; the coupling
+    from the other joints acts as a disturbance (the book's d_i), which the integral removes at
+    rest. The integral stops while the input is clipped at its limit in the error's direction
+    (no wind-up). Gains in V (or A) per rad of the drive's coordinate, per rad/s, per rad s: with
+    r = 1/62, 1 mrad at the joint is 62 mrad at the motor.
 
     Parameters
     ----------
     kp, kv : float or array_like
-        The gains, one value or one per joint, at least 0.
+        The proportional and derivative gains, one value or one per joint, at least 0.
+    ki : float or array_like, optional
+        The integral gain (default 0: PD).
     """
 
     kp: object
     kv: object
+    ki: object = 0.0
 
     def gains(self, n: int) -> np.ndarray:
-        """(2, n): kp and kv for n joints.
+        """(3, n): kp, kv and ki for n joints.
 
         Parameters
         ----------
@@ -1344,14 +1531,15 @@ class VoltagePD:
         Returns
         -------
         numpy.ndarray
-            The gains, row 0 kp and row 1 kv.
+            The gains, rows kp, kv, ki.
 
         Raises
         ------
         armdyn.ModelError
             When a gain is not one or n finite numbers at least 0.
         """
-        return np.stack([inputs.gains(gain, name, n) for gain, name in ((self.kp, "kp"), (self.kv, "kv"))])
+        named = ((self.kp, "kp"), (self.kv, "kv"), (self.ki, "ki"))
+        return np.stack([inputs.gains(gain, name, n) for gain, name in named])
 
     def describe(self) -> str:
         """The law and its gains, for titles and reports.
@@ -1366,7 +1554,88 @@ class VoltagePD:
         None
             It only formats the gains.
         """
-        return f"independent joint PD on the motor voltages (kp = {self.kp} V/rad, kv = {self.kv} V s/rad)"
+        kind = "PID" if np.any(np.asarray(self.ki, dtype=float) != 0) else "PD"
+        integral = f", ki = {self.ki}" if kind == "PID" else ""
+        return f"independent joint {kind} on the drives' inputs (kp = {self.kp}, kv = {self.kv}{integral})"
+
+
+@dataclass(frozen=True)
+class CurrentComputedTorque:
+    """Computed torque turned into current commands through the motor model (BOOK.md sections 5 and 7).
+
+    The outer loop is the arm's computed torque on the joints, tau_c = M(q) (qdd_d + kv de/dt +
+    kp e + ki z) + N(q, qd) with e = q_d - q, from the mechanical model (links and rotors); each
+    rigid DC drive turns its torque into the current command i_c = r tau_c / K_M (held within the
+    current limit), and the armature equation is inverted for the voltage,
+    v = R_a i + K_b qd_M + L w_c (i_c - i), so that di/dt = w_c (i_c - i): the current follows its
+    command with the bandwidth w_c until the voltage limit is reached. With w_c large against
+    the arm's motion this is the torque-controlled arm of Chapter 4's computed torque.
+
+    Parameters
+    ----------
+    kp, kv : float or array_like
+        Joint gains (1/s^2, 1/s), one value or one per joint, at least 0.
+    ki : float or array_like, optional
+        Integral gain (1/s^3), default 0.
+    bandwidth : float or array_like or None, optional
+        w_c, the current loop's bandwidth (rad/s), > 0; None (default) takes each drive's R_a / L.
+    """
+
+    kp: object
+    kv: object
+    ki: object = 0.0
+    bandwidth: object = None
+
+    def gains(self, arm: ActuatedArm) -> np.ndarray:
+        """(4, n): kp, kv, ki and w_c for the arm's joints.
+
+        Parameters
+        ----------
+        arm : ActuatedArm
+            The arm whose drives set the default bandwidth R_a / L.
+
+        Returns
+        -------
+        numpy.ndarray
+            The gains, rows kp, kv, ki, w_c.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a gain is not one or n finite numbers at least 0, or a bandwidth is not positive.
+        """
+        n = arm.n
+        named = ((self.kp, "kp"), (self.kv, "kv"), (self.ki, "ki"))
+        rows = [inputs.gains(gain, name, n) for gain, name in named]
+        if self.bandwidth is None:
+            rows.append(arm._R_a / arm._L)
+        else:
+            bandwidth = inputs.gains(self.bandwidth, "bandwidth", n)
+            if np.any(bandwidth <= 0):
+                raise ModelError(f"bandwidth (the current loop's, rad/s) must be positive, got {self.bandwidth}")
+            rows.append(bandwidth)
+        return np.stack(rows)
+
+    def describe(self) -> str:
+        """The law and its gains, for titles and reports.
+
+        Returns
+        -------
+        str
+            A short description.
+
+        Raises
+        ------
+        None
+            It only formats the gains.
+        """
+        loop = "R_a/L" if self.bandwidth is None else f"{self.bandwidth} rad/s"
+        return (f"computed torque through current commands (kp = {self.kp}, kv = {self.kv}, ki = {self.ki}; "
+                f"current loop {loop})")  # fmt: skip
+
+
+VoltagePD = DrivePID
+"""The PD on the motor voltages: DrivePID without the integral (kept as the book's name for it)."""
 
 
 @dataclass(frozen=True)
@@ -1383,82 +1652,167 @@ class DriveRecord:
         The inputs applied (after the limits), (T, n): volts, or valve amperes.
     i : numpy.ndarray
         The armature currents of the DC drives, (T, number of DC drives), A.
+    spool : numpy.ndarray or None, optional
+        The spool positions x_v of the hydraulic drives, (T, number of hydraulic drives), m.
+    pressure : numpy.ndarray or None, optional
+        Their load pressures P_L, (T, number of hydraulic drives), Pa.
     """
 
     names: list
     x: np.ndarray
     v: np.ndarray
     i: np.ndarray
+    spool: np.ndarray | None = None
+    pressure: np.ndarray | None = None
 
 
-def _rk4_substeps(arm: ActuatedArm, dt: float) -> int:
-    """RK4 steps per sample: each at most half the shortest electrical time constant L/R (explicit RK4
-    is stable to about 2.8 of them, and accurate to 1e-4 of the fast transient at a half)."""
-    fastest = float(np.min(arm._L / arm._R_a))
-    return max(1, math.ceil(dt / (0.5 * fastest)))
+def _drive_table(arm: ActuatedArm) -> np.ndarray:
+    """The drives' parameters packed for armdyn.dynamics.drives, (ROWS, n), with each joint's indices into x."""
+    from armdyn.dynamics import drives as packed
+
+    table = np.zeros((packed.ROWS, arm.n))
+    kind = np.where(arm._is_dc, np.where(arm._rigid, packed.RIGID, packed.FLEXIBLE), packed.HYDRAULIC)
+    rows = {
+        packed.KIND: kind, packed.RATIO: arm._r, packed.TORQUE_CONSTANT: arm._K_M, packed.BACK_EMF: arm._K_b,
+        packed.RESISTANCE: arm._R_a, packed.INDUCTANCE: arm._L, packed.INPUT_LIMIT: arm._u_max,
+        packed.CURRENT_LIMIT: arm._i_max, packed.ROTOR_INERTIA: arm._J_M, packed.ROTOR_VISCOUS: arm._B_M,
+        packed.COULOMB_POSITIVE: arm._Tc_pos, packed.COULOMB_NEGATIVE: arm._Tc_neg, packed.STIFFNESS: arm._K,
+        packed.SHAFT_DAMPING: arm._B_s, packed.VALVE_TIME: arm._tau_v, packed.VALVE_GAIN: arm._K_v,
+        packed.FLOW_GAIN: arm._K_q, packed.PRESSURE_COEFFICIENT: arm._K_c, packed.AREA: arm._A,
+        packed.LEAKAGE: arm._C_tp, packed.CAPACITANCE: arm._C, packed.SUPPLY: arm._P_s,
+        packed.SQRT_ORIFICE: arm._sqrt, packed.SQRT_GAIN: arm._sqrt_gain, packed.STROKE: arm._stroke,
+    }  # fmt: skip
+    for row, values in rows.items():
+        table[row] = values
+    for row, key, joints in ((packed.ANGLE_AT, "qM", arm._flex), (packed.SPEED_AT, "qdM", arm._flex),
+                             (packed.CURRENT_AT, "i", arm._dc), (packed.SPOOL_AT, "xv", arm._hyd),
+                             (packed.PRESSURE_AT, "PL", arm._hyd)):  # fmt: skip
+        table[row] = -1
+        table[row, joints] = np.arange(arm._slices[key].start, arm._slices[key].stop)
+    return table
+
+
+def rk4_step(arm: ActuatedArm, q: object, bandwidth: object = None) -> float:
+    """The RK4 step (s) that resolves the drives' fast dynamics near q: 0.5 / lambda for the fastest real
+    pole and 0.15 / w for the fastest lightly damped oscillation.
+
+    The real poles: the armatures R_a / L (or the current loops' w_c), the valves 1 / tau_v, each
+    hydraulic joint's pressure pole K_ce / C and each joint's viscous b / m. The oscillations: each
+    flexible shaft's sqrt(K / m') + B_s / m' (1/m' = 1/m + r^2 / J_M) and each hydraulic joint's
+    oil column sqrt(A^2 / (C m)) (Merritt 1967), with m = 1 / (M(q)^-1)_jj the smallest inertia
+    the joint's drive meets (BOOK.md section 7). At these steps RK4 (stable to about 2.8 / lambda)
+    keeps a first-order transient to about 1e-4 per time constant and an oscillation's phase to
+    about 1e-5 per step. ``simulate`` takes its step from here at the start.
+
+    Parameters
+    ----------
+    arm : ActuatedArm
+        The arm with its drives.
+    q : array_like
+        One configuration, (n,).
+    bandwidth : array_like or None, optional
+        The current loops' w_c (n values), when a law closes them.
+
+    Returns
+    -------
+    float
+        The step, s (math.inf when nothing is fast: no drive dynamics).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When q is not one configuration, or M(q) is singular.
+    """
+    q = inputs.state(q, arm.n, "q", arm._where)
+    if q.shape != (arm.n,):
+        raise ModelError(f"rk4_step takes one configuration of {arm.n} values{arm._where}")
+    inertia = arm._mechanical.inertia_matrix(q)
+    if not np.linalg.cond(inertia) < 1e12:
+        raise ModelError(f"M(q) is singular at q = {np.array2string(q, precision=6)}{arm._where}: the drives' time "
+                         "constants need the inertia they move (start elsewhere)")  # fmt: skip
+    mobility = np.diag(np.linalg.inv(inertia))  # 1/m_j
+    d, f, h = arm._dc, arm._flex, arm._hyd
+    electrical = arm._R_a[d] / arm._L[d] if bandwidth is None else np.maximum(arm._R_a / arm._L, bandwidth)[d]
+    shaft = mobility[f] + arm._r[f] ** 2 / arm._J_M[f]
+    real = [electrical, 1 / arm._tau_v[h], arm._K_ce[h] / arm._C[h], arm._mechanical.viscous_friction * mobility]
+    shafts = arm._B_s[f] * shaft + np.sqrt(arm._K[f] * shaft)
+    columns = np.sqrt(arm._A[h] ** 2 / arm._C[h] * mobility[h])
+    fastest = [max((float(np.max(rates)) for rates in group if rates.size), default=0.0)
+               for group in (real, [shafts, columns])]  # fmt: skip
+    return min(0.5 / fastest[0] if fastest[0] > 0 else math.inf, 0.15 / fastest[1] if fastest[1] > 0 else math.inf)
 
 
 def simulate(
     arm: ActuatedArm,
-    controller: VoltagePD,
+    controller: DrivePID | CurrentComputedTorque,
     trajectory: object = None,
     t_final: float = 5.0,
     dt: float = 1e-3,
     q0: object = None,
     qd0: object = None,
+    step: float | None = None,
 ) -> object:
-    """The arm driven through its motors' electrics under independent-joint voltage control (BOOK.md section 7).
+    """The arm driven through its drives' dynamics under a drive-level law (BOOK.md section 7).
 
-    Integrates the full model x = [q, qd, i] by RK4 in one compiled call, the controller evaluated
-    at every stage: v = kp (q_d - q) + kv (qd_d - qd) with the voltage limits applied and the
-    currents held within theirs. The electrics are stiff (L/R is about a millisecond): the RK4 step
-    is at most half the shortest L/R, so a run records every ``dt`` while integrating as finely as
-    stability and accuracy need (``info["substeps"]``). ``armdyn.simulate(actuated_arm, ...)`` comes
-    here.
+    Integrates the full model x = [q, qd, q_M, qd_M, i, x_v, P_L] (and the law's integrators) by
+    RK4 in one compiled call, the law evaluated at every stage, the inputs clipped to their limits
+    and the currents and spools held within theirs. The drives are stiff (L/R is about a
+    millisecond, an oil column rings at hundreds of hertz), and the method stays explicit RK4 with
+    the step chosen from them (``rk4_step`` at the start: half of L/R for a DC motor), so the run
+    records every ``dt`` while integrating as finely as stability and accuracy need (``info["substeps"]``).
+    ``armdyn.simulate(actuated_arm, ...)`` comes here.
 
     Parameters
     ----------
     arm : ActuatedArm
-        The arm with a rigid DC drive (L > 0) on every joint.
-    controller : VoltagePD
-        The law.
+        The arm with its drives (DC drives need L > 0).
+    controller : DrivePID or CurrentComputedTorque
+        The law: PD/PID on each drive's input (any drives), or computed torque through current
+        commands (rigid DC drives).
     trajectory : Sinusoid, Quintic or None, optional
         The desired joint path (armdyn.trajectories); None holds the start.
     t_final, dt : float, optional
         The run's length and the sample period (s).
     q0, qd0 : array_like, optional
-        The start (default zeros); the currents start at zero.
+        The start (default zeros); the drives start at rest relative to the links (``initial_state``).
+    step : float or None, optional
+        The largest RK4 step (s); None (default) takes it from the drives' time constants.
 
     Returns
     -------
     armdyn.simulation.Result
-        Times, q, qd, qdd, the joint torques (K_M / r) i, q_d, and ``drives`` (a DriveRecord: the
-        state, the voltages applied and the currents).
+        Times, q, qd, qdd, the joint torques the drives deliver, q_d, and ``drives`` (a DriveRecord:
+        the full state, the inputs applied, the currents, spools and load pressures).
 
     Raises
     ------
     armdyn.ModelError
-        When a drive is not a rigid DC motor with inductance, the controller is not a VoltagePD,
-        the trajectory is not one the compiled loop runs, an argument is invalid, or M(q) becomes
-        singular or the state not finite during the run (the message says when).
+        When a DC drive has no inductance, the controller is neither law (or computed torque meets
+        a flexible or hydraulic drive), the trajectory is not one the compiled loop runs, an
+        argument is invalid, or M(q) becomes singular or the state not finite during the run (the
+        message says when).
     """
     from armdyn import trajectories
-    from armdyn.dynamics.drives import run_voltage_pd
+    from armdyn.dynamics import drives as packed
     from armdyn.simulation import Result, _seconds
 
     if not isinstance(arm, ActuatedArm):
         raise ModelError(f"arm must be an ActuatedArm (armdyn.actuators.with_actuators), got {type(arm).__name__}")
-    others = [d.name for d in arm.drives if not (isinstance(d, DCMotor) and not d.flexible)]
-    if others:
-        raise ModelError(
-            f"simulate with drives runs rigid DC motors; {others}{arm._where} are flexible or hydraulic: integrate "
-            "ActuatedArm.state_derivative (e.g. scipy.integrate.solve_ivp, method='Radau')"
-        )
     arm._check_full()
-    if not isinstance(controller, VoltagePD):
-        raise ModelError(f"controller must be an armdyn.actuators.VoltagePD, got {type(controller).__name__}")
-    t_final, dt = _seconds(t_final, dt)
     n = arm.n
+    if isinstance(controller, DrivePID):
+        law, gains, bandwidth = packed.DRIVE_PID, np.vstack([controller.gains(n), np.zeros(n)]), None
+    elif isinstance(controller, CurrentComputedTorque):
+        others = [d.name for d in arm.drives if not (isinstance(d, DCMotor) and not d.flexible)]
+        if others:
+            raise ModelError(f"computed torque through current commands needs rigid DC drives; {others}{arm._where} "
+                             "are flexible or hydraulic (use DrivePID)")  # fmt: skip
+        law, gains = packed.CURRENT_COMPUTED_TORQUE, controller.gains(arm)
+        bandwidth = gains[packed.BANDWIDTH]
+    else:
+        raise ModelError("controller must be an armdyn.actuators.DrivePID or CurrentComputedTorque, "
+                         f"got {type(controller).__name__}")  # fmt: skip
+    t_final, dt = _seconds(t_final, dt)
     spec = trajectories.packed(trajectory, n)
     if spec is None:
         raise ModelError("trajectory must be None, an armdyn.trajectories.Sinusoid or a Quintic")
@@ -1466,25 +1820,34 @@ def simulate(
     rates = np.zeros(n) if qd0 is None else inputs.state(qd0, n, "qd0", arm._where)
     if start.shape != (n,) or rates.shape != (n,):
         raise ModelError(f"q0 and qd0 must be one state of {n} values{arm._where}")
-    samples = round(t_final / dt) + 1
-    substeps = _rk4_substeps(arm, dt)
-    parameters = np.stack([arm._r, arm._K_M, arm._K_b, arm._R_a, arm._L, arm._u_max, arm._i_max])
-    x = np.concatenate([start, rates, np.zeros(n)])
-    times, states = np.empty(samples), np.empty((samples, 3 * n))
-    voltages, accelerations, references = np.empty((samples, n)), np.empty((samples, n)), np.empty((samples, n))
-    stopped = run_voltage_pd(arm._mechanical.packed, parameters, controller.gains(n), spec[0], spec[1], start, x,
-                             dt / substeps, substeps, 0, samples, times, states, voltages, accelerations,
-                             references)  # fmt: skip
+    longest = rk4_step(arm, start, bandwidth)
+    if step is not None:
+        longest = inputs.number(step, "step")
+        if not (0 < longest < math.inf):
+            raise ModelError(f"step must be a positive number of seconds, got {step}")
+    samples, substeps = round(t_final / dt) + 1, max(1, math.ceil(dt / longest - 1e-9))
+    x = arm.initial_state(start, rates)
+    y = np.concatenate([x, np.zeros(n)])
+    times, states = np.empty(samples), np.empty((samples, arm.n_states))
+    applied, torques = np.empty((samples, n)), np.empty((samples, n))
+    accelerations, references = np.empty((samples, n)), np.empty((samples, n))
+    stopped = packed.run_drives(arm._mechanical.packed, _drive_table(arm), gains, law, spec[0], spec[1], start, y,
+                                dt / substeps, substeps, times, states, applied, torques, accelerations,
+                                references)  # fmt: skip
     if stopped >= 0:
         raise ModelError(f"the run{arm._where} stopped at t = {stopped * dt:.6g} s: M(q) became singular or the state "
-                         "not finite (lower the gains, or check the drives' limits)")  # fmt: skip
-    q, qd, i = states[:, :n], states[:, n : 2 * n], states[:, 2 * n :]
-    applied = np.clip(voltages, -arm._u_max, arm._u_max)
+                         "not finite (lower the gains, give a smaller step=, or check the drives' limits)")  # fmt: skip
+    q, qd = states[:, :n], states[:, n : 2 * n]
     mechanical = arm._mechanical
-    info = {"method": "rk4 (compiled, with electrics)", "dt": dt, "substeps": substeps,
-            "controller": controller.describe(), "trajectory": trajectories.describe(trajectory)}  # fmt: skip
+    info = {"method": "rk4 (compiled, with the drives' dynamics)", "dt": dt, "substeps": substeps,
+            "step": dt / substeps, "controller": controller.describe(),
+            "trajectory": trajectories.describe(trajectory)}  # fmt: skip
     desired_path = references if trajectory is not None else None
-    result = Result(times, q, qd, accelerations, arm._K_M * i / arm._r, desired_path, arm.robot, info,
+    result = Result(times, q, qd, accelerations, torques, desired_path, arm.robot, info,
                     lambda: mechanical.kinetic_energy(q, qd) + mechanical.potential_energy(q))  # fmt: skip
-    result.drives = DriveRecord(arm.state_names, states, applied, i)
+    part = arm._slices
+    hydraulic = arm._hyd.size > 0
+    result.drives = DriveRecord(arm.state_names, states, applied, states[:, part["i"]],
+                                states[:, part["xv"]] if hydraulic else None,
+                                states[:, part["PL"]] if hydraulic else None)  # fmt: skip
     return result

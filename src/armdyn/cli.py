@@ -246,6 +246,22 @@ class _Console(Console):
 console = _Console(width=None if Console().is_terminal else 140)
 
 
+ACTUATORS_HELP = (
+    "Drive every joint through its actuator (Section 3.6): dc (DC motors with their electrics; the PUMA 560's "
+    "own motors with representative electrics), flexible (the same behind elastic shafts) or hydraulic (servo "
+    "valves with rotary motors or pistons); representative drives sized from the arm's gravity load."
+)
+
+DRIVE_GAINS = (
+    "with --actuators and --controller pid, the gains act on each drive's input: V per rad of the motor "
+    "(default kp 20, kv 0.5) or, hydraulic, valve A per rad or m of the joint (default kp 0.1, kv 0)"
+)
+SIMULATE_DRIVES_HELP = (
+    "--controller pid is independent joint PID on each drive's input (voltage or valve current); "
+    "computed-torque (dc) is computed torque turned into current commands through the motor model."
+)
+
+
 def _version(value: bool) -> None:
     if value:
         from armdyn import __version__
@@ -501,16 +517,21 @@ def show(
     output: str | None = typer.Option(
         None, "--output", "-o", help="Also write the tables to this file: .csv, .md or .txt (by its suffix)."
     ),
+    actuators: str | None = typer.Option(None, "--actuators", help=ACTUATORS_HELP),
 ) -> None:
-    """Print an arm's DH (or joint) table and its dynamics table, with units."""
+    """Print an arm's DH (or joint) table and its dynamics table, with units; with --actuators, its drives
+    (Section 3.6) with their time constants."""
     target = _table_file(output, "--output") if output else None
     arm = _arm(name, strict)
+    driven = _actuated(arm, name, actuators) if actuators is not None else None
     from rich.markup import escape
 
     gravity = f"gravity {_vector(arm.gravity)} m/s^2"
     described = f"{arm.name}: {arm.description}" if arm.description else arm.name
     console.print(f"[bold]{escape(described)}[/bold]  (n = {arm.n}, {gravity})", highlight=False)
     sheets = [_geometry_sheet(arm), _dynamics_sheet(arm)]
+    if driven is not None:
+        sheets += _drive_sheets(driven)
     for sheet in sheets:
         console.print(sheet.rich())
     if arm.configurations:
@@ -525,6 +546,59 @@ def show(
             sheets.append(_Sheet("Configurations", columns, rows))
         _write_sheets(target, sheets, [f"{described} (n = {arm.n}, {gravity})"])
         console.print(f"wrote {output}")
+
+
+def _actuated(arm: Robot, name: str, kind: str) -> object:
+    """The arm with drives of ``kind`` (armdyn.actuators.representative_drives; the built-in PUMA 560's motors)."""
+    from armdyn import actuators
+
+    kinds = ("dc", "flexible", "hydraulic")
+    if kind not in kinds:
+        _fail(f"--actuators must be one of {', '.join(kinds)}, got '{kind}'")
+    if kind == "dc" and name.lower() == "puma560":
+        return actuators.puma560()
+    return actuators.representative_drives(arm, kind)
+
+
+def _drive_sheets(driven: object) -> list[_Sheet]:
+    """The drives of an ActuatedArm as tables: DC motors with their electrical and mechanical time
+    constants, hydraulic drives with their pressure pole and oil-column frequency."""
+    from armdyn.actuators import DCMotor
+
+    q = np.asarray(driven.robot.configurations.get("qz", np.zeros(driven.n)), dtype=float)
+    inertia = np.diag(driven.mechanical_robot().inertia_matrix(q))
+    joints = driven.robot.joint_names
+    motors = [(j, d) for j, d in enumerate(driven.drives) if isinstance(d, DCMotor)]
+    valves = [(j, d) for j, d in enumerate(driven.drives) if not isinstance(d, DCMotor)]
+    flexible = any(d.flexible for _, d in motors)
+    sheets = []
+    if motors:
+        columns = ["joint", "drive", "r", "J_M kg m^2", "K_M N m/A", "K_b V s", "R_a ohm", "L mH", "v max V",
+                   "i max A", "L/R_a ms", "tau_m ms", *(["shaft K"] if flexible else [])]  # fmt: skip
+        rows = []
+        for j, d in motors:
+            seen = d.rotor_inertia + d.gear_ratio**2 * inertia[j]  # the motor's own plus the link at qz
+            mechanical = seen * d.resistance / (d.torque_constant * d.back_emf)
+            shaft = [_number(d.stiffness) if d.flexible else "rigid"] if flexible else []
+            rows.append([joints[j], d.name, _number(d.gear_ratio), _number(d.rotor_inertia), _number(d.torque_constant),
+                         _number(d.back_emf), _number(d.resistance), _number(1e3 * d.inductance),
+                         _number(d.voltage_limit), _number(d.current_limit),
+                         _number(1e3 * d.inductance / d.resistance), _number(1e3 * mechanical), *shaft])  # fmt: skip
+        title = "DC drives (tau_m = J R_a / (K_M K_b), J the rotor's and the link's inertia at qz)"
+        sheets.append(_Sheet(title, columns, rows))
+    if valves:
+        columns = ["joint", "drive", "A m^2 or D_m m^3", "K_q m^2/s", "K_c + C_tp m^3/(s Pa)", "V_t l", "P_s MPa",
+                   "tau_v ms", "i max mA", "oil column Hz"]  # fmt: skip
+        rows = []
+        for j, d in valves:
+            column = np.sqrt(d.area**2 / (d.capacitance * inertia[j])) / (2 * np.pi)
+            rows.append([joints[j], d.name, _number(d.area), _number(d.linearized_flow_gain),
+                         _number(d.total_coefficient), _number(1e3 * d.volume), _number(d.supply_pressure / 1e6),
+                         _number(1e3 * d.valve_time_constant), _number(1e3 * d.current_limit),
+                         _number(column)])  # fmt: skip
+        sheets.append(_Sheet("Hydraulic drives (Merritt 1967; the oil column with the link's inertia at qz)", columns,
+                             rows))  # fmt: skip
+    return sheets
 
 
 def _geometry_sheet(arm: Robot) -> _Sheet:
@@ -1065,9 +1139,15 @@ def _task_report(result: object) -> _Sheet:
 @app.command()
 def simulate(
     name: str = typer.Argument(..., help=ARM_HELP),
-    controller: str = typer.Option("computed-torque", help="computed-torque, pd-gravity, pid or none."),
-    kp: str = typer.Option("100", help=f"Proportional gain: {PER_JOINT} (400,400,400,50,50,50)."),
-    kv: str = typer.Option("20", help=f"Derivative gain: {PER_JOINT}."),
+    controller: str | None = typer.Option(
+        None,
+        help="computed-torque (the default), pd-gravity, pid or none; with --actuators pid (the default) or "
+        "computed-torque; with --task computed-torque or operational-space.",
+    ),
+    kp: str | None = typer.Option(
+        None, help=f"Proportional gain: {PER_JOINT} (400,400,400,50,50,50). Default 100; {DRIVE_GAINS}."
+    ),
+    kv: str | None = typer.Option(None, help=f"Derivative gain: {PER_JOINT}. Default 20; {DRIVE_GAINS}."),
     ki: str = typer.Option("0", help=f"Integral gain: {PER_JOINT}."),
     trajectory: str | None = typer.Option(
         None,
@@ -1093,11 +1173,15 @@ def simulate(
     plot: str | None = typer.Option(None, help="Write the figure to this PNG file."),
     csv: str | None = typer.Option(None, help="Write the samples to this CSV file."),
     output: str | None = typer.Option(None, "--output", "-o", help=SIMULATE_OUTPUT_HELP),
+    actuators: str | None = typer.Option(None, "--actuators", help=ACTUATORS_HELP + " " + SIMULATE_DRIVES_HELP),
 ) -> None:
     """Simulate an arm under control and report the tracking errors (with units); with --task, control
-    in task coordinates (Section 3.5) along a line or a circle of the tool."""
+    in task coordinates (Section 3.5) along a line or a circle of the tool; with --actuators, through its
+    drives' dynamics (Section 3.6)."""
     from armdyn.simulation import simulate as run
 
+    if controller is None:
+        controller = "pid" if actuators is not None else "computed-torque"
     plot_file = _output_file(plot, "--plot") if plot else None
     csv_file = _output_file(csv, "--csv") if csv else None
     folder = _output_folder(output, "--output") if output else None
@@ -1105,30 +1189,50 @@ def simulate(
     start = _joint_state(q0, "--q0", arm) if q0 is not None else None
     velocity = _joint_state(qd0, "--qd0", arm) if qd0 is not None else None
     tau_d = np.broadcast_to(_per_joint(disturbance, "--disturbance", arm.n), (arm.n,))
-    if task is not None:
+    driven = None
+    if actuators is not None:  # the arm through its drives' dynamics
+        options = (("--task", task is not None), ("--period", period != 0), ("--torque-limit", torque_limit != "inf"),
+                   ("--method", method != "rk4"), ("--disturbance", bool(np.any(tau_d))))  # fmt: skip
+        refused = [option for option, given in options if given]
+        if refused:
+            _fail(f"{', '.join(refused)} do not apply with --actuators (the drives' dynamics run by compiled RK4; "
+                  "their limits are the drives' voltage and current limits)")  # fmt: skip
+        driven = _actuated(arm, name, actuators)
+        law = _drive_controller(driven, actuators, controller, kp, kv, ki)
+        desired = _trajectory("sine" if trajectory is None else trajectory, arm, amplitude, frequency, start)
+        if start is None and desired is not None:
+            start = desired(0.0, arm.n)[0]
+    elif task is not None:
         if period != 0 or torque_limit != "inf":
             _fail("--period and --torque-limit apply to joint-space control, not to --task")
         start = start if start is not None else _default_start(arm)
         path = "line" if trajectory is None else trajectory
+        kp, kv = ("100" if kp is None else kp), ("20" if kv is None else kv)
         law = _task_controller(arm, task, controller, kp, kv, path, amplitude, frequency, start, move, turn)
         desired = None
     else:
-        gains = [_per_joint(value, option, arm.n) for value, option in ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))]
+        named = (("100" if kp is None else kp, "--kp"), ("20" if kv is None else kv, "--kv"), (ki, "--ki"))
+        gains = [_per_joint(value, option, arm.n) for value, option in named]
         law = _controller(controller, *gains, period, _per_joint(torque_limit, "--torque-limit", arm.n))
         desired = _trajectory("sine" if trajectory is None else trajectory, arm, amplitude, frequency, start)
     if start is None and desired is not None and controller == "none":
         start = desired(0.0, arm.n)[0]
-    progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
-    result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
-                 disturbance=None if not np.any(tau_d) else tau_d.copy(), progress=progress)  # fmt: skip
+    if driven is not None:
+        _activity.status(f"simulating {t_final:g} s of {arm.name} with its drives (compiled RK4)")
+        result = run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity)
+    else:
+        progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
+        result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
+                     disturbance=None if not np.any(tau_d) else tau_d.copy(), progress=progress)  # fmt: skip
     _check_finite(result)
     report = _report(result) if result.task is None else _task_report(result)
+    reports = [report] + ([_drive_report(result, driven)] if driven is not None else [])
     if folder is not None:
         folder.mkdir(exist_ok=True)
         stem = re.sub(r"[^\w-]+", "_", arm.name).strip("_") or "arm"
         (result.plot if result.task is None else result.plot_task)(folder / f"{stem}.png")
         result.to_csv(folder / f"{stem}.csv")
-        _write_sheets(folder / f"{stem}-report.md", [report])
+        _write_sheets(folder / f"{stem}-report.md", reports)
         console.print(f"wrote {folder / f'{stem}.png'}, {folder / f'{stem}.csv'} and {folder / f'{stem}-report.md'}")
     if plot_file is not None:
         (result.plot if result.task is None else result.plot_task)(plot_file)
@@ -1136,6 +1240,45 @@ def simulate(
     if csv_file is not None:
         result.to_csv(csv_file)
         console.print(f"wrote {csv}")
+
+
+def _drive_controller(driven: object, kind: str, controller: str, kp: str | None, kv: str | None, ki: str) -> object:
+    """The drive-level law of ``simulate --actuators``."""
+    from armdyn import actuators
+
+    n = driven.n
+    if controller == "pid":
+        defaults = ("0.1", "0") if kind == "hydraulic" else ("20", "0.5")
+        named = ((kp, defaults[0], "--kp"), (kv, defaults[1], "--kv"), (ki, "0", "--ki"))
+        gains = (_per_joint(default if value is None else value, option, n) for value, default, option in named)
+        return actuators.DrivePID(*gains)
+    if controller == "computed-torque":
+        if kind != "dc":
+            _fail(f"--controller computed-torque with --actuators runs through current commands: it needs dc drives, "
+                  f"not {kind} (use --controller pid)")  # fmt: skip
+        named = ((kp, "100", "--kp"), (kv, "20", "--kv"), (ki, "0", "--ki"))
+        gains = (_per_joint(default if value is None else value, option, n) for value, default, option in named)
+        return actuators.CurrentComputedTorque(*gains)
+    _fail(f"--controller with --actuators must be pid or computed-torque, got '{controller}'")
+
+
+def _drive_report(result: object, driven: object) -> _Sheet:
+    """Print what the drives did (peak input, current, load pressure) and return it as a sheet."""
+    record, joints = result.drives, driven.robot.joint_names
+    columns = ["joint", "drive", "max |input| (V or A)", "input limit", "max |i| (A)", "max |P_L| (MPa)"]
+    sheet = _Sheet(f"{driven.name}: drives ({result.info['substeps']} RK4 steps per sample)", columns, [])
+    names = record.names
+    for j, drive in enumerate(driven.drives):
+        current = f"i {joints[j]}" in names
+        pressure = f"PL {joints[j]}" in names
+        limit = getattr(drive, "voltage_limit", None) or getattr(drive, "current_limit", None)
+        sheet.rows.append([
+            joints[j], drive.name, f"{np.abs(record.v[:, j]).max():.4g}", _number(limit),
+            f"{np.abs(record.x[:, names.index(f'i {joints[j]}')]).max():.4g}" if current else "-",
+            f"{np.abs(record.x[:, names.index(f'PL {joints[j]}')]).max() / 1e6:.4g}" if pressure else "-",
+        ])  # fmt: skip
+    console.print(sheet.rich())
+    return sheet
 
 
 def _check_finite(result: object) -> None:
@@ -1173,10 +1316,14 @@ def _report(result: object) -> _Sheet:
 @app.command()
 def demo(
     output: str = typer.Option(
-        "out", "--output", "-o", help="Folder for demo.png and demo.csv (made if missing; its parent must exist)."
+        "out",
+        "--output",
+        "-o",
+        help="Folder for demo.png, demo.csv and demo-drives.png (made if missing; its parent must exist).",
     ),
 ) -> None:
-    """The chapter end to end on the RR arm of Example 3.2-2: closed form, properties, and Example 4.4-1."""
+    """The chapter end to end on the RR arm of Example 3.2-2: closed form, properties, Example 4.4-1, task
+    space (Section 3.5) and the arm through its DC motors (Section 3.6)."""
     from armdyn import control, trajectories
     from armdyn.properties import check as check_properties
     from armdyn.simulation import simulate as run
@@ -1211,6 +1358,41 @@ def demo(
     console.print(f"wrote {folder / 'demo.png'} and {folder / 'demo.csv'}")
     final = np.abs(result.error[-1])
     console.print(f"final tracking errors: e1 = {final[0]:.2e} rad, e2 = {final[1]:.2e} rad")
+    _demo_task_space(arm)
+    _demo_actuators(arm, desired, folder)
+
+
+def _demo_task_space(arm: Robot) -> None:
+    """The demo's Section 3.5: the tool's dynamics in Cartesian coordinates at one configuration."""
+    from armdyn import cartesian
+
+    console.rule("[bold]Section 3.5: the tool point's dynamics in Cartesian coordinates, at q = (0.3, 1.2) rad")
+    q, tool = np.array([0.3, 1.2]), cartesian.PlanarPosition()
+    for label, value, unit in (
+        ("Mbar = J^-T M J^-1", cartesian.task_inertia(arm, tool, q), "kg"),
+        ("Gbar = J^-T G", cartesian.task_gravity(arm, tool, q), "N"),
+    ):
+        console.print(f"{label} ({unit}):\n{np.array2string(np.asarray(value), precision=4)}", highlight=False)
+
+
+def _demo_actuators(arm: Robot, desired: object, folder: Path) -> None:
+    """The demo's Section 3.6: Example 3.6-1's poles and the arm driven through DC motors with their electrics."""
+    from armdyn import actuators
+    from armdyn.simulation import simulate as run
+
+    console.rule("[bold]Section 3.6: Example 3.6-1 and the arm through its DC motors' electrics")
+    _, denominator = actuators.example_3_6_1()
+    poles = ", ".join(f"{pole.real:.3f}" for pole in np.sort(np.roots(denominator)))
+    formula = "H(s) = k_m / ((L s + R)(J s + b_m) + k_m k_m')"
+    console.print(f"Example 3.6-1: {formula}, poles {poles} (the book: -2.3, -8.7)")
+    driven = actuators.representative_drives(arm, "dc")
+    _activity.status("simulating the arm through its motors (compiled RK4 with the electrics)")
+    result = run(driven, actuators.DrivePID(20.0, 0.5, 20.0), desired, t_final=5.0, dt=1e-3)
+    _report(result)
+    _drive_report(result, driven)
+    result.plot(folder / "demo-drives.png", title="The two-link arm through DC motors: independent joint PID on "
+                "the voltages, Example 4.4-1's path")  # fmt: skip
+    console.print(f"wrote {folder / 'demo-drives.png'}")
 
 
 def main() -> None:

@@ -33,22 +33,28 @@ def plot_result(result: object, path: str | Path | None = None, title: str | Non
     n = result.q.shape[1]
     kinds = result.arm.kinds
     position, force = units(kinds, "rad", "m"), units(kinds, "N m", "N")
-    rows = 3 if result.q_d is not None else 2
+    drives = _drive_panels(result)
+    rows = (3 if result.q_d is not None else 2) + len(drives)
     fig, axes = plt.subplots(rows, 1, figsize=(9, 2.5 * rows + 0.6), sharex=True, layout="constrained")
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     names = result.arm.joint_names
+    torque_axis = axes[rows - 1 - len(drives)]
     for i in range(n):
         colour = colours[i % len(colours)]
         axes[0].plot(result.t, result.q[:, i], color=colour)
         if result.q_d is not None:
             axes[0].plot(result.t, result.q_d[:, i], color=colour, linestyle="--", linewidth=1.0)
             axes[1].plot(result.t, result.error[:, i], color=colour)
-        axes[-1].plot(result.t, result.tau[:, i], color=colour)
+        torque_axis.plot(result.t, result.tau[:, i], color=colour)
     axes[0].set_ylabel(f"joint position ({position})")
     if result.q_d is not None:
         axes[1].set_ylabel(f"error q_d - q ({position})")
         axes[1].axhline(0.0, color="0.6", linewidth=0.8)
-    axes[-1].set_ylabel(f"torque ({force})")
+    torque_axis.set_ylabel(f"torque ({force})")
+    for axis, (label, joints, values) in zip(axes[rows - len(drives) :], drives, strict=True):
+        for column, joint in enumerate(joints):
+            axis.plot(result.t, values[:, column], color=colours[joint % len(colours)])
+        axis.set_ylabel(label)
     axes[-1].set_xlabel("time (s)")
     for axis in axes:
         axis.grid(True, alpha=0.3)
@@ -64,6 +70,27 @@ def plot_result(result: object, path: str | Path | None = None, title: str | Non
         fig.savefig(path, dpi=150)
         plt.close(fig)
     return fig
+
+
+def _drive_panels(result: object) -> list[tuple[str, list[int], object]]:
+    """The drives' extra plots of a run with its actuators: (label, joint of each column, values) for the
+    inputs, the armature currents and the load pressures."""
+    record = getattr(result, "drives", None)
+    if record is None:
+        return []
+    joints = result.arm.joint_names
+
+    def columns(prefix: str) -> list[int]:
+        return [joints.index(name[len(prefix) :]) for name in record.names if name.startswith(prefix)]
+
+    dc, hydraulic = columns("i "), columns("PL ")
+    unit = "V" if not hydraulic else "A" if not dc else "V; valves A"
+    panels = [(f"drive input ({unit})", list(range(len(joints))), record.v)]
+    if dc:
+        panels.append(("armature current (A)", dc, record.i))
+    if hydraulic:
+        panels.append(("load pressure (MPa)", hydraulic, record.pressure / 1e6))
+    return panels
 
 
 def _title(result: object) -> str:

@@ -110,7 +110,8 @@ class Result:
         return plot_task(self, path, title)
 
     def to_csv(self, path: str | Path) -> None:
-        """One row per time: t, q_i, qd_i, qdd_i, tau_i (and q_d_i, e_i with a trajectory), energy."""
+        """One row per time: t, q_i, qd_i, qdd_i, tau_i (and q_d_i, e_i with a trajectory), energy; with
+        drives also their inputs v_i and states (q_M, qd_M, i, x_v, P_L by name)."""
         n = self.q.shape[1]
         columns = {"t": self.t[:, None]}
         for name, values in (("q", self.q), ("qd", self.qd), ("qdd", self.qdd), ("tau", self.tau)):
@@ -123,6 +124,9 @@ class Result:
             task = {"y": self.task.y, "y_d": self.task.y_d, "task_e": self.task.error}
             header += [f"{name}{i + 1}" for name, values in task.items() for i in range(values.shape[1])]
             table = np.hstack([table, *task.values()])
+        if self.drives is not None:  # the drives' inputs, then their states by name (e.g. "i q1", "PL q2")
+            header += [f"v{i + 1}" for i in range(n)] + [name for name in self.drives.names[2 * n :]]
+            table = np.hstack([table, self.drives.v, self.drives.x[:, 2 * n :]])
         with open(path, "w", newline="", encoding="utf-8") as handle:
             writer = csv.writer(handle)
             writer.writerow(header)

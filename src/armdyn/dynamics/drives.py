@@ -1,10 +1,26 @@
-"""The arm driven by DC motors with their electrics, compiled (BOOK.md section 7): the state
-derivative of x = [q, qd, i] and a fixed-step RK4 run under independent-joint voltage PD control.
+"""The arm with its drives, compiled (BOOK.md section 7; Merritt 1967): the full model's state
+derivative and a fixed-step RK4 run under a drive-level control law.
 
-The arm's mechanics M qdd + Vm qd + F + G = tau carry the rotors and their friction (the Link
-motor convention, packed as usual); each drive adds tau_j = (K_Mj / r_j) i_j and its armature
-L_j di_j/dt + R_aj i_j + K_bj qd_j / r_j = v_j, with v clipped to the voltage limit and i held
-within the current limit (armdyn.actuators.ActuatedArm.state_derivative is the NumPy version).
+The state is x = [q, qd, q_M, qd_M, i, x_v, P_L] as ``armdyn.actuators.ActuatedArm`` orders it
+(``state_derivative`` there is the NumPy version of ``full_rates``). The arm's mechanics
+M qdd + Vm qd + F + G = tau carry the rigid drives' rotors and friction (the Link motor
+convention, packed as usual); the joint torque is (K_M / r) i for a rigid DC drive, the shaft
+torque K (r q_M - q) + B_s (r qd_M - qd) for a flexible one, and A P_L for a hydraulic one. The
+drives' own equations are the armature L di/dt + R_a i + K_b qd_M = v, the flexible rotor
+J_M qdd_M + B_M qd_M + F_M + r tau = K_M i, the valve tau_v dx_v/dt + x_v = K_v u, the load flow
+(linear or square-root orifice) and the continuity equation Q_L = A qd + C_tp P_L + C dP_L/dt.
+Inputs are clipped to their limits; currents and spools are held within theirs.
+
+Control laws (row ``LAW`` of the gains, evaluated at every RK4 stage):
+
+- ``DRIVE_PID``: independent joint control on each drive's input, on the drive's own coordinate:
+  the motor angle of a DC drive (q / r when rigid, q_M when flexible), the joint of a hydraulic
+  one: u = kp e + kv de/dt + ki z, dz/dt = e (the integral stops while the input is clipped in
+  the error's direction, so that it does not wind up);
+- ``CURRENT_COMPUTED_TORQUE``: computed torque tau_c = M(q) (qdd_d + kv de/dt + kp e + ki z) + N(q, qd)
+  on the joints, turned into current commands i_c = r tau_c / K_M (held within the current limit),
+  and the armature equation inverted for the voltage: v = R_a i + K_b qd_M + L w_c (i_c - i), so
+  that di/dt = w_c (i_c - i) until the voltage limit is reached (rigid DC drives).
 """
 
 from __future__ import annotations
@@ -14,109 +30,221 @@ from numba import njit
 
 from armdyn.dynamics.aba import aba_one
 from armdyn.dynamics.packed import N_JOINTS
+from armdyn.dynamics.rnea import inverse_dynamics_one
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.trajectories import desired
 
-RATIO, TORQUE_CONSTANT, BACK_EMF, RESISTANCE, INDUCTANCE, VOLTAGE_LIMIT, CURRENT_LIMIT = range(7)
-"""The rows of the drives' parameter array, (7, n)."""
+(KIND, RATIO, TORQUE_CONSTANT, BACK_EMF, RESISTANCE, INDUCTANCE, INPUT_LIMIT, CURRENT_LIMIT, ROTOR_INERTIA,
+ ROTOR_VISCOUS, COULOMB_POSITIVE, COULOMB_NEGATIVE, STIFFNESS, SHAFT_DAMPING, VALVE_TIME, VALVE_GAIN, FLOW_GAIN,
+ PRESSURE_COEFFICIENT, AREA, LEAKAGE, CAPACITANCE, SUPPLY, SQRT_ORIFICE, SQRT_GAIN, STROKE, ANGLE_AT, SPEED_AT,
+ CURRENT_AT, SPOOL_AT, PRESSURE_AT, ROWS) = range(31)  # fmt: skip
+"""The rows of the drives' parameter array, (ROWS, n); the *_AT rows hold each joint's index into x (-1: none)."""
+
+RIGID, FLEXIBLE, HYDRAULIC = 0, 1, 2
+"""The values of row KIND."""
+
+DRIVE_PID, CURRENT_COMPUTED_TORQUE = 0, 1
+"""The control laws."""
+
+KP, KV, KI, BANDWIDTH = range(4)
+"""The rows of the gains, (4, n)."""
 
 
-@njit(**NUMBA_OPTIONS)
-def dc_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, v: np.ndarray, out: np.ndarray) -> int:
-    """xdot of x = [q, qd, i] under the voltages v; the status of the forward dynamics (0, or M singular)."""
-    n = int(model[N_JOINTS])
-    tau = np.empty(n)
+@njit(inline="always", **NUMBA_OPTIONS)
+def _held(rate: float, value: float, limit: float) -> float:
+    """The rate of a state held within +-limit: zero where it would leave the range."""
+    return 0.0 if (value >= limit and rate > 0) or (value <= -limit and rate < 0) else rate
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def _clipped(value: float, limit: float) -> float:
+    return min(max(value, -limit), limit)
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def joint_torques(drives: np.ndarray, x: np.ndarray, tau: np.ndarray) -> None:
+    """tau_j = (K_M / r) i (rigid DC), K (r q_M - q) + B_s (r qd_M - qd) (flexible), A P_L (hydraulic)."""
+    n = tau.shape[0]
     for j in range(n):
-        tau[j] = drives[TORQUE_CONSTANT, j] * x[2 * n + j] / drives[RATIO, j]
+        kind = drives[KIND, j]
+        if kind == RIGID:
+            tau[j] = drives[TORQUE_CONSTANT, j] * x[int(drives[CURRENT_AT, j])] / drives[RATIO, j]
+        elif kind == FLEXIBLE:
+            r, angle, speed = drives[RATIO, j], x[int(drives[ANGLE_AT, j])], x[int(drives[SPEED_AT, j])]
+            tau[j] = drives[STIFFNESS, j] * (r * angle - x[j]) + drives[SHAFT_DAMPING, j] * (r * speed - x[n + j])
+        else:
+            tau[j] = drives[AREA, j] * x[int(drives[PRESSURE_AT, j])]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def _load_flow(drives: np.ndarray, j: int, spool: float, pressure: float) -> float:
+    """Q_L = K_q x_v - K_c P_L, or C_d w x_v sgn(drop) sqrt(|drop| / rho), drop = P_s - sgn(x_v) P_L
+    (Merritt 1967; the flow reverses where the load drives P_L past the supply)."""
+    if drives[SQRT_ORIFICE, j] != 0:
+        drop = drives[SUPPLY, j] - np.sign(spool) * pressure
+        return drives[SQRT_GAIN, j] * spool * np.sign(drop) * np.sqrt(abs(drop))
+    return drives[FLOW_GAIN, j] * spool - drives[PRESSURE_COEFFICIENT, j] * pressure
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarray, tau: np.ndarray,
+               out: np.ndarray) -> int:  # fmt: skip
+    """xdot of the full model under the inputs u (clipped here), the joint torques in ``tau``; returns
+    the status of the forward dynamics (0, or M singular)."""
+    n = int(model[N_JOINTS])
+    joint_torques(drives, x, tau)
     status = aba_one(model, x[:n], x[n : 2 * n], tau, out[n : 2 * n])
     for j in range(n):
         out[j] = x[n + j]
-        limit = drives[VOLTAGE_LIMIT, j]
-        voltage = min(max(v[j], -limit), limit)
-        current = x[2 * n + j]
-        rotor_speed = x[n + j] / drives[RATIO, j]
-        rate = (voltage - drives[RESISTANCE, j] * current - drives[BACK_EMF, j] * rotor_speed) / drives[INDUCTANCE, j]
-        held = drives[CURRENT_LIMIT, j]
-        out[2 * n + j] = 0.0 if (current >= held and rate > 0) or (current <= -held and rate < 0) else rate
+        kind, r = drives[KIND, j], drives[RATIO, j]
+        u_j = _clipped(u[j], drives[INPUT_LIMIT, j])
+        if kind == HYDRAULIC:
+            s, p = int(drives[SPOOL_AT, j]), int(drives[PRESSURE_AT, j])
+            spool_rate = (drives[VALVE_GAIN, j] * u_j - x[s]) / drives[VALVE_TIME, j]
+            out[s] = _held(spool_rate, x[s], drives[STROKE, j])
+            flow = _load_flow(drives, j, x[s], x[p])
+            out[p] = (flow - drives[AREA, j] * x[n + j] - drives[LEAKAGE, j] * x[p]) / drives[CAPACITANCE, j]
+            continue
+        c = int(drives[CURRENT_AT, j])
+        current = x[c]
+        rotor_speed = x[n + j] / r
+        if kind == FLEXIBLE:
+            a, w = int(drives[ANGLE_AT, j]), int(drives[SPEED_AT, j])
+            rotor_speed = x[w]
+            friction = drives[COULOMB_POSITIVE, j] if rotor_speed > 0 else 0.0
+            friction = drives[COULOMB_NEGATIVE, j] if rotor_speed < 0 else friction
+            out[a] = rotor_speed
+            out[w] = (drives[TORQUE_CONSTANT, j] * current - drives[ROTOR_VISCOUS, j] * rotor_speed - friction
+                      - r * tau[j]) / drives[ROTOR_INERTIA, j]  # fmt: skip
+        rate = (u_j - drives[RESISTANCE, j] * current - drives[BACK_EMF, j] * rotor_speed) / drives[INDUCTANCE, j]
+        out[c] = _held(rate, current, drives[CURRENT_LIMIT, j])
     return status
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def voltage_pd(gains: np.ndarray, ratios: np.ndarray, reference: np.ndarray, x: np.ndarray, v: np.ndarray) -> None:
-    """v = kp (q_Md - q_M) + kv (qd_Md - qd_M), q_M = q / r: independent joint control on each motor's
-    voltage, on the motor's own angle (BOOK.md section 7)."""
-    n = v.shape[0]
-    for j in range(n):
-        error = (reference[0, j] - x[j]) / ratios[j]
-        rate = (reference[1, j] - x[n + j]) / ratios[j]
-        v[j] = gains[0, j] * error + gains[1, j] * rate
+def _drive_coordinate(drives: np.ndarray, reference: np.ndarray, x: np.ndarray, j: int, n: int) -> tuple:
+    """(e, de/dt) of joint j's drive on its own coordinate: the motor angle of a DC drive (q / r, or
+    q_M when flexible), the joint of a hydraulic one."""
+    kind, r = drives[KIND, j], drives[RATIO, j]
+    if kind == HYDRAULIC:
+        return reference[0, j] - x[j], reference[1, j] - x[n + j]
+    if kind == FLEXIBLE:
+        return reference[0, j] / r - x[int(drives[ANGLE_AT, j])], reference[1, j] / r - x[int(drives[SPEED_AT, j])]
+    return (reference[0, j] - x[j]) / r, (reference[1, j] - x[n + j]) / r
 
 
 @njit(**NUMBA_OPTIONS)
-def run_voltage_pd(
+def current_computed_torque(
     model: np.ndarray,
     drives: np.ndarray,
     gains: np.ndarray,
+    reference: np.ndarray,
+    x: np.ndarray,
+    z: np.ndarray,
+    u: np.ndarray,
+    zdot: np.ndarray,
+    work: np.ndarray,
+) -> int:
+    """CURRENT_COMPUTED_TORQUE's voltages u and integrator rates; the status of the inverse dynamics.
+    ``work`` holds 2 n numbers."""
+    n = u.shape[0]
+    command, tau_c = work[:n], work[n:]
+    for j in range(n):
+        e, de = reference[0, j] - x[j], reference[1, j] - x[n + j]
+        command[j] = reference[2, j] + gains[KV, j] * de + gains[KP, j] * e + gains[KI, j] * z[j]
+        zdot[j] = e
+    status = inverse_dynamics_one(model, x[:n], x[n : 2 * n], command, tau_c)
+    for j in range(n):
+        r, c = drives[RATIO, j], int(drives[CURRENT_AT, j])
+        i_c = _clipped(r * tau_c[j] / drives[TORQUE_CONSTANT, j], drives[CURRENT_LIMIT, j])
+        u[j] = (drives[RESISTANCE, j] * x[c] + drives[BACK_EMF, j] * x[n + j] / r
+                + drives[INDUCTANCE, j] * gains[BANDWIDTH, j] * (i_c - x[c]))  # fmt: skip
+    return status
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def drive_inputs(model: np.ndarray, drives: np.ndarray, gains: np.ndarray, law: int, reference: np.ndarray,
+                 x: np.ndarray, z: np.ndarray, u: np.ndarray, zdot: np.ndarray, work: np.ndarray) -> int:  # fmt: skip
+    """The law's inputs u (before the limits) and the integrators' rates zdot; the status of the
+    inverse dynamics (computed torque), else 0."""
+    if law != DRIVE_PID:
+        return current_computed_torque(model, drives, gains, reference, x, z, u, zdot, work)
+    n = u.shape[0]
+    for j in range(n):
+        e, de = _drive_coordinate(drives, reference, x, j, n)
+        u[j] = gains[KP, j] * e + gains[KV, j] * de + gains[KI, j] * z[j]
+        wound = abs(u[j]) >= drives[INPUT_LIMIT, j] and u[j] * e > 0
+        zdot[j] = 0.0 if wound else e
+    return 0
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def closed_loop(model: np.ndarray, drives: np.ndarray, gains: np.ndarray, law: int, kind: int, params: np.ndarray,
+                q0: np.ndarray, t: float, y: np.ndarray, u: np.ndarray, tau: np.ndarray, reference: np.ndarray,
+                work: np.ndarray, out: np.ndarray, fresh: bool = True) -> int:  # fmt: skip
+    """d/dt of y = [x, z] (the full state and the integrators) at time t under the law; u and tau are
+    left as applied there. ``fresh`` False reuses ``reference`` (the same t as the last call)."""
+    size = y.shape[0] - u.shape[0]
+    if fresh:
+        desired(kind, params, t, q0, reference)
+    status = drive_inputs(model, drives, gains, law, reference, y[:size], y[size:], u, out[size:], work)
+    if status != 0:
+        return status
+    return full_rates(model, drives, y[:size], u, tau, out[:size])
+
+
+@njit(**NUMBA_OPTIONS)
+def run_drives(
+    model: np.ndarray,
+    drives: np.ndarray,
+    gains: np.ndarray,
+    law: int,
     kind: int,
     params: np.ndarray,
     q0: np.ndarray,
-    x: np.ndarray,
+    y: np.ndarray,
     h: float,
     substeps: int,
-    first: int,
-    last: int,
     times: np.ndarray,
     states: np.ndarray,
-    voltages: np.ndarray,
+    inputs: np.ndarray,
+    torques: np.ndarray,
     accelerations: np.ndarray,
     references: np.ndarray,
 ) -> int:
-    """RK4 from sample ``first`` to ``last`` (exclusive), ``substeps`` steps of h between samples, the
-    controller evaluated at every stage; records each sample. Returns -1, or the sample where M(q)
-    was singular or the state stopped being finite."""
-    n, size = int(model[N_JOINTS]), x.shape[0]
-    k1, k2, k3, k4, stage = np.empty(size), np.empty(size), np.empty(size), np.empty(size), np.empty(size)
-    v, reference = np.empty(n), np.empty((3, n))
-    for sample in range(first, last):
+    """RK4 on y = [x, z], ``substeps`` steps of h between samples; records each sample (the inputs
+    after their limits). Returns -1, or the sample where M(q) was singular or the state stopped
+    being finite. The four stages share one evaluation site, so the inlined model is compiled once."""
+    n, size, last = int(model[N_JOINTS]), y.shape[0], states.shape[0] - 1
+    rates, stage_y = np.empty((4, size)), np.empty(size)
+    u, tau, reference, work = np.empty(n), np.empty(n), np.empty((3, n)), np.empty(2 * n)
+    recorded = states.shape[1]
+    for sample in range(last + 1):
         t = sample * substeps * h
-        desired(kind, params, t, q0, reference)
-        voltage_pd(gains, drives[RATIO], reference, x, v)
-        times[sample] = t
-        states[sample] = x
-        voltages[sample] = v
-        references[sample] = reference[0]
-        if dc_rates(model, drives, x, v, k1) != 0:
-            return sample
-        accelerations[sample] = k1[n : 2 * n]
-        for j in range(size):
-            if not np.isfinite(x[j]):
-                return sample
-        if sample == states.shape[0] - 1:
-            break
         for step in range(substeps):
-            s = t + step * h
-            if step > 0:
-                desired(kind, params, s, q0, reference)
-                voltage_pd(gains, drives[RATIO], reference, x, v)
-                if dc_rates(model, drives, x, v, k1) != 0:
+            for stage in range(4):
+                c = 0.0 if stage == 0 else (0.5 if stage < 3 else 1.0)
+                if stage > 0:
+                    for j in range(size):
+                        stage_y[j] = y[j] + c * h * rates[stage - 1, j]
+                at = y if stage == 0 else stage_y
+                status = closed_loop(model, drives, gains, law, kind, params, q0, t + (step + c) * h, at, u, tau,
+                                     reference, work, rates[stage], stage != 2)  # fmt: skip
+                if status != 0:
                     return sample
+                if step == 0 and stage == 0:
+                    times[sample] = t
+                    states[sample] = y[:recorded]
+                    for j in range(n):
+                        inputs[sample, j] = _clipped(u[j], drives[INPUT_LIMIT, j])
+                    torques[sample] = tau
+                    accelerations[sample] = rates[0, n : 2 * n]
+                    references[sample] = reference[0]
+                    for j in range(size):
+                        if not np.isfinite(y[j]):
+                            return sample
+                    if sample == last:
+                        return -1
             for j in range(size):
-                stage[j] = x[j] + 0.5 * h * k1[j]
-            desired(kind, params, s + 0.5 * h, q0, reference)
-            voltage_pd(gains, drives[RATIO], reference, stage, v)
-            if dc_rates(model, drives, stage, v, k2) != 0:
-                return sample
-            for j in range(size):
-                stage[j] = x[j] + 0.5 * h * k2[j]
-            voltage_pd(gains, drives[RATIO], reference, stage, v)
-            if dc_rates(model, drives, stage, v, k3) != 0:
-                return sample
-            for j in range(size):
-                stage[j] = x[j] + h * k3[j]
-            desired(kind, params, s + h, q0, reference)
-            voltage_pd(gains, drives[RATIO], reference, stage, v)
-            if dc_rates(model, drives, stage, v, k4) != 0:
-                return sample
-            for j in range(size):
-                x[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+                y[j] += h / 6.0 * (rates[0, j] + 2.0 * rates[1, j] + 2.0 * rates[2, j] + rates[3, j])
     return -1
