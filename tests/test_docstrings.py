@@ -40,11 +40,14 @@ MODULES = (
     "armdyn.excitation",
     "armdyn.cartesian",
     "armdyn.actuators",
+    "armdyn.study",
 )
 # Entry points named one by one (their modules are not walked in full); all of them need Raises.
 ENTRY_POINTS = (
     "armdyn.load_urdf",
     "armdyn.simulation.simulate",
+    "armdyn.simulation.simulate_many",
+    "armdyn.simulation.plant_variants",
     "armdyn.properties.check",
     "armdyn.identify",
     "armdyn.symbolic.derive",

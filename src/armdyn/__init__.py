@@ -22,6 +22,7 @@ _LAZY_MODULES = (
     "control",
     "trajectories",
     "simulation",
+    "study",
     "plotting",
     "excitation",
 )
@@ -29,13 +30,14 @@ _LAZY_MODULES = (
 
 def __getattr__(name: str) -> object:
     """The heavier parts load on first use: armdyn.symbolic (SymPy), armdyn.properties (SciPy),
-    armdyn.actuators, armdyn.simulation and its companions; ``armdyn.simulate`` is armdyn.simulation.simulate."""
+    armdyn.actuators, armdyn.simulation and its companions; ``armdyn.simulate`` and ``armdyn.simulate_many``
+    are armdyn.simulation's."""
     import importlib
 
     if name in _LAZY_MODULES:
         return importlib.import_module(f"armdyn.{name}")
-    if name == "simulate":
-        return importlib.import_module("armdyn.simulation").simulate
+    if name in ("simulate", "simulate_many"):
+        return getattr(importlib.import_module("armdyn.simulation"), name)
     raise AttributeError(f"module 'armdyn' has no attribute '{name}'")
 
 

@@ -303,6 +303,8 @@ def _output_file(path: str, option: str) -> Path:
         _fail(f"{option} {path}: {folder} is not a folder")
     if target.is_dir():
         _fail(f"{option} {path} is a folder; give a file name")
+    if target.exists() and not target.is_file():
+        _fail(f"{option} {path} is not a regular file (a device or a pipe); give a file name")
     return target
 
 
@@ -1279,6 +1281,111 @@ def _drive_report(result: object, driven: object) -> _Sheet:
         ])  # fmt: skip
     console.print(sheet.rich())
     return sheet
+
+
+def _distribution(text: str | None, option: str, relative: bool = False) -> object:
+    """A study's distribution from the command line: "a:b" (uniform on [a, b]), "x%" (uniform on
+    [-x/100, x/100], a relative error), or one number (that constant; for a relative error +-x)."""
+    from armdyn.study import Uniform
+
+    if text is None:
+        return None
+    try:
+        if text.strip().endswith("%"):
+            half = float(text.strip()[:-1]) / 100
+            return Uniform(-half, half)
+        if ":" in text:
+            low, high = (catalog._value(part.strip(), option) for part in text.split(":", 1))
+            return Uniform(low, high)
+        value = catalog._value(text.strip(), option)
+    except ModelError as error:
+        _fail(f"{option} {text!r}: {error}")
+    except ValueError:
+        _fail(f"{option} {text!r}: give a:b (uniform), x% or a number")
+    return Uniform(-abs(value), abs(value)) if relative else Uniform(value, value)
+
+
+STUDY_SPEC_HELP = (
+    "The requirement each run must meet: clauses 'quantity < bound' joined by 'and'; quantities final_error, "
+    "max_error_after (max-error-after-1s sets the window), rms_error, max_tau (largest over joints, or one joint: "
+    "'max_error_after q2'), payload, mass_scale, friction_scale."
+)
+
+
+@app.command()
+def study(
+    name: str = typer.Argument(..., help=ARM_HELP),
+    runs: int = typer.Option(1000, "--runs", help="The number of runs."),
+    payload: str | None = typer.Option(None, "--payload", help="Payload at the tool (kg): a:b uniform, or one mass."),
+    mass_error: str | None = typer.Option(
+        None, "--mass-error", help="Each link's relative mass error: x% (uniform +-x %), a:b, or one number (+-)."
+    ),
+    friction_error: str | None = typer.Option(
+        None, "--friction-error", help="Each joint's relative friction error, as --mass-error."
+    ),
+    start_error: str | None = typer.Option(
+        None, "--start-error", help="Offset of each joint's start (rad or m): a:b, or one number (+-)."
+    ),
+    controller: str = typer.Option("computed-torque", help="computed-torque, pd-gravity or pid (on the nominal arm)."),
+    kp: str = typer.Option("100", help=f"Proportional gain: {PER_JOINT}."),
+    kv: str = typer.Option("20", help=f"Derivative gain: {PER_JOINT}."),
+    ki: str = typer.Option("0", help=f"Integral gain: {PER_JOINT}."),
+    trajectory: str = typer.Option("sine", help="sine (about the start), quintic (from it) or none (hold it)."),
+    amplitude: float = typer.Option(0.1, help="Trajectory amplitude (rad or m)."),
+    frequency: float = typer.Option(0.5, help="Trajectory frequency (Hz)."),
+    t_final: float = typer.Option(2.0, "--t-final", help="Each run's length (s)."),
+    dt: float = typer.Option(1e-3, help="RK4 step (s)."),
+    spec: str = typer.Option("max-error-after-1s<1e-3", "--spec", help=STUDY_SPEC_HELP),
+    confidence: float = typer.Option(0.95, help="Confidence of the interval."),
+    seed: int = typer.Option(0, help="The seed: the same seed gives the same runs wherever they run."),
+    block: int = typer.Option(1000, help="Runs per block (the unit of sampling, of work and of files)."),
+    scheduler: str = typer.Option("local", help="local (this process), local-cluster (Dask) or tcp://host:port."),
+    workers: int = typer.Option(2, help="Worker processes of --scheduler local-cluster."),
+    output: str | None = typer.Option(
+        None, "--out", "-o", help="A folder for the blocks (Parquet), made if missing: a rerun resumes there."
+    ),
+    plot: str | None = typer.Option(None, help="Write the figure (histograms of the spec's quantities) to this PNG."),
+    q0: str | None = typer.Option(None, "--q0", help=Q0_HELP),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+) -> None:
+    """A Monte Carlo study: the probability that the controlled arm meets a spec under uncertain payload,
+    masses, friction and start, with its Clopper-Pearson interval; locally or on a Dask cluster."""
+    from armdyn.study import Study, runs_needed
+
+    plot_file = _output_file(plot, "--plot") if plot else None
+    folder = _output_folder(output, "--out") if output else None
+    arm = _arm(name, strict)
+    start = _joint_state(q0, "--q0", arm) if q0 is not None else _default_start(arm)
+    gains = [_per_joint(value, option, arm.n) for value, option in ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))]
+    if controller not in ("computed-torque", "pd-gravity", "pid"):
+        _fail(f"--controller must be computed-torque, pd-gravity or pid, got '{controller}'")
+    law = _controller(controller, *gains, 0.0, np.inf)
+    desired = _trajectory(trajectory, arm, amplitude, frequency, start)
+    declared = Study(arm, law, desired, spec=spec, t_final=t_final, dt=dt, q0=start, block=block,
+                     payload=_distribution(payload, "--payload"),
+                     mass_error=_distribution(mass_error, "--mass-error", relative=True),
+                     friction_error=_distribution(friction_error, "--friction-error", relative=True),
+                     start_error=_distribution(start_error, "--start-error", relative=True))  # fmt: skip
+    if scheduler != "local":
+        _activity.status(f"starting the study on {scheduler}")
+    progress = _activity.bar(f"{runs} runs of {arm.name} ({scheduler})")
+    result = declared.run(runs, seed=seed, scheduler=None if scheduler == "local" else scheduler, out=folder,
+                          confidence=confidence, workers=workers, progress=progress)  # fmt: skip
+    _activity.stop()
+    if "dashboard" in result.info:
+        console.print(f"Dask dashboard: {result.info['dashboard']} ({result.info['workers']} workers)")
+    estimate = result.estimate
+    sheet = _Sheet(f"{arm.name}: {spec}", ["quantity", "value"], [
+        ["runs (finished)", f"{estimate.runs} ({int(result.table['finished'].sum())})"],
+        ["P(spec holds)", f"{estimate.probability:.4f}"],
+        [f"{estimate.confidence:.0%} interval (Clopper-Pearson)", f"[{estimate.low:.4f}, {estimate.high:.4f}]"],
+        [f"runs for +-0.01 at {estimate.confidence:.0%} (Hoeffding)", str(runs_needed(0.01, estimate.confidence))],
+        ["blocks computed / read from --out", f"{result.info['computed']} / {result.info['read']}"],
+    ])  # fmt: skip
+    console.print(sheet.rich(justify="left"))
+    if plot_file is not None:
+        result.plot(plot_file)
+        console.print(f"wrote {plot}")
 
 
 def _check_finite(result: object) -> None:

@@ -152,3 +152,87 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
         fig.savefig(path, dpi=150)
         plt.close(fig)
     return fig
+
+
+def plot_ensemble(ensemble: object, path: str | Path | None = None, quantity: str = "max_error_after") -> object:
+    """Many runs at once: the tracking error's envelope over time (median, 25-75 % and 5-95 % bands of
+    |q_d - q| per joint, when samples were kept) above histograms of one summary per joint."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from armdyn.simulation import SUMMARY_NAMES
+
+    arm, n = ensemble.arm, ensemble.arm.n
+    position = units(arm.kinds, "rad", "m")
+    envelope = bool(ensemble.samples)
+    fig = plt.figure(figsize=(9, 6.5 if envelope else 3.5), layout="constrained")
+    grid = fig.add_gridspec(2 if envelope else 1, n)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    if envelope:
+        top = fig.add_subplot(grid[0, :])
+        error = np.abs(ensemble.samples["q_d"] - ensemble.samples["q"])
+        for j in range(n):
+            colour = colours[j % len(colours)]
+            low, quarter, median, upper, high = np.percentile(error[:, :, j], [5, 25, 50, 75, 95], axis=0)
+            top.fill_between(ensemble.t, low, high, color=colour, alpha=0.15, linewidth=0)
+            top.fill_between(ensemble.t, quarter, upper, color=colour, alpha=0.3, linewidth=0)
+            top.plot(ensemble.t, median, color=colour, label=arm.joint_names[j])
+        top.set_yscale("log")
+        top.set_xlabel("time (s)")
+        top.set_ylabel(f"|q_d - q| ({position})")
+        top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+        top.grid(True, alpha=0.3)
+    values = ensemble.summaries[:, SUMMARY_NAMES.index(quantity)]
+    for j in range(n):
+        axis = fig.add_subplot(grid[-1, j])
+        axis.hist(np.abs(values[:, j]) if quantity != "final_q" else values[:, j], bins=30,
+                  color=colours[j % len(colours)])  # fmt: skip
+        axis.set_title(arm.joint_names[j], fontsize=8)
+        axis.tick_params(labelsize=7)
+        if j == 0:
+            axis.set_ylabel("runs")
+    fig.supxlabel(f"{quantity.replace('_', ' ')} ({position})", fontsize=9)
+    title = (f"{arm.name}: {ensemble.runs} runs, {ensemble.info['controller']}, error after "
+             f"{ensemble.info['after']:g} s")  # fmt: skip
+    fig.suptitle(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
+    if path is not None:
+        fig.savefig(path, dpi=150)
+        plt.close(fig)
+    return fig
+
+
+def plot_study(result: object, path: str | Path | None = None) -> object:
+    """A study's runs: a histogram per clause of its spec (the bound marked, runs that fail in a second
+    colour), titled with the estimate of P(spec holds) and its interval."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    clauses = result.spec.clauses
+    fig, axes = plt.subplots(1, len(clauses), figsize=(4.5 * len(clauses) + 1, 3.6), layout="constrained",
+                             squeeze=False)  # fmt: skip
+    holds = np.asarray(result.table["holds"], dtype=bool)
+    for axis, (column, op, bound) in zip(axes[0], clauses, strict=True):
+        values = np.asarray(result.table[column], dtype=float)
+        finite = np.isfinite(values)
+        bins = np.histogram_bin_edges(values[finite], bins=40) if finite.any() else 10
+        axis.hist([values[finite & holds], values[finite & ~holds]], bins=bins, stacked=True,
+                  color=["tab:green", "tab:red"], label=["spec holds", "spec fails"])  # fmt: skip
+        axis.axvline(bound, color="0.2", linestyle="--", linewidth=1.0, label=f"{op} {bound:g}")
+        unit = {"payload": "kg", "max_tau": "N m or N"}.get(column.split()[0], "rad or m")
+        unit = "" if column.split()[0] in ("mass_scale", "friction_scale") else f" ({unit})"
+        axis.set_xlabel(column.replace("_", " ") + unit)
+        axis.set_ylabel("runs")
+        axis.legend(fontsize=8, frameon=False)
+        axis.grid(True, alpha=0.3)
+    width = min(TITLE_WIDTH, int(12 * fig.get_figwidth()))
+    fig.suptitle(textwrap.fill(f"{result.spec.text}: {result.estimate}", width), fontsize=10)
+    if path is not None:
+        fig.savefig(path, dpi=150)
+        plt.close(fig)
+    return fig

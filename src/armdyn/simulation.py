@@ -27,14 +27,28 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from armdyn import control, inputs, memory, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
-from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, PIVOT_FLOOR, STRIDE, workspace_size
+from armdyn.dynamics.packed import (
+    COULOMB_NEG,
+    COULOMB_POS,
+    FIRST_MOMENT,
+    HEADER,
+    INERTIA,
+    LINK_POSITION,
+    LINK_ROTATION,
+    MASS,
+    PIVOT_FLOOR,
+    STRIDE,
+    TOOL_LINK,
+    VISCOUS,
+    workspace_size,
+)
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ModelError
 from armdyn.inputs import LARGEST_STATE
@@ -915,3 +929,570 @@ def continuous_rate(
         rate[n + i] = qdd[i]
         rate[2 * n + i] = goal[0, i] - q[i]
     return singular
+
+
+# ----- many runs at once ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Plants:
+    """Variants of one arm, packed for the compiled loop: one model row per variant (``plant_variants``).
+
+    Attributes
+    ----------
+    arm : Robot
+        The nominal arm they vary.
+    packed : numpy.ndarray
+        (V, L): each variant's packed model, its Coulomb friction taken out.
+    coulomb : numpy.ndarray
+        (V, n, 2): each variant's Coulomb friction (Tc+, Tc-) at the joints.
+    """
+
+    arm: Robot
+    packed: np.ndarray
+    coulomb: np.ndarray
+
+    def __len__(self) -> int:
+        return self.packed.shape[0]
+
+
+def _per_variant(value: object, name: str, count: int, tail: tuple[int, ...]) -> np.ndarray:
+    """``value`` as (count, *tail): one value for every variant or one per variant."""
+    array = inputs.numbers(value, name)
+    try:
+        return np.broadcast_to(array if array.ndim > len(tail) else array[None], (count, *tail)).astype(float)
+    except ValueError:
+        raise ModelError(f"{name} must have the shape {tail or '()'} or ({count}, {', '.join(map(str, tail))}), "
+                         f"got {array.shape}") from None  # fmt: skip
+
+
+def plant_variants(
+    arm: Robot,
+    count: int,
+    payload_mass: object = 0.0,
+    payload_com: object = (0.0, 0.0, 0.0),
+    payload_inertia: object = (0.0, 0.0, 0.0),
+    mass_scale: object = 1.0,
+    friction_scale: object = 1.0,
+) -> Plants:
+    """``count`` variants of the arm, each with its own payload, link masses and friction, packed at once.
+
+    Each argument is one value for every variant or one per variant. The mass properties enter the
+    packed model linearly (mass, first moment m c, inertia about the body origin), so a variant is
+    the nominal row with its links scaled and the payload added by the parallel-axis theorem, in
+    one array operation: no Robot is built per variant. Variant k equals
+    ``arm.with_payload(...)`` with the links' masses, first moments and inertias times
+    ``mass_scale[k]`` and the viscous and Coulomb friction times ``friction_scale[k]``.
+
+    Parameters
+    ----------
+    arm : Robot
+        The nominal arm, numeric.
+    count : int
+        The number of variants, >= 1.
+    payload_mass : float or array_like, optional
+        kg, >= 0: (count,) or one value.
+    payload_com : array_like, optional
+        The payload's centre of mass in the tool link's frame, m: (3,) or (count, 3).
+    payload_inertia : array_like, optional
+        Its principal moments about its centre of mass in the tool link's axes, kg m^2:
+        (3,) or (count, 3), each >= 0 and obeying the triangle inequality.
+    mass_scale : float or array_like, optional
+        Factors > 0 on the links' mass properties: one, (n,) per joint, (count, 1) per variant, or
+        (count, n).
+    friction_scale : float or array_like, optional
+        Factors >= 0 on the joints' viscous and Coulomb friction, shaped as ``mass_scale``.
+
+    Returns
+    -------
+    Plants
+        The packed variants.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the arm is symbolic, count is not a positive integer, or a value has the wrong
+        shape or breaks its rule (negative mass, a scale <= 0, moments breaking the triangle
+        inequality).
+    """
+    if not isinstance(arm, Robot):
+        raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+    count = inputs.integer(count, "count", 1)
+    n = arm.n
+    mass = _per_variant(payload_mass, "payload_mass", count, ())
+    com = _per_variant(payload_com, "payload_com", count, (3,))
+    moments = _per_variant(payload_inertia, "payload_inertia", count, (3,))
+    scale = _per_variant(mass_scale, "mass_scale", count, (n,))
+    friction = _per_variant(friction_scale, "friction_scale", count, (n,))
+    if np.any(mass < 0) or np.any(moments < 0):
+        raise ModelError("payload_mass and payload_inertia must be >= 0")
+    ordered = np.sort(moments, axis=1)
+    if np.any(ordered[:, 0] + ordered[:, 1] < ordered[:, 2] * (1 - 1e-12)):
+        raise ModelError("payload_inertia's moments must obey the triangle inequality (I_a + I_b >= I_c)")
+    if np.any(scale <= 0) or np.any(friction < 0):
+        raise ModelError("mass_scale must be > 0 and friction_scale >= 0 (per variant and joint)")
+    packed, coulomb = vary_packed(nominal(arm), mass, com, moments, scale, friction)
+    return Plants(arm, packed, coulomb)
+
+
+@dataclass(frozen=True)
+class Nominal:
+    """What varying an arm needs of it, as arrays only (what a study sends to its workers).
+
+    Attributes
+    ----------
+    packed : numpy.ndarray
+        (L,): the packed model, its Coulomb friction taken out.
+    coulomb : numpy.ndarray
+        (n, 2): Coulomb friction at the joints.
+    tool : int
+        The tool link's index.
+    rotation, offset : numpy.ndarray
+        The tool link's frame in its body frame: (3, 3) and (3,).
+    """
+
+    packed: np.ndarray
+    coulomb: np.ndarray
+    tool: int
+    rotation: np.ndarray
+    offset: np.ndarray
+
+
+def nominal(arm: Robot) -> Nominal:
+    """The arrays of ``arm`` that ``vary_packed`` and a study's workers use (no Robot object).
+
+    Parameters
+    ----------
+    arm : Robot
+        A numeric arm.
+
+    Returns
+    -------
+    Nominal
+        Its packed model and tool frame.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the arm is symbolic.
+    """
+    base, coulomb = _plant_buffers([arm])
+    tool = int(arm.packed[TOOL_LINK])
+    start = HEADER + STRIDE * tool
+    rotation = arm.packed[start + LINK_ROTATION : start + LINK_ROTATION + 9].reshape(3, 3).copy()
+    offset = arm.packed[start + LINK_POSITION : start + LINK_POSITION + 3].copy()
+    return Nominal(base[0], coulomb[0], tool, rotation, offset)
+
+
+def vary_packed(
+    arm: Nominal, mass: np.ndarray, com: np.ndarray, moments: np.ndarray, scale: np.ndarray, friction: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(packed (V, L), Coulomb (V, n, 2)) of V variants: links' mass properties times ``scale`` (V, n),
+    friction times ``friction`` (V, n), the payload (mass (V,), centre (V, 3) and principal moments
+    (V, 3) in the tool link's frame) added by the parallel-axis theorem. The arguments are checked
+    by ``plant_variants``."""
+    count, n = scale.shape
+    packed = np.repeat(arm.packed[None], count, axis=0)
+    for j in range(n):
+        start = HEADER + STRIDE * j
+        packed[:, start + MASS : start + INERTIA + 6] *= scale[:, j, None]
+        packed[:, start + VISCOUS] *= friction[:, j]
+    start = HEADER + STRIDE * arm.tool
+    centre = com @ arm.rotation.T + arm.offset  # the payload's centre in the body frame
+    inertia = np.einsum("ij,kj,jl->kil", arm.rotation, moments, arm.rotation.T)  # R diag(I) R^T per variant
+    inertia += mass[:, None, None] * (np.sum(centre**2, axis=1)[:, None, None] * np.eye(3)
+                                      - centre[:, :, None] * centre[:, None, :])  # fmt: skip
+    packed[:, start + MASS] += mass
+    packed[:, start + FIRST_MOMENT : start + FIRST_MOMENT + 3] += mass[:, None] * centre
+    upper = inertia[:, [0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]]  # Ixx Ixy Ixz Iyy Iyz Izz
+    packed[:, start + INERTIA : start + INERTIA + 6] += upper
+    return packed, arm.coulomb[None] * friction[:, :, None]
+
+
+SUMMARY_NAMES = ("final_error", "max_error_after", "rms_error", "max_tau", "final_q")
+"""The per-run, per-joint summaries simulate_many keeps (rows of its summary array)."""
+FINAL_ERROR, MAX_ERROR_AFTER, RMS_ERROR, MAX_TAU, FINAL_Q = range(5)
+
+
+@njit(**NUMBA_OPTIONS)
+def _auto_smoothing(plant: np.ndarray, coulomb: np.ndarray, q: np.ndarray, qd: np.ndarray, dt: float) -> np.ndarray:
+    """simulate's coulomb_smoothing="auto" (see _smoothing) for one packed plant at its start."""
+    n = q.shape[0]
+    M, N = np.empty((n, n)), np.empty(n)
+    mass_matrix_and_bias(plant, np.empty(workspace_size(n)), q, qd, M, N)
+    eps = np.empty(n)
+    for i in range(n):
+        largest = max(abs(coulomb[i, 0]), abs(coulomb[i, 1]))
+        eps[i] = max(1e-3, largest * dt / M[i, i] if M[i, i] > 0 else 0.0)
+    return eps
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
+def run_many(
+    plants: tuple, models: tuple, control: tuple, path: tuple, starts: tuple, timing: tuple, outputs: tuple
+) -> None:
+    """Runs r = 0..N-1 of run_rk4 in parallel (prange over runs), each in chunks of rows.
+
+    plants = (packed (P, L), Coulomb (P, n, 2), plant of each run (N,), disturbance (N, n)); each run's
+    Coulomb smoothing is simulate's "auto" on its own plant and start (_auto_smoothing).
+    models = (packed (Q, L), Coulomb (Q, n, 2), model of each run (N,), shares plant (N,)).
+    control = (kind, gains (N, 4, n), hold). path = (kind, params (N, 4, n)). starts = (q0 (N, n),
+    qd0 (N, n)). timing = (dt, rows, chunk, keep every, first row of the summaries' "after").
+    outputs = (summaries (N, 5, n), outcome (N, 3), kept q, qd, tau, q_d (N, K, n)): each run writes
+    only its own rows, so the result does not depend on the thread count.
+    """
+    plant_rows, plant_coulombs, plant_of, disturbances = plants
+    model_rows, model_coulombs, model_of, shares = models
+    kind, gains, hold = control
+    path_kind, params = path
+    q0s, qd0s = starts
+    dt, rows, chunk, every, after = timing
+    summaries, outcomes, kept_q, kept_qd, kept_tau, kept_qd_d = outputs
+    n = q0s.shape[1]
+    for r in prange(q0s.shape[0]):
+        p, m = plant_of[r], model_of[r]
+        eps = _auto_smoothing(plant_rows[p], plant_coulombs[p], q0s[r], qd0s[r], dt)
+        plant = (plant_rows[p : p + 1], plant_coulombs[p : p + 1], np.empty(0), disturbances[r], eps)
+        law = (kind, model_rows[m], model_coulombs[m], gains[r], hold, shares[r])
+        state = (np.concatenate((q0s[r], qd0s[r])), np.zeros(n), np.zeros(n), outcomes[r])
+        record = (np.empty(chunk), np.empty((chunk, n)), np.empty((chunk, n)), np.empty((chunk, n)),
+                  np.empty((chunk, n)), np.empty((chunk, n)))  # fmt: skip
+        summary = summaries[r]
+        summary[:, :] = 0.0
+        for first in range(0, rows, chunk):
+            count = min(chunk, rows - first)
+            run_rk4(plant, law, (path_kind, params[r], q0s[r]), (first * dt, dt, 0, count), state, record)
+            done = count if outcomes[r, 0] < 0 else int(outcomes[r, 0])
+            for k in range(done):
+                row = first + k
+                for i in range(n):
+                    error = record[5][k, i] - record[1][k, i]
+                    summary[RMS_ERROR, i] += error * error
+                    summary[MAX_TAU, i] = max(summary[MAX_TAU, i], abs(record[4][k, i]))
+                    if row >= after:
+                        summary[MAX_ERROR_AFTER, i] = max(summary[MAX_ERROR_AFTER, i], abs(error))
+                    summary[FINAL_ERROR, i] = error
+                    summary[FINAL_Q, i] = record[1][k, i]
+                if every > 0 and row % every == 0:
+                    slot = row // every
+                    kept_q[r, slot], kept_qd[r, slot] = record[1][k], record[2][k]
+                    kept_tau[r, slot], kept_qd_d[r, slot] = record[4][k], record[5][k]
+            if outcomes[r, 0] >= 0:
+                outcomes[r, 0] += first
+                break
+        for i in range(n):
+            summary[RMS_ERROR, i] = math.sqrt(summary[RMS_ERROR, i] / rows)
+
+
+@dataclass
+class Ensemble:
+    """What ``simulate_many`` kept of N runs: per-run summaries, and samples when asked.
+
+    Attributes
+    ----------
+    arm : Robot
+        The nominal arm.
+    t : numpy.ndarray
+        The times of the kept samples, (K,) (empty with keep="summary").
+    summaries : numpy.ndarray
+        (N, 5, n): per run and joint the final error, the largest |error| from ``after`` on, the
+        RMS error, the largest |tau| and the final q (rows named by SUMMARY_NAMES).
+    outcome : numpy.ndarray
+        (N, 3) integers: (-1, 0, -1) for a run that finished, else (row it stopped at, 1 singular
+        M or 2 diverged, joint).
+    samples : dict
+        "q", "qd", "tau", "q_d": (N, K, n) each, when kept.
+    info : dict
+        dt, t_final, after, the controller and the trajectory.
+    """
+
+    arm: Robot
+    t: np.ndarray
+    summaries: np.ndarray
+    outcome: np.ndarray
+    samples: dict
+    info: dict
+
+    @property
+    def runs(self) -> int:
+        """N, the number of runs."""
+        return self.summaries.shape[0]
+
+    @property
+    def finished(self) -> np.ndarray:
+        """(N,) bool: the runs that reached t_final."""
+        return self.outcome[:, 0] < 0
+
+    def summary(self) -> object:
+        """The summaries as a pandas DataFrame: one row per run, a column per quantity and joint
+        ("max_error_after q1", ...), the largest over joints ("max_error_after"), and "finished".
+
+        Returns
+        -------
+        pandas.DataFrame
+            N rows.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When pandas is not installed.
+        """
+        pandas = _optional("pandas")
+        columns = {}
+        for k, name in enumerate(SUMMARY_NAMES):
+            values = self.summaries[:, k]
+            for j, joint in enumerate(self.arm.joint_names):
+                columns[f"{name} {joint}"] = values[:, j]
+            if name != "final_q":
+                columns[name] = np.abs(values).max(axis=1)
+        columns["finished"] = self.finished
+        return pandas.DataFrame(columns, index=pandas.RangeIndex(self.runs, name="run"))
+
+    def to_xarray(self) -> object:
+        """An xarray Dataset with dimensions run, joint and (when samples were kept) time.
+
+        Returns
+        -------
+        xarray.Dataset
+            The summaries as variables (run, joint), the samples as (run, time, joint), the
+            outcome as (run,) variables; ``.to_dataframe()`` gives pandas.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When xarray is not installed.
+        """
+        xarray = _optional("xarray")
+        variables = {name: (("run", "joint"), self.summaries[:, k]) for k, name in enumerate(SUMMARY_NAMES)}
+        variables |= {name: (("run", "time", "joint"), values) for name, values in self.samples.items()}
+        variables |= {"stopped_at": (("run",), self.outcome[:, 0]), "reason": (("run",), self.outcome[:, 1])}
+        coordinates = {"run": np.arange(self.runs), "joint": self.arm.joint_names}
+        if self.samples:
+            coordinates["time"] = self.t
+        return xarray.Dataset(variables, coords=coordinates, attrs={k: str(v) for k, v in self.info.items()})
+
+    def plot(self, path: str | Path | None = None, quantity: str = "max_error_after") -> object:
+        """The error envelope over time (median and 5-95 % and 25-75 % bands of |q_d - q| per joint,
+        when samples were kept) and histograms of a summary quantity per joint.
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            Write the figure there (PNG); default: return it only.
+        quantity : str, optional
+            The summary for the histograms (one of SUMMARY_NAMES), default "max_error_after".
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``quantity`` is not a summary's name.
+        """
+        from armdyn.plotting import plot_ensemble
+
+        if quantity not in SUMMARY_NAMES:
+            raise ModelError(f"quantity must be one of {', '.join(SUMMARY_NAMES)}, got {quantity!r}")
+        return plot_ensemble(self, path, quantity)
+
+
+def _optional(module: str) -> object:
+    """An optional dependency, or a ModelError saying how to install it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise ModelError(f"this needs {module}: pip install 'armdyn[study]'") from None
+
+
+def launch_many(
+    plants: tuple, models: tuple, law: tuple, path: tuple, starts: tuple, timing: tuple, threads: int | None = None
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """run_many on arrays only (its tuples; timing = (dt, rows, keep every, first row of "after")), on
+    ``threads`` Numba threads: (summaries (N, 5, n), outcome (N, 3), kept q, qd, tau, q_d)."""
+    import numba
+
+    dt, rows, every, after = timing
+    runs, n = starts[0].shape
+    kept = 0 if every == 0 else (rows - 1) // every + 1
+    summaries, outcome = np.empty((runs, 5, n)), np.tile(np.array([-1, 0, -1]), (runs, 1))
+    samples = [np.zeros((runs, kept, n)) for _ in range(4)]
+    chunk = law[2] * max(1, 256 // law[2])  # whole sample periods of a Digital law
+    previous = numba.get_num_threads()
+    if threads is not None:
+        numba.set_num_threads(inputs.integer(threads, "threads", 1, numba.config.NUMBA_NUM_THREADS))
+    try:
+        run_many(plants, models, law, path, starts, (dt, rows, chunk, every, after), (summaries, outcome, *samples))
+    finally:
+        numba.set_num_threads(previous)
+    return summaries, outcome, samples
+
+
+def _runs_of(value: object, name: str, runs: int, n: int, default: float = 0.0) -> np.ndarray:
+    """A per-run (runs, n) array from None (``default``), one state (n,) or (runs, n)."""
+    if value is None:
+        return np.full((runs, n), default)
+    array = inputs.numbers(value, name)
+    if array.shape in ((n,), ()) or array.shape == (runs, n):
+        return np.ascontiguousarray(np.broadcast_to(array, (runs, n)), dtype=float)
+    raise ModelError(f"{name} must be one value, {n} values or ({runs}, {n}) (one row per run), got {array.shape}")
+
+
+def _variants(value: object, arm: Robot, runs: int, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(packed (V, L), Coulomb (V, n, 2), variant of each run) from None (the arm), a Robot or Plants."""
+    if value is None:
+        value = arm
+    if isinstance(value, Robot):
+        if value.n != arm.n or value.is_symbolic:
+            raise ModelError(f"{name} must be a numeric arm with the plant's {arm.n} joints")
+        packed, coulomb = _plant_buffers([value])
+        return packed, coulomb, np.zeros(runs, dtype=np.int64)
+    if isinstance(value, Plants):
+        if value.arm.n != arm.n or value.packed.shape[1] != arm.packed.shape[0]:
+            raise ModelError(f"{name} must vary an arm with the plant's {arm.n} joints")
+        if len(value) not in (1, runs):
+            raise ModelError(f"{name} holds {len(value)} variants: give 1 or one per run ({runs})")
+        return value.packed, value.coulomb, np.arange(runs, dtype=np.int64) % len(value)
+    raise ModelError(f"{name} must be None, a Robot or armdyn.simulation.Plants (plant_variants), got "
+                     f"{type(value).__name__}")  # fmt: skip
+
+
+def _paths(trajectory: object, runs: int, n: int) -> tuple[int, np.ndarray]:
+    """The compiled kind and (runs, 4, n) parameters of one trajectory or one per run (of one kind)."""
+    many = isinstance(trajectory, (list, tuple))
+    if many and len(trajectory) != runs:
+        raise ModelError(f"give one trajectory or one per run ({runs}), got {len(trajectory)}")
+    specs = [trajectories.packed(path, n) for path in (trajectory if many else [trajectory])]
+    if any(spec is None for spec in specs):
+        raise ModelError("simulate_many runs None, armdyn.trajectories.Sinusoid or Quintic trajectories")
+    if len({spec[0] for spec in specs}) != 1:
+        raise ModelError("the runs' trajectories must be of one kind (all Sinusoid, or all Quintic)")
+    params = np.stack([spec[1] for spec in specs])
+    return specs[0][0], np.ascontiguousarray(np.broadcast_to(params, (runs, *params.shape[1:])))
+
+
+def simulate_many(
+    arm: Robot,
+    controller: object,
+    trajectory: object = None,
+    t_final: float = 2.0,
+    dt: float = 1e-3,
+    runs: int | None = None,
+    q0: object = None,
+    qd0: object = None,
+    plants: Plants | Robot | None = None,
+    models: Plants | Robot | None = None,
+    gains: object = None,
+    disturbance: object = None,
+    keep: str | int = "summary",
+    after: float = 1.0,
+    threads: int | None = None,
+) -> Ensemble:
+    """N closed-loop runs in one compiled call, parallel over runs (Chapter 4's TRESP, as ``simulate``).
+
+    Each run integrates the robot equation under the controller by the same fixed-step RK4 as
+    ``simulate(..., method="rk4")`` (run k equals that single run to rounding), with its own start,
+    plant, controller model, gains, trajectory and constant disturbance. Plant and model variants
+    are packed arrays (``plant_variants``), never Robot objects per run. What is kept is chosen:
+    ``keep="summary"`` keeps per run and joint only the final error, the largest |error| from
+    ``after`` seconds on, the RMS error, the largest |tau| and the final q (40 n bytes a run: a
+    million runs of a six-joint arm in 240 MB); an integer k also keeps q, qd, tau and q_d every
+    k-th step; ``"full"`` every step.
+
+    Parameters
+    ----------
+    arm : Robot
+        The nominal arm: the plant of every run unless ``plants`` varies it.
+    controller : ComputedTorque, PDGravity, PID, one of them inside Digital or Saturated, or None
+        One of armdyn.control's laws (its ``model`` is the belief of every run unless ``models``);
+        None applies no torque.
+    trajectory : Sinusoid or Quintic or None, or a sequence of them (one per run, of one kind)
+        The desired path; None holds the start.
+    t_final, dt : float, optional
+        The runs' length and the RK4 step (s).
+    runs : int, optional
+        N; by default the longest per-run argument's length.
+    q0, qd0 : array_like, optional
+        The start: (n,) for every run or (N, n).
+    plants, models : Plants or Robot or None, optional
+        The plants, and the controller's models (its belief), one variant per run or one for all.
+    gains : array_like, optional
+        (N, 3, n) or (3, n): kp, kv, ki per run, replacing the controller's.
+    disturbance : array_like, optional
+        A constant tau_d: (n,) or (N, n).
+    keep : "summary", "full" or int, optional
+        What is kept per run (see above).
+    after : float, optional
+        The start of the "max error after" window (s), default 1.
+    threads : int, optional
+        Numba's thread count for this call (default: as set; all cores).
+
+    Returns
+    -------
+    Ensemble
+        The summaries (and samples kept), with their outcome per run.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When an argument has the wrong shape or kind, the controller is not a compiled law, the
+        runs' number is unclear or the kept samples would exceed the memory available.
+    """
+    if not isinstance(arm, Robot) or arm.is_symbolic:
+        raise ModelError(f"arm must be a numeric armdyn Robot, got {type(arm).__name__}")
+    n = arm.n
+    t_final, dt = _seconds(t_final, dt)
+    spec, period, law = _unwrap(controller, n)
+    if spec is None:
+        raise ModelError("simulate_many runs armdyn.control's laws (ComputedTorque, PDGravity, PID, in Digital or "
+                         f"Saturated) or None (no torque), got {type(controller).__name__}")  # fmt: skip
+    lengths = {len(v) for v in (plants, models) if isinstance(v, Plants)}
+    lengths |= {np.shape(v)[0] for v in (q0, qd0, disturbance) if np.ndim(v) == 2}
+    lengths |= {len(trajectory)} if isinstance(trajectory, (list, tuple)) else set()
+    lengths |= {np.shape(gains)[0]} if np.ndim(gains) == 3 else set()
+    lengths.discard(1)
+    if runs is None:
+        if len(lengths) > 1:
+            raise ModelError(f"the per-run arguments disagree on the number of runs: {sorted(lengths)}")
+        runs = lengths.pop() if lengths else 1
+    runs = inputs.integer(runs, "runs", 1)
+    if lengths - {runs}:
+        raise ModelError(f"runs = {runs}, but per-run arguments have {sorted(lengths - {runs})} rows")
+    plant_rows, plant_coulombs, plant_of = _variants(plants, arm, runs, "plants")
+    shares = np.full(runs, spec.model is None and models is None)
+    model_rows, model_coulombs, model_of = _variants(models if models is not None else spec.model, arm, runs,
+                                                     "models")  # fmt: skip
+    if spec.model is None and models is None:
+        model_rows, model_coulombs, model_of = plant_rows, plant_coulombs, plant_of
+    table = np.stack([*(inputs.gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki"))),
+                      np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,))])  # fmt: skip
+    table = np.ascontiguousarray(np.broadcast_to(table, (runs, 4, n)))
+    if gains is not None:
+        given = inputs.numbers(gains, "gains")
+        if given.shape not in ((3, n), (runs, 3, n)) or np.any(given < 0):
+            raise ModelError(f"gains must be (3, {n}) or ({runs}, 3, {n}) values >= 0 (kp, kv, ki), got {given.shape}")
+        table[:, :3] = given
+    path_kind, params = _paths(trajectory, runs, n)
+    starts = (_runs_of(q0, "q0", runs, n), _runs_of(qd0, "qd0", runs, n))
+    tau_d = _runs_of(disturbance, "disturbance", runs, n)
+    steps = _steps(t_final, dt, n, False)
+    hold = max(1, round(period / dt)) if period else 1
+    if period and abs(hold * dt - period) > 1e-9 * period:
+        raise ModelError(f"the sample period {period} must be a whole number of steps dt = {dt}")
+    rows = steps + 1
+    every = 0 if keep == "summary" else 1 if keep == "full" else keep
+    if isinstance(every, str) or not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 0:
+        raise ModelError(f"keep must be 'summary', 'full' or a whole number of steps >= 1, got {keep!r}")
+    kept = 0 if every == 0 else (rows - 1) // every + 1
+    memory.affordable(runs * kept * n * 4 * 8 + runs * n * 5 * 8, f"the samples kept of {runs} runs")
+    summaries, outcome, samples = launch_many(
+        (plant_rows, plant_coulombs, plant_of, tau_d), (model_rows, model_coulombs, model_of, shares),
+        (spec.kind, table, hold), (path_kind, params), starts, (dt, rows, every, math.ceil(after / dt - 1e-9)),
+        threads)  # fmt: skip
+    times = np.arange(kept) * every * dt
+    return Ensemble(arm, times, summaries, outcome, dict(zip(("q", "qd", "tau", "q_d"), samples, strict=True)) if kept
+                    else {}, {"dt": dt, "t_final": t_final, "after": after, "controller": control.describe(law),
+                             "trajectory": trajectories.describe(trajectory if not isinstance(trajectory, (list, tuple))
+                                                                 else trajectory[0])})  # fmt: skip

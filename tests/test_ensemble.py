@@ -1,0 +1,131 @@
+"""simulate_many: N closed-loop runs in one compiled call, each equal to its single run."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armdyn as ad
+from armdyn import control
+from armdyn import trajectories as tr
+from armdyn.errors import ModelError
+from armdyn.simulation import SUMMARY_NAMES, plant_variants, simulate_many
+
+
+@pytest.fixture(scope="module")
+def puma() -> ad.Robot:
+    return ad.models.puma560()
+
+
+def test_one_run_equals_simulate(puma: ad.Robot) -> None:
+    """Same RK4, same law: the run kept in full equals ad.simulate to rounding (here exactly)."""
+    q0 = puma.configuration("qn")
+    law, path = control.ComputedTorque(100.0, 20.0, 5.0), tr.Sinusoid(0.1, 0.5, 0.0, q0)
+    many = simulate_many(puma, law, path, t_final=1.0, q0=q0, keep="full")
+    single = ad.simulate(puma, law, path, t_final=1.0, q0=q0)
+    for name, values in (("q", single.q), ("qd", single.qd), ("tau", single.tau), ("q_d", single.q_d)):
+        assert np.abs(many.samples[name][0] - values).max() <= 1e-12 * max(1.0, np.abs(values).max()), name
+    assert np.allclose(many.t, single.t) and many.finished.all()
+    error = single.q_d - single.q
+    late = single.t >= 1.0 - 1e-12
+    assert np.allclose(many.summaries[0, 0], error[-1])
+    assert np.allclose(many.summaries[0, 1], np.abs(error[late]).max(0))
+    assert np.allclose(many.summaries[0, 2], np.sqrt(np.mean(error**2, axis=0)))
+    assert np.allclose(many.summaries[0, 3], np.abs(single.tau).max(0))
+
+
+def test_runs_with_different_plants_models_gains_and_starts_equal_their_single_runs(puma: ad.Robot) -> None:
+    """Each run its own payload (plant), controller belief (model), gains, start, trajectory and disturbance:
+    run k equals ad.simulate on arm.with_payload(...) with the same inputs, whatever the thread count."""
+    rng = np.random.default_rng(3)
+    runs = 5
+    masses, centres = rng.uniform(0, 2, runs), rng.uniform(-0.05, 0.05, (runs, 3))
+    plants = plant_variants(puma, runs, payload_mass=masses, payload_com=centres)
+    models = plant_variants(puma, runs, payload_mass=0.5 * masses)
+    q0 = puma.configuration("qn") + rng.uniform(-0.05, 0.05, (runs, 6))
+    paths = [tr.Sinusoid(0.1, 0.5 + 0.1 * k, 0.0, q0[k]) for k in range(runs)]
+    gains = np.stack([np.stack([np.full(6, 100.0 + 10 * k), np.full(6, 20.0), np.zeros(6)]) for k in range(runs)])
+    tau_d = rng.uniform(-1, 1, (runs, 6))
+    law = control.ComputedTorque(1.0, 1.0)
+    one = simulate_many(puma, law, paths, t_final=0.5, q0=q0, plants=plants, models=models, gains=gains,
+                        disturbance=tau_d, keep=1, threads=1)  # fmt: skip
+    two = simulate_many(puma, law, paths, t_final=0.5, q0=q0, plants=plants, models=models, gains=gains,
+                        disturbance=tau_d, keep=1, threads=2)  # fmt: skip
+    assert np.array_equal(one.summaries, two.summaries) and np.array_equal(one.samples["q"], two.samples["q"])
+    for k in range(runs):
+        belief = puma.with_payload(0.5 * masses[k])
+        single = ad.simulate(puma.with_payload(masses[k], centres[k]),
+                             control.ComputedTorque(gains[k, 0], gains[k, 1], model=belief), paths[k], t_final=0.5,
+                             q0=q0[k], disturbance=tau_d[k])  # fmt: skip
+        assert np.abs(one.samples["q"][k] - single.q).max() < 1e-12, k
+
+
+def test_decimated_samples_and_summaries_only(puma: ad.Robot) -> None:
+    q0 = puma.configuration("qn")
+    law, path = control.PDGravity(200.0, 30.0), tr.Sinusoid(0.05, 1.0, 0.0, q0)
+    full = simulate_many(puma, law, path, t_final=0.3, q0=q0, keep="full")
+    every = simulate_many(puma, law, path, t_final=0.3, q0=q0, keep=10)
+    summary = simulate_many(puma, law, path, t_final=0.3, q0=q0)
+    assert every.samples["q"].shape == (1, 31, 6) and np.array_equal(every.samples["q"][0], full.samples["q"][0, ::10])
+    assert summary.samples == {} and summary.t.size == 0 and np.array_equal(summary.summaries, full.summaries)
+    frame = summary.summary()
+    assert list(frame.index) == [0] and "max_error_after q2" in frame and bool(frame["finished"][0])
+    dataset = every.to_xarray()
+    assert dict(dataset.sizes) == {"run": 1, "time": 31, "joint": 6}
+    assert set(SUMMARY_NAMES) <= set(dataset.data_vars)
+
+
+def test_a_run_that_diverges_is_marked_and_the_others_finish() -> None:
+    arm = ad.models.two_link_planar()
+    law = control.PDGravity(1e9, 0.0)  # far beyond RK4's stability at 10 ms
+    gains = [[[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]], [[1e9, 1e9], [0.0, 0.0], [0.0, 0.0]]]
+    path = tr.Sinusoid(0.5, 1.0)
+    result = simulate_many(arm, law, path, t_final=1.0, dt=1e-2, q0=[[0.0, 0.0], [0.5, 0.5]], gains=gains)
+    assert result.finished.tolist() == [True, False] and result.outcome[1, 1] == 2
+
+
+def test_plant_variants_equal_robots_built_one_by_one(puma: ad.Robot) -> None:
+    """The packed variants equal with_payload's arms (mass properties by the parallel-axis theorem) and scaled links."""
+    from armdyn.simulation import _plant_buffers
+
+    masses, centres, moments = [0.0, 1.5], [[0, 0, 0], [0.01, 0.02, 0.1]], [[0, 0, 0], [0.01, 0.012, 0.015]]
+    variants = plant_variants(puma, 2, payload_mass=masses, payload_com=centres, payload_inertia=moments)
+    for k in range(2):
+        packed, _ = _plant_buffers([puma.with_payload(masses[k], centres[k], moments[k])])
+        body = np.arange(packed.shape[1]) >= 20  # the header's pivot floor scales with the arm's inertia
+        assert np.abs(variants.packed[k, body] - packed[0, body]).max() < 1e-12
+    scaled = plant_variants(puma, 1, mass_scale=2.0, friction_scale=0.0)
+    q = puma.configuration("qn")
+    heavy = simulate_many(puma, None, None, t_final=0.01, q0=q, plants=scaled, keep="full")
+    light = simulate_many(puma.without_friction(), None, None, t_final=0.01, q0=q, keep="full")
+    assert heavy.samples["q"].shape == light.samples["q"].shape
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        ({"q0": np.zeros((3, 6)), "qd0": np.zeros((4, 6))}, "disagree on the number of runs"),
+        ({"runs": 2, "q0": np.zeros((3, 6))}, "runs = 2"),
+        ({"keep": "everything"}, "keep must be"),
+        ({"keep": -1}, "keep must be"),
+        ({"gains": np.ones((2, 6))}, "gains must be"),
+        ({"plants": "heavy"}, "plants must be None"),
+        ({"trajectory": [tr.Sinusoid(0.1, 1.0), tr.Quintic(0.0, 1.0, 0.0, 1.0)]}, "one kind"),
+        ({"controller": lambda t, q, qd, q_d, qd_d, qdd_d, e: q}, "runs armdyn.control's laws"),
+    ],
+)
+def test_bad_inputs_are_model_errors(puma: ad.Robot, arguments: dict, message: str) -> None:
+    options = {"controller": control.PDGravity(10.0, 1.0), "t_final": 0.01} | arguments
+    with pytest.raises(ModelError, match=message):
+        simulate_many(puma, **options)
+
+
+def test_bad_variants_are_model_errors(puma: ad.Robot) -> None:
+    for arguments, message in (
+        ({"payload_mass": -1.0}, ">= 0"),
+        ({"payload_inertia": [1.0, 0.1, 0.1]}, "triangle"),
+        ({"mass_scale": 0.0}, "mass_scale must be > 0"),
+        ({"payload_com": [0.0, 0.0]}, "payload_com must have the shape"),
+    ):
+        with pytest.raises(ModelError, match=message):
+            plant_variants(puma, 2, **arguments)
