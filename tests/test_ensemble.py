@@ -129,3 +129,15 @@ def test_bad_variants_are_model_errors(puma: ad.Robot) -> None:
     ):
         with pytest.raises(ModelError, match=message):
             plant_variants(puma, 2, **arguments)
+
+
+def test_the_envelope_figure(puma: ad.Robot, tmp_path) -> None:
+    q0 = puma.configuration("qn")
+    payloads = np.linspace(0.0, 2.0, 12)
+    runs = simulate_many(puma, control.ComputedTorque(100.0, 20.0), tr.Sinusoid(0.1, 0.5, 0.0, q0), t_final=0.2,
+                         q0=q0, keep=5, plants=plant_variants(puma, 12, payload_mass=payloads))  # fmt: skip
+    runs.plot(tmp_path / "envelope.png")
+    simulate_many(puma, None, None, t_final=0.01, q0=q0).plot(tmp_path / "histograms.png", quantity="max_tau")
+    assert (tmp_path / "envelope.png").stat().st_size > 20_000 and (tmp_path / "histograms.png").exists()
+    with pytest.raises(ModelError, match="quantity must be one of"):
+        runs.plot(quantity="speed")

@@ -162,6 +162,7 @@ def plot_ensemble(ensemble: object, path: str | Path | None = None, quantity: st
     if path is not None:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     from armdyn.simulation import SUMMARY_NAMES
 
@@ -191,7 +192,10 @@ def plot_ensemble(ensemble: object, path: str | Path | None = None, quantity: st
         axis.hist(np.abs(values[:, j]) if quantity != "final_q" else values[:, j], bins=30,
                   color=colours[j % len(colours)])  # fmt: skip
         axis.set_title(arm.joint_names[j], fontsize=8)
+        axis.xaxis.set_major_locator(MaxNLocator(3))
+        axis.ticklabel_format(axis="x", style="sci", scilimits=(-2, 3), useOffset=False)
         axis.tick_params(labelsize=7)
+        axis.tick_params(axis="x", labelrotation=30)
         if j == 0:
             axis.set_ylabel("runs")
     fig.supxlabel(f"{quantity.replace('_', ' ')} ({position})", fontsize=9)
