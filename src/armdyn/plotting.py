@@ -154,17 +154,16 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
     return fig
 
 
-def plot_ensemble(ensemble: object, path: str | Path | None = None, quantity: str = "max_error_after") -> object:
+def plot_ensemble(ensemble: object, path: str | Path | None, quantity: str, row: int) -> object:
     """Many runs at once: the tracking error's envelope over time (median, 25-75 % and 5-95 % bands of
-    |q_d - q| per joint, when samples were kept) above histograms of one summary per joint."""
+    |q_d - q| per joint, when samples were kept) above histograms of one summary (``quantity``, row
+    ``row`` of the summaries) per joint."""
     import matplotlib
 
     if path is not None:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
-
-    from armdyn.simulation import SUMMARY_NAMES
 
     arm, n = ensemble.arm, ensemble.arm.n
     position = units(arm.kinds, "rad", "m")
@@ -186,7 +185,7 @@ def plot_ensemble(ensemble: object, path: str | Path | None = None, quantity: st
         top.set_ylabel(f"|q_d - q| ({position})")
         top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
         top.grid(True, alpha=0.3)
-    values = ensemble.summaries[:, SUMMARY_NAMES.index(quantity)]
+    values = ensemble.summaries[:, row]
     for j in range(n):
         axis = fig.add_subplot(grid[-1, j])
         axis.hist(np.abs(values[:, j]) if quantity != "final_q" else values[:, j], bins=30,

@@ -38,6 +38,8 @@ class Robot(ArmModel):
     # dynamics (armdyn.dynamics.api)
     inverse_dynamics = api.inverse_dynamics
     forward_dynamics = api.forward_dynamics
+    inverse_dynamics_derivatives = api.inverse_dynamics_derivatives
+    forward_dynamics_derivatives = api.forward_dynamics_derivatives
     inertia_matrix = api.inertia_matrix
     inertia_matrix_dot = api.inertia_matrix_dot
     coriolis_matrix = api.coriolis_matrix

@@ -1294,7 +1294,7 @@ class Ensemble:
 
         if quantity not in SUMMARY_NAMES:
             raise ModelError(f"quantity must be one of {', '.join(SUMMARY_NAMES)}, got {quantity!r}")
-        return plot_ensemble(self, path, quantity)
+        return plot_ensemble(self, path, quantity, SUMMARY_NAMES.index(quantity))
 
 
 def _optional(module: str) -> object:

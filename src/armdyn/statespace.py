@@ -9,9 +9,8 @@
 - Hamiltonian form in (q, p), p = M qd: H = 1/2 p^T M^-1 p + P(q), qdot = M^-1 p,
   pdot = Vm^T qd - G - F + tau;
 - linearization about (q0, qd0, tau0): A = [[0, I], [-M^-1 dID/dq, -M^-1 dID/dqd]],
-  B = [0; M^-1], with dID/dq by complex-step differentiation of the Lagrange-Euler
-  reference (exact to rounding, no step-size error) and dID/dqd = 2 Vm + Fv exactly
-  (Vm is the Christoffel form, so d(Vm qd)/dqd = 2 Vm).
+  B = [0; M^-1], with the analytic derivatives of the recursive Newton-Euler algorithm
+  (Robot.forward_dynamics_derivatives; Carpentier and Mansard 2018), compiled.
 
 Every function but ``linearize`` takes one state or a batch (leading axes (...)) and returns
 the matching shape. Arguments are checked first (armdyn.inputs): a wrong type or shape is a
@@ -26,7 +25,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from armdyn import inputs
-from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -366,8 +364,8 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
     """A, B of the position/velocity form about (q0, qd0, tau0) (see the module docstring).
 
     A = [[0, I], [-M^-1 dID/dq, -M^-1 dID/dqd]], B = [0; M^-1] (BOOK.md section 5), with
-    dID/dq by complex-step differentiation of the Lagrange-Euler reference and
-    dID/dqd = 2 Vm + Fv.
+    the analytic derivatives of the recursive Newton-Euler algorithm
+    (``Robot.forward_dynamics_derivatives``).
 
     Parameters
     ----------
@@ -397,20 +395,10 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
             raise ModelError(f"{name} must be one state of {n} values{_where(arm)}, got shape {value.shape}")
     if np.any(qd0 == 0) and np.any(arm.coulomb_friction[qd0 == 0] != 0):
         raise ModelError("Coulomb friction is not differentiable at zero velocity; linearize elsewhere")
-    qdd0 = arm.forward_dynamics(q0, qd0, tau0)
-    M = arm.inertia_matrix(q0)
-    bare = arm.without_friction()
-    step = 1e-30
-    d_tau_dq = np.empty((n, n))
-    for j in range(n):
-        q = q0.astype(complex)
-        q[j] += 1j * step
-        d_tau_dq[:, j] = lagrange.inverse_dynamics(bare, q, qd0.astype(complex), qdd0.astype(complex)).imag / step
-    d_tau_dqd = 2 * arm.coriolis_matrix(q0, qd0) + np.diag(arm.viscous_friction)
-    Minv = np.linalg.inv(M)
+    d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q0, qd0, tau0)
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
-    A[n:, :n] = -Minv @ d_tau_dq
-    A[n:, n:] = -Minv @ d_tau_dqd
-    B = np.vstack([np.zeros((n, n)), Minv])
+    A[n:, :n] = d_q
+    A[n:, n:] = d_qd
+    B = np.vstack([np.zeros((n, n)), d_tau])
     return Linearization(A, B, q0, qd0, tau0)

@@ -27,6 +27,7 @@ from armdyn.dynamics.aba import aba_one
 from armdyn.dynamics.aba_blocks import aba_blocks
 from armdyn.dynamics.coriolis import coriolis_batch, coriolis_one
 from armdyn.dynamics.crba import crba_batch, crba_one
+from armdyn.dynamics.derivatives import rnea_derivatives_batch, rnea_derivatives_one
 from armdyn.dynamics.energy import energy_batch, energy_one
 from armdyn.dynamics.frames import TOOL, jacobian_dot_one, jacobian_one, pose_one, transforms_one
 from armdyn.dynamics.friction import friction_batch, friction_one
@@ -706,3 +707,105 @@ def _with_target(kernel: Callable, *options: int) -> Callable:
         kernel(model, *arrays[:-1], *options, arrays[-1])
 
     return call
+
+
+def _plain(x: object, n: int) -> bool:
+    """One state as the compiled kernels take it: a C-contiguous float64 array of n values."""
+    return isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64 and x.flags.c_contiguous
+
+
+def _pair(out: object, shape: tuple[int, ...], count: int) -> list[np.ndarray]:
+    """``out`` as ``count`` result arrays of ``shape`` (None: new ones)."""
+    if out is None:
+        return [inputs.result(None, shape) for _ in range(count)]
+    if not isinstance(out, (tuple, list)) or len(out) != count:
+        raise ModelError(f"out must be None or a tuple of {count} arrays of shape {shape}")
+    return [inputs.result(part, shape) for part in out]
+
+
+def inverse_dynamics_derivatives(
+    arm: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, out: tuple | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """d tau/dq and d tau/dqd of tau = M qdd + Vm qd + F + G, analytic (BOOK.md section 5).
+
+    The recursive Newton-Euler algorithm differentiated along with itself (Carpentier and
+    Mansard, RSS 2018; armdyn.dynamics.derivatives), compiled, one state or a batch in one
+    parallel call. The reflected motor inertia and the viscous friction are included; Coulomb
+    friction is constant away from zero velocity and adds nothing (it has no derivative at zero).
+    d tau/dqdd is M (``inertia_matrix``).
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd, qdd : array_like
+        Joint positions, velocities and accelerations, (n,) or a batch (..., n).
+    out : tuple of two numpy.ndarray, optional
+        Where to write d tau/dq and d tau/dqd, each C-contiguous float64 (..., n, n).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (d tau/dq, d tau/dqd), each (..., n, n), row i the derivatives of tau_i.
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid (see inverse_dynamics), or the arm is symbolic.
+    """
+    model = _model(arm)
+    n = arm.n
+    if out is None and all(_plain(x, n) for x in (q, qd, qdd)):  # one state: straight to the kernel
+        d_q, d_qd = np.empty((n, n)), np.empty((n, n))
+        if rnea_derivatives_one(model, q, qd, qdd, d_q, d_qd) == 0:
+            return d_q, d_qd
+    batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), arm.n, _where(arm))
+    results = _pair(out, (*batch, n, n), 2)
+    status = np.zeros(flat[0].shape[0], dtype=np.int64)
+    if status.size:
+        views = [r.reshape(-1, n, n) for r in results]
+        _launch(rnea_derivatives_batch, results[0].size, model, *flat, *views, status)
+    return results[0], results[1]
+
+
+def forward_dynamics_derivatives(
+    arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: tuple | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """d qdd/dq, d qdd/dqd and d qdd/dtau of qdd = M^-1 (tau - N), analytic (BOOK.md section 5).
+
+    From the inverse dynamics' derivatives at qdd = FD(q, qd, tau): d qdd/dq = -M^-1 d tau/dq,
+    d qdd/dqd = -M^-1 d tau/dqd, d qdd/dtau = M^-1 (Carpentier and Mansard 2018), with M^-1 from
+    one Cholesky factorization per state.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd, tau : array_like
+        Joint positions, velocities and torques, (n,) or a batch (..., n).
+    out : tuple of three numpy.ndarray, optional
+        Where to write the three results, each (..., n, n).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (d qdd/dq, d qdd/dqd, d qdd/dtau), each (..., n, n).
+
+    Raises
+    ------
+    ModelError
+        When a state or ``out`` is invalid, or M(q) is singular at a state.
+    """
+    qdd = forward_dynamics(arm, q, qd, tau)
+    batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), arm.n, _where(arm))
+    n = arm.n
+    results = _pair(out, (*batch, n, n), 3)
+    d_q, d_qd = inverse_dynamics_derivatives(arm, flat[0], flat[1], qdd.reshape(-1, n))
+    M = inertia_matrix(arm, flat[0])
+    factor = np.linalg.cholesky(M)
+    identity = np.broadcast_to(np.eye(n), M.shape)
+    inverse = np.linalg.solve(np.swapaxes(factor, -1, -2), np.linalg.solve(factor, identity))
+    results[2][...] = inverse.reshape(results[2].shape)
+    results[0][...] = -(inverse @ d_q).reshape(results[0].shape)
+    results[1][...] = -(inverse @ d_qd).reshape(results[1].shape)
+    return results[0], results[1], results[2]
