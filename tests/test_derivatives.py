@@ -128,3 +128,32 @@ def test_linearize_equals_the_complex_step_route(name: str) -> None:
     n = arm.n
     for got, expected in ((new.A[n:, :n], -inverse @ d_q), (new.A[n:, n:], -inverse @ d_qd), (new.B[n:], inverse)):
         assert np.abs(got - expected).max() <= 1e-10 * max(1.0, np.abs(expected).max())
+
+
+def test_the_rk4_step_and_its_derivatives() -> None:
+    """statespace.rk4_step takes simulate's compiled RK4 step (the same state to rounding), and its (A_d, B_d)
+    equal central differences of that compiled step to 1e-7 relative (the differences' own error)."""
+    arm = ad.models.puma560().without_friction()
+    rng = np.random.default_rng(11)
+    q, qd, tau = rng.uniform(-1, 1, (3, 6))
+    dt = 1e-2
+
+    def compiled_step(x: np.ndarray, torque: np.ndarray) -> np.ndarray:
+        run = ad.simulate(arm, None, None, t_final=dt, dt=dt, q0=x[:6], qd0=x[6:], disturbance=-torque)
+        return np.concatenate([run.q[-1], run.qd[-1]])
+
+    x = np.concatenate([q, qd])
+    step, A_d, B_d = ad.statespace.rk4_step(arm, q, qd, tau, dt)
+    assert np.abs(step - compiled_step(x, tau)).max() < 1e-14
+    h = 1e-6
+    for matrix, size, vary in ((A_d, 12, lambda e: (x + e, tau)), (B_d, 6, lambda e: (x, tau + e))):
+        expected = np.empty_like(matrix)
+        for j in range(size):
+            e = np.zeros(size)
+            e[j] = h
+            expected[:, j] = (compiled_step(*vary(e)) - compiled_step(*vary(-e))) / (2 * h)
+        assert np.abs(matrix - expected).max() <= 1e-7 * np.abs(expected).max()
+    with pytest.raises(ModelError, match="dt must be positive"):
+        ad.statespace.rk4_step(arm, q, qd, tau, 0.0)
+    with pytest.raises(ModelError, match="one state"):
+        ad.statespace.rk4_step(arm, np.zeros((2, 6)), qd, tau, dt)

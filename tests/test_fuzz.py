@@ -184,6 +184,8 @@ def MATRIX(arm: ad.Robot) -> tuple[int, ...]:
 DYNAMICS = {  # method: (state arguments, shape of out= or None when it has none)
     "inverse_dynamics": (("q", "qd", "qdd"), VECTOR),
     "forward_dynamics": (("q", "qd", "tau"), VECTOR),
+    "inverse_dynamics_derivatives": (("q", "qd", "qdd"), None),
+    "forward_dynamics_derivatives": (("q", "qd", "tau"), None),
     "inertia_matrix": (("q",), MATRIX),
     "inertia_matrix_dot": (("q", "qd"), None),
     "coriolis_matrix": (("q", "qd"), MATRIX),

@@ -402,3 +402,74 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
     A[n:, n:] = d_qd
     B = np.vstack([np.zeros((n, n)), d_tau])
     return Linearization(A, B, q0, qd0, tau0)
+
+
+def _rates_and_jacobians(arm: Robot, x: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """f(x, tau) = [qd; FD(q, qd, tau)] and its Jacobians df/dx (2n, 2n), df/dtau (2n, n), analytic."""
+    n = arm.n
+    q, qd = x[:n], x[n:]
+    qdd = arm.forward_dynamics(q, qd, tau)
+    d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q, qd, tau)
+    jacobian = np.zeros((2 * n, 2 * n))
+    jacobian[:n, n:] = np.eye(n)
+    jacobian[n:, :n], jacobian[n:, n:] = d_q, d_qd
+    return np.concatenate([qd, qdd]), jacobian, np.vstack([np.zeros((n, n)), d_tau])
+
+
+def rk4_step(arm: Robot, q: object, qd: object, tau: object, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One RK4 step of xdot = f(x, tau) (tau held), with its exact derivatives (A_d, B_d).
+
+    x+ = x + dt/6 (k1 + 2 k2 + 2 k3 + k4), k1 = f(x), k2 = f(x + dt/2 k1), k3 = f(x + dt/2 k2),
+    k4 = f(x + dt k3) (the book's TRESP, as simulate runs it without Coulomb smoothing); A_d and B_d
+    follow the stages by the chain rule through the analytic Jacobians of f (BOOK.md section 5,
+    Carpentier and Mansard 2018): the derivative of the step itself, as MPC needs it.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm.
+    q, qd, tau : array_like
+        The state and the torque held over the step, (n,) each.
+    dt : float
+        The step (s), > 0.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        x+ (2n,), A_d = dx+/dx (2n, 2n), B_d = dx+/dtau (2n, n).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When an argument is not one finite state of n values or dt is not positive, or M(q)
+        is singular at a stage.
+    TypeError
+        When ``arm`` is not a Robot.
+    """
+    _check_arm(arm)
+    q, qd, tau = _states(arm, ("q", "qd", "tau"), (q, qd, tau))
+    n = arm.n
+    if q.shape != (n,) or qd.shape != (n,) or tau.shape != (n,):
+        raise ModelError(f"rk4_step takes one state of {n} values{_where(arm)}")
+    dt = inputs.number(dt, "dt")
+    if not dt > 0:
+        raise ModelError(f"dt must be positive, got {dt:g}")
+    x = np.concatenate([q, qd])
+    identity = np.eye(2 * n)
+    slopes, d_x, d_tau = [], [], []
+    for fraction in (0.0, 0.5, 0.5, 1.0):
+        if slopes:
+            point = x + fraction * dt * slopes[-1]
+            entry_x = identity + fraction * dt * d_x[-1]  # d(point)/dx
+            entry_tau = fraction * dt * d_tau[-1]
+        else:
+            point, entry_x, entry_tau = x, identity, np.zeros((2 * n, n))
+        rate, jacobian, input_jacobian = _rates_and_jacobians(arm, point, tau)
+        slopes.append(rate)
+        d_x.append(jacobian @ entry_x)
+        d_tau.append(jacobian @ entry_tau + input_jacobian)
+    weights = (1.0, 2.0, 2.0, 1.0)
+    step = x + dt / 6 * sum(w * k for w, k in zip(weights, slopes, strict=True))
+    A_d = identity + dt / 6 * sum(w * k for w, k in zip(weights, d_x, strict=True))
+    B_d = dt / 6 * sum(w * k for w, k in zip(weights, d_tau, strict=True))
+    return step, A_d, B_d

@@ -711,7 +711,8 @@ def _with_target(kernel: Callable, *options: int) -> Callable:
 
 def _plain(x: object, n: int) -> bool:
     """One state as the compiled kernels take it: a C-contiguous float64 array of n values."""
-    return isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64 and x.flags.c_contiguous
+    return (isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64 and x.flags.c_contiguous
+            and x.flags.writeable)  # fmt: skip
 
 
 def _pair(out: object, shape: tuple[int, ...], count: int) -> list[np.ndarray]:
