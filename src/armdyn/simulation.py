@@ -605,6 +605,19 @@ def _with_drives(arm, controller, trajectory, t_final, dt, method, q0, qd0, dist
     return arm._simulate(controller, trajectory, t_final, dt, q0, qd0)
 
 
+def law_table(spec: control.Spec, period: float, dt: float, n: int) -> tuple[np.ndarray, int]:
+    """The compiled law's gain table (4, n): kp, kv, ki and the torque limit; and its hold, the steps per
+    sample period (1 when continuous), refused unless the period is a whole number of steps."""
+    gain = np.stack([
+        *(inputs.gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki"))),
+        np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,)),
+    ])  # fmt: skip
+    hold = max(1, round(period / dt)) if period else 1
+    if period and abs(hold * dt - period) > 1e-9 * period:
+        raise ModelError(f"the sample period {period} must be a whole number of steps dt = {dt}")
+    return gain, hold
+
+
 def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):
     """The plant, controller and trajectory tuples of run_rk4 and continuous_rate."""
     n = arm.n
@@ -614,13 +627,7 @@ def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance
         raise ModelError("the controller's model must have the plant's joints")
     models, model_coulombs = _plant_buffers([spec.model if spec.model is not None else arm])
     model, model_coulomb = models[0], model_coulombs[0]
-    gain = np.stack([
-        *(inputs.gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki"))),
-        np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,)),
-    ])  # fmt: skip
-    hold = max(1, round(period / dt)) if period else 1
-    if period and abs(hold * dt - period) > 1e-9 * period:
-        raise ModelError(f"the sample period {period} must be a whole number of steps dt = {dt}")
+    gain, hold = law_table(spec, period, dt, n)
     trajectory_kind, params = trajectories.packed(trajectory, n)
     tau_d = np.zeros(n) if disturbance is None else np.broadcast_to(np.asarray(disturbance, float), (n,)).copy()
     smoothing = _smoothing(arm, eps, dt, q0)
@@ -1466,8 +1473,7 @@ def simulate_many(
                                                      "models")  # fmt: skip
     if spec.model is None and models is None:
         model_rows, model_coulombs, model_of = plant_rows, plant_coulombs, plant_of
-    table = np.stack([*(inputs.gains(g, name, n) for g, name in ((spec.kp, "kp"), (spec.kv, "kv"), (spec.ki, "ki"))),
-                      np.broadcast_to(np.asarray(spec.limit, dtype=float), (n,))])  # fmt: skip
+    table, hold = law_table(spec, period, dt, n)
     table = np.ascontiguousarray(np.broadcast_to(table, (runs, 4, n)))
     if gains is not None:
         given = inputs.numbers(gains, "gains")
@@ -1478,9 +1484,6 @@ def simulate_many(
     starts = (_runs_of(q0, "q0", runs, n), _runs_of(qd0, "qd0", runs, n))
     tau_d = _runs_of(disturbance, "disturbance", runs, n)
     steps = _steps(t_final, dt, n, False)
-    hold = max(1, round(period / dt)) if period else 1
-    if period and abs(hold * dt - period) > 1e-9 * period:
-        raise ModelError(f"the sample period {period} must be a whole number of steps dt = {dt}")
     rows = steps + 1
     every = 0 if keep == "summary" else 1 if keep == "full" else keep
     if isinstance(every, str) or not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 0:

@@ -35,7 +35,7 @@ import numpy as np
 from armdyn import control, inputs, trajectories
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
-from armdyn.simulation import SUMMARY_NAMES, Nominal, launch_many, nominal, vary_packed
+from armdyn.simulation import SUMMARY_NAMES, Nominal, launch_many, law_table, nominal, vary_packed
 
 __all__ = ["Estimate", "Normal", "Spec", "Study", "StudyResult", "Uniform", "clopper_pearson", "runs_needed"]
 
@@ -520,9 +520,7 @@ class Study:
         law_spec, period, self.controller = _unwrap(controller, n)
         if law_spec is None or controller is None:
             raise ModelError("a study runs one of armdyn.control's laws (ComputedTorque, PDGravity, PID)")
-        hold = max(1, round(period / self.dt)) if period else 1
-        gains = np.stack([*(inputs.gains(g, name, n) for g, name in ((law_spec.kp, "kp"), (law_spec.kv, "kv"),
-                          (law_spec.ki, "ki"))), np.broadcast_to(np.asarray(law_spec.limit, float), (n,))])  # fmt: skip
+        gains, hold = law_table(law_spec, period, self.dt, n)
         belief, belief_coulomb = _plant_buffers([law_spec.model if law_spec.model is not None else arm])
         path = trajectories.packed(trajectory, n)
         if path is None:
