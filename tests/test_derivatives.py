@@ -157,3 +157,128 @@ def test_the_rk4_step_and_its_derivatives() -> None:
         ad.statespace.rk4_step(arm, q, qd, tau, 0.0)
     with pytest.raises(ModelError, match="one state"):
         ad.statespace.rk4_step(arm, np.zeros((2, 6)), qd, tau, dt)
+
+
+def _reference_rates(arm: ad.Robot, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """xdot = [qd; M^-1 (tau - N)] by the Lagrange-Euler reference, complex-safe (an arm without friction)."""
+    n = arm.n
+    q, qd = x[:n], x[n:]
+    bias = lagrange.inverse_dynamics(arm, q, qd, np.zeros(n, dtype=x.dtype))
+    gravity = lagrange.inverse_dynamics(arm, q, np.zeros(n, dtype=x.dtype), np.zeros(n, dtype=x.dtype))
+    M = np.column_stack([lagrange.inverse_dynamics(arm, q, np.zeros(n, dtype=x.dtype), e) - gravity
+                         for e in np.eye(n, dtype=x.dtype)])  # fmt: skip
+    return np.concatenate([qd, np.linalg.solve(M, tau - bias)])
+
+
+def test_the_rk4_step_derivatives_equal_complex_step_through_the_reference_step() -> None:
+    """(A_d, B_d) of statespace.rk4_step equal complex-step derivatives of the same RK4 step taken with the
+    Lagrange-Euler reference, to 1e-10 relative (and the step itself equals the compiled one, test above)."""
+    arm = ad.models.puma560().without_friction()
+    rng = np.random.default_rng(12)
+    q, qd, tau = rng.uniform(-1, 1, (3, 6))
+    dt, h = 2e-2, 1e-30
+
+    def reference_step(x: np.ndarray, torque: np.ndarray) -> np.ndarray:
+        k1 = _reference_rates(arm, x, torque)
+        k2 = _reference_rates(arm, x + dt / 2 * k1, torque)
+        k3 = _reference_rates(arm, x + dt / 2 * k2, torque)
+        k4 = _reference_rates(arm, x + dt * k3, torque)
+        return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    x = np.concatenate([q, qd]).astype(complex)
+    step, A_d, B_d = ad.statespace.rk4_step(arm, q, qd, tau, dt)
+    assert np.abs(step - reference_step(x, tau.astype(complex)).real).max() < 1e-12
+    for matrix, size, vary in ((A_d, 12, lambda e: (x + e, tau.astype(complex))), (B_d, 6, lambda e: (x, tau + e))):
+        expected = np.column_stack([reference_step(*vary(1j * h * e)).imag / h for e in np.eye(size)])
+        assert np.abs(matrix - expected).max() <= 1e-10 * np.abs(expected).max()
+
+
+def test_smoothed_coulomb_friction_enters_both_derivatives() -> None:
+    """With coulomb_smoothing = eps, d tau/dqd gains the slope of tanh(qd / eps) Tc (complex step of that law), and
+    the forward-dynamics derivatives are those of the plant that follows it (central differences)."""
+    arm = ad.models.puma560()
+    assert np.any(arm.coulomb_friction != 0)
+    rng = np.random.default_rng(13)
+    q, qdd, tau = rng.uniform(-1, 1, (3, 6))
+    qd = rng.uniform(-0.02, 0.02, 6)  # inside the smoothing band, where the slope is large
+    eps, table = 0.01, arm.coulomb_friction
+    exact_q, exact_qd = arm.inverse_dynamics_derivatives(q, qd, qdd)
+    d_q, d_qd = arm.inverse_dynamics_derivatives(q, qd, qdd, coulomb_smoothing=eps)
+    slope = np.array([smooth_law(table, eps, qd + 1j * 1e-30 * e).imag / 1e-30 for e in np.eye(6)]).T
+    assert np.array_equal(d_q, exact_q)
+    assert np.abs(d_qd - (exact_qd + slope)).max() <= 1e-12 * np.abs(d_qd).max()
+    assert np.abs(np.diag(slope)).min() > 1.0
+
+    def plant(q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        exact = np.where(qd > 0, table[:, 0], np.where(qd < 0, table[:, 1], 0.0))
+        return arm.forward_dynamics(q, qd, tau - smooth_law(table, eps, qd) + exact)
+
+    forward = arm.forward_dynamics_derivatives(q, qd, tau, coulomb_smoothing=[eps] * 6)
+    for variable, got in enumerate(forward):
+        expected = np.empty((6, 6))
+        for j in range(6):
+            step = 1e-7
+            plus, minus = [q.copy(), qd.copy(), tau.copy()], [q.copy(), qd.copy(), tau.copy()]
+            plus[variable][j] += step
+            minus[variable][j] -= step
+            expected[:, j] = (plant(*plus) - plant(*minus)) / (2 * step)
+        assert np.abs(got - expected).max() <= 1e-6 * np.abs(expected).max()
+    with pytest.raises(ModelError, match="coulomb_smoothing"):
+        arm.inverse_dynamics_derivatives(q, qd, qdd, coulomb_smoothing=-1.0)
+    with pytest.raises(ModelError, match="coulomb_smoothing"):
+        arm.forward_dynamics_derivatives(q, qd, tau, coulomb_smoothing=[0.1, 0.1])
+
+
+def smooth_law(table: np.ndarray, eps: float, qd: np.ndarray) -> np.ndarray:
+    """tanh(qd / eps) Tc+ for qd >= 0, -tanh(qd / eps) Tc- below (friction.smooth_coulomb), complex-safe."""
+    smooth = np.tanh(qd / eps)
+    return np.where(qd.real >= 0, smooth * table[:, 0], -smooth * table[:, 1])
+
+
+def test_the_kernel_gives_M_with_the_derivatives() -> None:
+    """The recursion yields M(q) on the way (d tau/dqdd); the kernel writes it when asked."""
+    from armdyn.dynamics.derivatives import rnea_derivatives_one
+
+    arm = ad.models.stanford()
+    rng = np.random.default_rng(14)
+    q, qd, qdd = rng.uniform(-1, 1, (3, 6))
+    d_q, d_qd, M = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
+    assert rnea_derivatives_one(arm.packed, q, qd, qdd, np.zeros(6), d_q, d_qd, M) == 0
+    assert np.abs(M - arm.inertia_matrix(q)).max() <= 1e-13 * np.abs(M).max()
+    assert rnea_derivatives_one(arm.packed, q, qd, qdd, np.zeros(5), d_q, d_qd, M) == 4
+
+
+def test_a_singular_state_in_a_batch_is_named() -> None:
+    arm = ad.models.polar_rp()
+    q = np.array([[0.0, 1.0], [0.0, 0.0]])
+    with pytest.raises(ModelError, match=r"singular at state \(1,\)"):
+        arm.forward_dynamics_derivatives(q, np.zeros((2, 2)), np.zeros((2, 2)))
+
+
+def test_the_rk4_step_with_smoothed_coulomb_friction_is_simulates_step() -> None:
+    """rk4_step(coulomb_smoothing=eps) takes the step simulate takes with that smoothing, and its derivatives
+    equal central differences of simulate's step; linearize at rest needs the smoothing."""
+    arm = ad.models.puma560()
+    rng = np.random.default_rng(15)
+    q, tau = rng.uniform(-1, 1, (2, 6))
+    qd = rng.uniform(-0.01, 0.01, 6)
+    dt, eps = 5e-3, 0.02
+
+    def compiled_step(x: np.ndarray) -> np.ndarray:
+        run = ad.simulate(arm, None, None, t_final=dt, dt=dt, q0=x[:6], qd0=x[6:], disturbance=-tau,
+                          coulomb_smoothing=eps)  # fmt: skip
+        return np.concatenate([run.q[-1], run.qd[-1]])
+
+    x = np.concatenate([q, qd])
+    step, A_d, _ = ad.statespace.rk4_step(arm, q, qd, tau, dt, coulomb_smoothing=eps)
+    assert np.abs(step - compiled_step(x)).max() < 1e-13
+    h = 1e-7
+    expected = np.column_stack([(compiled_step(x + h * e) - compiled_step(x - h * e)) / (2 * h) for e in np.eye(12)])
+    assert np.abs(A_d - expected).max() <= 1e-6 * np.abs(expected).max()
+    with pytest.raises(ModelError, match="not differentiable at zero velocity"):
+        ad.statespace.linearize(arm, q, np.zeros(6), tau)
+    smoothed = ad.statespace.linearize(arm, q, np.zeros(6), tau, coulomb_smoothing=eps)
+    slope = np.diag(arm.coulomb_friction[:, 0] / eps)  # tanh'(0) Tc+ / eps
+    inverse = np.linalg.inv(arm.inertia_matrix(q))
+    exact_qd = 2 * arm.coriolis_matrix(q, np.zeros(6)) + np.diag(arm.viscous_friction)
+    assert np.allclose(smoothed.A[6:, 6:], -inverse @ (exact_qd + slope), rtol=1e-10, atol=1e-12)

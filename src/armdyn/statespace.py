@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from armdyn import inputs
+from armdyn.dynamics.api import smoothing_per_joint
+from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb_vector
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -360,7 +362,7 @@ class Linearization:
         return control.ss(self.A, self.B, np.eye(self.A.shape[0]), np.zeros(self.B.shape))
 
 
-def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearization:
+def linearize(arm: Robot, q0: object, qd0: object, tau0: object, coulomb_smoothing: object = None) -> Linearization:
     """A, B of the position/velocity form about (q0, qd0, tau0) (see the module docstring).
 
     A = [[0, I], [-M^-1 dID/dq, -M^-1 dID/dqd]], B = [0; M^-1] (BOOK.md section 5), with
@@ -373,6 +375,9 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
         The arm.
     q0, qd0, tau0 : array_like
         The operating point: joint positions, velocities and torques, (n,) each.
+    coulomb_smoothing : float or array_like, optional
+        eps >= 0 of the smoothed Coulomb law tanh(qd / eps) Tc (as ``simulate`` uses it), one
+        for all joints or one per joint; None or 0: the exact sign law.
 
     Returns
     -------
@@ -383,7 +388,8 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
     ------
     armdyn.ModelError
         When q0, qd0 or tau0 is not n finite numbers (one state, not a batch), or when a
-        joint with Coulomb friction has zero velocity in qd0 (not differentiable there).
+        joint with Coulomb friction and no smoothing has zero velocity in qd0 (the exact law
+        is not differentiable there).
     TypeError
         When ``arm`` is not a Robot.
     """
@@ -393,9 +399,10 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
     for name, value in zip(names, (q0, qd0, tau0), strict=True):
         if value.shape != (n,):
             raise ModelError(f"{name} must be one state of {n} values{_where(arm)}, got shape {value.shape}")
-    if np.any(qd0 == 0) and np.any(arm.coulomb_friction[qd0 == 0] != 0):
-        raise ModelError("Coulomb friction is not differentiable at zero velocity; linearize elsewhere")
-    d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q0, qd0, tau0)
+    if coulomb_smoothing is not None:
+        coulomb_smoothing = smoothing_per_joint(arm, coulomb_smoothing)
+    _check_differentiable(arm, qd0, coulomb_smoothing)
+    d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q0, qd0, tau0, coulomb_smoothing=coulomb_smoothing)
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
     A[n:, :n] = d_q
@@ -404,23 +411,43 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object) -> Linearizatio
     return Linearization(A, B, q0, qd0, tau0)
 
 
-def _rates_and_jacobians(arm: Robot, x: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """f(x, tau) = [qd; FD(q, qd, tau)] and its Jacobians df/dx (2n, 2n), df/dtau (2n, n), analytic."""
+def _check_differentiable(arm: Robot, qd: np.ndarray, coulomb_smoothing: object) -> None:
+    """A ModelError when a joint with the exact Coulomb law (no smoothing) is at zero velocity."""
+    eps = np.zeros(arm.n) if coulomb_smoothing is None else np.broadcast_to(np.asarray(coulomb_smoothing), (arm.n,))
+    stuck = (qd == 0) & (arm.coulomb_friction != 0).any(axis=1) & ~(eps > 0)
+    if np.any(stuck):
+        joint = arm.joint_names[int(np.flatnonzero(stuck)[0])]
+        raise ModelError(f"Coulomb friction of joint '{joint}' is not differentiable at zero velocity; linearize "
+                         "elsewhere, or give coulomb_smoothing > 0")  # fmt: skip
+
+
+def _rates_and_jacobians(
+    arm: Robot, x: np.ndarray, tau: np.ndarray, coulomb_smoothing: object
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """f(x, tau) = [qd; FD(q, qd, tau)] and its Jacobians df/dx (2n, 2n), df/dtau (2n, n), analytic;
+    the Coulomb law smoothed with eps where ``coulomb_smoothing`` gives one."""
     n = arm.n
     q, qd = x[:n], x[n:]
-    qdd = arm.forward_dynamics(q, qd, tau)
-    d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q, qd, tau)
+    torque = tau  # the exact law's torque that gives the smoothed plant's qdd
+    if coulomb_smoothing is not None:
+        eps, table = np.broadcast_to(np.asarray(coulomb_smoothing, float), (n,)), arm.coulomb_friction
+        torque = tau - smooth_coulomb_vector(table, eps, qd) + coulomb_vector(table, qd)
+    qdd = arm.forward_dynamics(q, qd, torque)
+    d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q, qd, tau, coulomb_smoothing=coulomb_smoothing)
     jacobian = np.zeros((2 * n, 2 * n))
     jacobian[:n, n:] = np.eye(n)
     jacobian[n:, :n], jacobian[n:, n:] = d_q, d_qd
     return np.concatenate([qd, qdd]), jacobian, np.vstack([np.zeros((n, n)), d_tau])
 
 
-def rk4_step(arm: Robot, q: object, qd: object, tau: object, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def rk4_step(
+    arm: Robot, q: object, qd: object, tau: object, dt: float, coulomb_smoothing: object = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One RK4 step of xdot = f(x, tau) (tau held), with its exact derivatives (A_d, B_d).
 
     x+ = x + dt/6 (k1 + 2 k2 + 2 k3 + k4), k1 = f(x), k2 = f(x + dt/2 k1), k3 = f(x + dt/2 k2),
-    k4 = f(x + dt k3) (the book's TRESP, as simulate runs it without Coulomb smoothing); A_d and B_d
+    k4 = f(x + dt k3) (the book's TRESP, as simulate runs it; the Coulomb law smoothed as simulate
+    smooths it when ``coulomb_smoothing`` gives eps); A_d and B_d
     follow the stages by the chain rule through the analytic Jacobians of f (BOOK.md section 5,
     Carpentier and Mansard 2018): the derivative of the step itself, as MPC needs it.
 
@@ -432,6 +459,9 @@ def rk4_step(arm: Robot, q: object, qd: object, tau: object, dt: float) -> tuple
         The state and the torque held over the step, (n,) each.
     dt : float
         The step (s), > 0.
+    coulomb_smoothing : float or array_like, optional
+        eps >= 0 of the smoothed Coulomb law, one for all joints or one per joint; None: the
+        exact sign law (not differentiable at zero velocity).
 
     Returns
     -------
@@ -455,6 +485,8 @@ def rk4_step(arm: Robot, q: object, qd: object, tau: object, dt: float) -> tuple
     if not dt > 0:
         raise ModelError(f"dt must be positive, got {dt:g}")
     x = np.concatenate([q, qd])
+    if coulomb_smoothing is not None:
+        coulomb_smoothing = smoothing_per_joint(arm, coulomb_smoothing)
     identity = np.eye(2 * n)
     slopes, d_x, d_tau = [], [], []
     for fraction in (0.0, 0.5, 0.5, 1.0):
@@ -464,7 +496,7 @@ def rk4_step(arm: Robot, q: object, qd: object, tau: object, dt: float) -> tuple
             entry_tau = fraction * dt * d_tau[-1]
         else:
             point, entry_x, entry_tau = x, identity, np.zeros((2 * n, n))
-        rate, jacobian, input_jacobian = _rates_and_jacobians(arm, point, tau)
+        rate, jacobian, input_jacobian = _rates_and_jacobians(arm, point, tau, coulomb_smoothing)
         slopes.append(rate)
         d_x.append(jacobian @ entry_x)
         d_tau.append(jacobian @ entry_tau + input_jacobian)

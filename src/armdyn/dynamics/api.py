@@ -27,7 +27,12 @@ from armdyn.dynamics.aba import aba_one
 from armdyn.dynamics.aba_blocks import aba_blocks
 from armdyn.dynamics.coriolis import coriolis_batch, coriolis_one
 from armdyn.dynamics.crba import crba_batch, crba_one
-from armdyn.dynamics.derivatives import rnea_derivatives_batch, rnea_derivatives_one
+from armdyn.dynamics.derivatives import (
+    forward_dynamics_derivatives_batch,
+    forward_dynamics_derivatives_one,
+    rnea_derivatives_batch,
+    rnea_derivatives_one,
+)
 from armdyn.dynamics.energy import energy_batch, energy_one
 from armdyn.dynamics.frames import TOOL, jacobian_dot_one, jacobian_one, pose_one, transforms_one
 from armdyn.dynamics.friction import friction_batch, friction_one
@@ -56,6 +61,8 @@ _empty = np.empty
 # dtypes: TypeError; an empty list: ValueError; a masked array: a NumbaError): the general path
 # then checks them and names what is wrong.
 _NOT_ONE_STATE = (TypeError, ValueError, NumbaError)
+_NO_MATRIX = np.empty((0, 0))  # a kernel's optional matrix output, not asked for
+_EXACT_COULOMB: dict[int, np.ndarray] = {}  # eps = 0 per joint count, read (never written) by the kernels
 _NO_WRENCH = np.zeros((1, 6))
 
 
@@ -709,12 +716,6 @@ def _with_target(kernel: Callable, *options: int) -> Callable:
     return call
 
 
-def _plain(x: object, n: int) -> bool:
-    """One state as the compiled kernels take it: a C-contiguous float64 array of n values."""
-    return (isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64 and x.flags.c_contiguous
-            and x.flags.writeable)  # fmt: skip
-
-
 def _pair(out: object, shape: tuple[int, ...], count: int) -> list[np.ndarray]:
     """``out`` as ``count`` result arrays of ``shape`` (None: new ones)."""
     if out is None:
@@ -724,15 +725,30 @@ def _pair(out: object, shape: tuple[int, ...], count: int) -> list[np.ndarray]:
     return [inputs.result(part, shape) for part in out]
 
 
+def smoothing_per_joint(arm: Robot, value: object) -> np.ndarray:
+    """coulomb_smoothing as eps >= 0 per joint (n,): None is 0 (the exact sign law)."""
+    if value is None:
+        exact = _EXACT_COULOMB.get(arm.n)
+        if exact is None:
+            exact = _EXACT_COULOMB[arm.n] = np.zeros(arm.n)
+        return exact
+    eps = inputs.numbers(value, "coulomb_smoothing", where=_where(arm))
+    if eps.shape not in ((), (arm.n,)) or np.any(eps < 0):
+        raise ModelError(f"coulomb_smoothing must be eps >= 0 (rad/s or m/s), one for all joints or one per joint"
+                         f"{_where(arm)}, got {np.array2string(eps, precision=4)}")  # fmt: skip
+    return np.ascontiguousarray(np.broadcast_to(eps, (arm.n,)), dtype=float).copy()
+
+
 def inverse_dynamics_derivatives(
-    arm: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, out: tuple | None = None
+    arm: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, out: tuple | None = None, coulomb_smoothing: object = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """d tau/dq and d tau/dqd of tau = M qdd + Vm qd + F + G, analytic (BOOK.md section 5).
 
-    The recursive Newton-Euler algorithm differentiated along with itself (Carpentier and
-    Mansard, RSS 2018; armdyn.dynamics.derivatives), compiled, one state or a batch in one
-    parallel call. The reflected motor inertia and the viscous friction are included; Coulomb
-    friction is constant away from zero velocity and adds nothing (it has no derivative at zero).
+    The recursive Newton-Euler algorithm differentiated along with itself in the world frame
+    (Carpentier and Mansard, RSS 2018; armdyn.dynamics.derivatives), compiled, one state or a
+    batch in one parallel call. The reflected motor inertia and the viscous friction are included;
+    the exact Coulomb law is constant away from zero velocity and adds nothing, its smoothed form
+    tanh(qd / eps) Tc (``coulomb_smoothing``, as ``simulate`` uses it) adds its slope.
     d tau/dqdd is M (``inertia_matrix``).
 
     Parameters
@@ -743,6 +759,9 @@ def inverse_dynamics_derivatives(
         Joint positions, velocities and accelerations, (n,) or a batch (..., n).
     out : tuple of two numpy.ndarray, optional
         Where to write d tau/dq and d tau/dqd, each C-contiguous float64 (..., n, n).
+    coulomb_smoothing : float or array_like, optional
+        eps >= 0 of the smoothed Coulomb law, one for all joints or one per joint; None or 0 is
+        the exact sign law.
 
     Returns
     -------
@@ -752,31 +771,36 @@ def inverse_dynamics_derivatives(
     Raises
     ------
     ModelError
-        When a state or ``out`` is invalid (see inverse_dynamics), or the arm is symbolic.
+        When a state, ``out`` or ``coulomb_smoothing`` is invalid (see inverse_dynamics), or the
+        arm is symbolic.
     """
     model = _model(arm)
     n = arm.n
-    if out is None and all(_plain(x, n) for x in (q, qd, qdd)):  # one state: straight to the kernel
+    eps = smoothing_per_joint(arm, coulomb_smoothing)
+    if out is None:  # one plain state: straight to the kernel
         d_q, d_qd = np.empty((n, n)), np.empty((n, n))
-        if rnea_derivatives_one(model, q, qd, qdd, d_q, d_qd) == 0:
-            return d_q, d_qd
-    batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), arm.n, _where(arm))
+        try:
+            if rnea_derivatives_one(model, q, qd, qdd, eps, d_q, d_qd, _NO_MATRIX) == 0:
+                return d_q, d_qd
+        except _NOT_ONE_STATE:
+            pass
+    batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, _where(arm))
     results = _pair(out, (*batch, n, n), 2)
-    status = np.zeros(flat[0].shape[0], dtype=np.int64)
-    if status.size:
+    if flat[0].shape[0]:
         views = [r.reshape(-1, n, n) for r in results]
-        _launch(rnea_derivatives_batch, results[0].size, model, *flat, *views, status)
+        _launch(rnea_derivatives_batch, results[0].size, model, *flat, eps, *views)
     return results[0], results[1]
 
 
 def forward_dynamics_derivatives(
-    arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: tuple | None = None
+    arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: tuple | None = None, coulomb_smoothing: object = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """d qdd/dq, d qdd/dqd and d qdd/dtau of qdd = M^-1 (tau - N), analytic (BOOK.md section 5).
 
-    From the inverse dynamics' derivatives at qdd = FD(q, qd, tau): d qdd/dq = -M^-1 d tau/dq,
-    d qdd/dqd = -M^-1 d tau/dqd, d qdd/dtau = M^-1 (Carpentier and Mansard 2018), with M^-1 from
-    one Cholesky factorization per state.
+    qdd = FD(q, qd, tau) by the articulated-body algorithm, the inverse dynamics' derivatives
+    there, and one Cholesky factorization of M (Carpentier and Mansard 2018): d qdd/dq =
+    -M^-1 d tau/dq and d qdd/dqd = -M^-1 d tau/dqd by triangular solves, d qdd/dtau = M^-1;
+    compiled, one state or a batch in one parallel call.
 
     Parameters
     ----------
@@ -785,7 +809,10 @@ def forward_dynamics_derivatives(
     q, qd, tau : array_like
         Joint positions, velocities and torques, (n,) or a batch (..., n).
     out : tuple of three numpy.ndarray, optional
-        Where to write the three results, each (..., n, n).
+        Where to write the three results, each C-contiguous float64 (..., n, n).
+    coulomb_smoothing : float or array_like, optional
+        eps >= 0 of the smoothed Coulomb law the plant follows (qdd and its slope), one for all
+        joints or one per joint; None or 0 is the exact sign law.
 
     Returns
     -------
@@ -795,18 +822,24 @@ def forward_dynamics_derivatives(
     Raises
     ------
     ModelError
-        When a state or ``out`` is invalid, or M(q) is singular at a state.
+        When a state, ``out`` or ``coulomb_smoothing`` is invalid, or M(q) is singular at a state.
     """
-    qdd = forward_dynamics(arm, q, qd, tau)
-    batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), arm.n, _where(arm))
+    model = _model(arm)
     n = arm.n
+    eps = smoothing_per_joint(arm, coulomb_smoothing)
+    if out is None:
+        d_q, d_qd, d_tau = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+        try:
+            if forward_dynamics_derivatives_one(model, q, qd, tau, eps, d_q, d_qd, d_tau) == 0:
+                return d_q, d_qd, d_tau
+        except _NOT_ONE_STATE:
+            pass
+    batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), n, _where(arm))
     results = _pair(out, (*batch, n, n), 3)
-    d_q, d_qd = inverse_dynamics_derivatives(arm, flat[0], flat[1], qdd.reshape(-1, n))
-    M = inertia_matrix(arm, flat[0])
-    factor = np.linalg.cholesky(M)
-    identity = np.broadcast_to(np.eye(n), M.shape)
-    inverse = np.linalg.solve(np.swapaxes(factor, -1, -2), np.linalg.solve(factor, identity))
-    results[2][...] = inverse.reshape(results[2].shape)
-    results[0][...] = -(inverse @ d_q).reshape(results[0].shape)
-    results[1][...] = -(inverse @ d_qd).reshape(results[1].shape)
+    singular = np.full(flat[0].shape[0], -1)
+    if singular.size:
+        views = [r.reshape(-1, n, n) for r in results]
+        _launch(forward_dynamics_derivatives_batch, results[0].size, model, *flat, eps, *views, singular)
+    if singular.max(initial=-1) >= 0:
+        raise _singular(arm, flat[0], singular, batch)
     return results[0], results[1], results[2]

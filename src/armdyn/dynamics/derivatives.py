@@ -1,231 +1,383 @@
-"""Analytic derivatives of the inverse dynamics: d tau / dq and d tau / dqd, by differentiating the
-recursive Newton-Euler algorithm along with it (Carpentier and Mansard, "Analytical Derivatives of
-Rigid Body Dynamics Algorithms", RSS 2018, in body coordinates; BOOK.md section 5's RNEA).
+"""Analytic derivatives of the robot equation: d tau/dq, d tau/dqd (and M = d tau/dqdd) of the
+inverse dynamics, and d qdd/dq, d qdd/dqd, d qdd/dtau of the forward dynamics (Carpentier and
+Mansard, "Analytical Derivatives of Rigid Body Dynamics Algorithms", RSS 2018; BOOK.md section 5).
 
-The RNEA in spatial vectors (Featherstone 2008, 5.3), joint i moving along S (e_z of its frame):
+World frame, joint k moving along S_k (a motion vector that depends on q through the joints
+above k). Turning joint k moves its whole subtree rigidly: every vector attached to it is
+carried by S_k x (a force by S_k x*), and the pairing S_j^T F_j is invariant under that carrying.
+What is left over is the same for every body below k:
 
-    v_i = X_i v_p + S qd_i,   a_i = X_i a_p + S qdd_i + v_i x S qd_i,   f_i = I_i a_i + v_i x* I_i v_i
-    F_i = f_i + sum over children c of X_c^T F_c,   tau_i = S^T F_i (+ armature qdd_i + friction)
+    dv_i/dq_k  = S_k x v_i + dV_k,                 dV_k = v_lambda(k) x S_k
+    da_i/dq_k  = S_k x a_i + dA_k + dV_k x v_i,    dA_k = a_lambda(k) x S_k + v_lambda(k) x dV_k
+    dv_i/dqd_k = S_k,  da_i/dqd_k = dAv_k + S_k x v_i,    dAv_k = v_k x S_k + dV_k = 2 dV_k
 
-Only X_i depends on q, and only on q_i: dX_i/dq_i = -(S x) X_i, so dX_i/dq_i u = (X_i u) x S. The
-derivatives follow the same two passes, for every direction k at once (dv[i, k] = dv_i/dq_k):
+(a_0 = -g). For f_i = I_i a_i + v_i x* I_i v_i this gives, with D_i = (v_i x*) I_i - I_i (v_i x)
++ (I_i v_i) xbar* (twice the body Coriolis matrix B_i of coriolis.body_coriolis) and the
+composites I^C_j, D^C_j, F^C_j summed over the subtree of j:
 
-    dv_i = X_i dv_p + [i = k] (X_i v_p) x S
-    da_i = X_i da_p + [i = k] (X_i a_p) x S + dv_i x S qd_i
-    df_i = I_i da_i + dv_i x* I_i v_i + v_i x* I_i dv_i
-    dF_p += X_i^T dF_i + [i = k] X_i^T (S x* F_i),   dtau_i = S^T dF_i
+    d tau_j/dq_k  = S_j^T (S_k x* F^C_k + I^C_k dA_k + D^C_k dV_k)      k in the subtree of j
+    d tau_j/dq_k  = (I^C_j S_j)^T dA_k + (D^C_j^T S_j)^T dV_k           k above j
+    d tau_j/dqd_k = S_j^T (I^C_k dAv_k + D^C_k S_k)                      k in the subtree of j
+    d tau_j/dqd_k = (I^C_j S_j)^T dAv_k + (D^C_j^T S_j)^T S_k           k above j
+    M_jk = S_j^T I^C_k S_k                                              k in the subtree of j
 
-and for qd: dv_i = X_i dv_p + [i = k] S, da_i = X_i da_p + dv_i x S qd_i + [i = k] v_i x S, the
-force and backward terms as above without the [i = k] transform terms; the viscous friction adds
-its coefficient to the diagonal (Coulomb friction is constant away from zero velocity).
+(zero for joints on different branches): O(n d) work for depth d, a few dot products per pair.
+The motor terms add the reflected inertia to M's diagonal and the viscous friction to d tau/dqd's;
+the Coulomb law is constant away from zero velocity and adds d/dqd of its smoothed form
+tanh(qd / eps) Tc where a smoothing eps > 0 is given (friction.smooth_coulomb).
+
+Forward dynamics: qdd = FD(q, qd, tau) by the articulated-body algorithm, then the derivatives
+above at (q, qd, qdd) and one Cholesky factorization of M: d qdd/dq = -M^-1 d tau/dq,
+d qdd/dqd = -M^-1 d tau/dqd (by triangular solves) and d qdd/dtau = M^-1.
 """
 
 from __future__ import annotations
 
-import numpy as np
-from numba import njit, prange
+import math
 
+import numpy as np
+from numba import njit, prange, types
+
+from armdyn.dynamics.aba import aba_core
+from armdyn.dynamics.coriolis import body_coriolis
 from armdyn.dynamics.packed import (
+    ABA_FIXED,
+    ABA_JOINT,
+    ARMATURE,
+    COULOMB_NEG,
+    COULOMB_POS,
+    DERIVATIVE_FIXED,
+    DERIVATIVE_JOINT,
     FIRST_MOMENT,
+    GRAVITY,
     HEADER,
     INERTIA,
-    KIND,
     MASS,
     N_JOINTS,
-    POSITION,
-    ROTATION,
+    PARENT,
     STRIDE,
     VISCOUS,
 )
-from armdyn.dynamics.rnea import inverse_dynamics_one
-from armdyn.dynamics.spatial import NUMBA_OPTIONS
+from armdyn.dynamics.rnea import BATCH_CHUNKS
+from armdyn.dynamics.spatial import (
+    MATRIX,
+    MODEL,
+    NUMBA_OPTIONS,
+    VECTOR,
+    add_inertia_to_parent,
+    dot6,
+    dot_with,
+    joint_transform,
+    motion_cross,
+    one_state,
+    rigid_times,
+    scratch,
+    states_status,
+    world_motion_subspace,
+    world_pose,
+)
+
+SINGULAR_STATUS = 50  # forward_dynamics_derivatives_one: M(q) is singular
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _cross_motion(v: np.ndarray, u: np.ndarray, out: np.ndarray) -> None:
-    """out = v x u for motion vectors [angular; linear] (Featherstone's crm(v) u)."""
-    out[0] = v[1] * u[2] - v[2] * u[1]
-    out[1] = v[2] * u[0] - v[0] * u[2]
-    out[2] = v[0] * u[1] - v[1] * u[0]
-    out[3] = v[1] * u[5] - v[2] * u[4] + v[4] * u[2] - v[5] * u[1]
-    out[4] = v[2] * u[3] - v[0] * u[5] + v[5] * u[0] - v[3] * u[2]
-    out[5] = v[0] * u[4] - v[1] * u[3] + v[3] * u[1] - v[4] * u[0]
+def coulomb_slope(model: np.ndarray, j: int, rate: float, eps: float) -> float:
+    """d Fd_j/dqd_j of the smoothed Coulomb law tanh(qd / eps) Tc (friction.smooth_coulomb); 0 for
+    eps = 0, where the exact law is constant away from zero velocity."""
+    if eps <= 0.0:
+        return 0.0
+    x = rate / eps
+    if abs(x) >= 20.0:
+        return 0.0
+    slope = (1.0 - math.tanh(x) ** 2) / eps
+    b = HEADER + STRIDE * j
+    return slope * model[b + COULOMB_POS] if rate >= 0.0 else -slope * model[b + COULOMB_NEG]
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _cross_force(v: np.ndarray, f: np.ndarray, out: np.ndarray) -> None:
-    """out = v x* f for a motion vector v and a force vector f (Featherstone's crf(v) f)."""
-    out[0] = v[1] * f[2] - v[2] * f[1] + v[4] * f[5] - v[5] * f[4]
-    out[1] = v[2] * f[0] - v[0] * f[2] + v[5] * f[3] - v[3] * f[5]
-    out[2] = v[0] * f[1] - v[1] * f[0] + v[3] * f[4] - v[4] * f[3]
-    out[3] = v[1] * f[5] - v[2] * f[4]
-    out[4] = v[2] * f[3] - v[0] * f[5]
-    out[5] = v[0] * f[4] - v[1] * f[3]
+def coulomb_smoothed_minus_exact(model: np.ndarray, j: int, rate: float, eps: float) -> float:
+    """The smoothed Coulomb torque of joint j less the exact sign law's (0 for eps = 0)."""
+    if eps <= 0.0:
+        return 0.0
+    b = HEADER + STRIDE * j
+    x = rate / eps
+    smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)
+    if rate > 0.0:
+        return (smooth - 1.0) * model[b + COULOMB_POS]
+    if rate < 0.0:
+        return -(1.0 + smooth) * model[b + COULOMB_NEG]
+    return 0.0
 
 
-@njit(**NUMBA_OPTIONS)
-def _joint_frames(model: np.ndarray, q: np.ndarray, X: np.ndarray, inertia: np.ndarray, S: np.ndarray) -> None:
-    """X_i (6, 6) from the parent's to joint i's coordinates, I_i (6, 6) about the body origin and S_i (6,)."""
+@njit(inline="always", **NUMBA_OPTIONS)
+def force_cross(work: np.ndarray, v: int, f: int, out: int) -> None:
+    """out = v x* f for a motion v = [w; u] and a force f = [n; g]: [w x n + u x g; w x g]."""
+    wx, wy, wz, ux, uy, uz = work[v], work[v + 1], work[v + 2], work[v + 3], work[v + 4], work[v + 5]
+    nx, ny, nz, gx, gy, gz = work[f], work[f + 1], work[f + 2], work[f + 3], work[f + 4], work[f + 5]
+    work[out] = wy * nz - wz * ny + uy * gz - uz * gy
+    work[out + 1] = wz * nx - wx * nz + uz * gx - ux * gz
+    work[out + 2] = wx * ny - wy * nx + ux * gy - uy * gx
+    work[out + 3] = wy * gz - wz * gy
+    work[out + 4] = wz * gx - wx * gz
+    work[out + 5] = wx * gy - wy * gx
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def inertia_and_coriolis_times(work: np.ndarray, ic: int, bc: int, m: int, d: int, out: int) -> None:
+    """out = I^C m + 2 B^C d for a composite inertia at work[ic:] and B^C = [[B11, 0], [-[l]x, 0]]
+    at work[bc:] (coriolis.body_coriolis): B^C d = [B11 a; -l x a] for d = [a; .]."""
+    rigid_times(work, ic, m, out)
+    ax, ay, az = work[d], work[d + 1], work[d + 2]
+    lx, ly, lz = work[bc + 9], work[bc + 10], work[bc + 11]
+    for r in range(3):
+        work[out + r] += 2.0 * (work[bc + 3 * r] * ax + work[bc + 3 * r + 1] * ay + work[bc + 3 * r + 2] * az)
+    work[out + 3] -= 2.0 * (ly * az - lz * ay)
+    work[out + 4] -= 2.0 * (lz * ax - lx * az)
+    work[out + 5] -= 2.0 * (lx * ay - ly * ax)
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                          eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray, M: np.ndarray) -> None:  # fmt: skip
+    """d tau/dq, d tau/dqd and M (written when M is (n, n)) at one state, by the module's recursion.
+
+    Workspace (DERIVATIVE_JOINT per joint, DERIVATIVE_FIXED after): local and world transforms,
+    S, dV, dA, dAv, v, a, I^C, B^C, F^C; then one inertia and three 6-vectors.
+    """
     n = int(model[N_JOINTS])
-    R = np.empty((3, 3))
+    local, pose, S, dV, dA, dAv, vel, acc = 0, 12 * n, 24 * n, 30 * n, 36 * n, 42 * n, 48 * n, 54 * n
+    IC, BC, FC, tmp = 60 * n, 70 * n, 82 * n, 88 * n
+    F2, F3, column = tmp + 10, tmp + 16, tmp + 22
+    with_mass = M.shape[0] == n
     for i in range(n):
         b = HEADER + STRIDE * i
-        for r in range(3):
-            for c in range(3):
-                R[r, c] = model[b + ROTATION + 3 * r + c]
-        px, py, pz = model[b + POSITION], model[b + POSITION + 1], model[b + POSITION + 2]
-        S[i, :] = 0.0
-        if model[b + KIND] == 0.0:
-            c, s = np.cos(q[i]), np.sin(q[i])
-            for r in range(3):
-                first, second = R[r, 0], R[r, 1]
-                R[r, 0] = first * c + second * s
-                R[r, 1] = second * c - first * s
-            S[i, 2] = 1.0
+        parent = int(model[b + PARENT])
+        s, v, a, dv = S + 6 * i, vel + 6 * i, acc + 6 * i, dV + 6 * i
+        joint_transform(model, i, q[i], work, local + 12 * i)
+        world_pose(model, work, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
+        world_motion_subspace(model, i, work, pose + 12 * i, s)
+        if parent >= 0:
+            vp, ap = vel + 6 * parent, acc + 6 * parent
+            motion_cross(work, vp, s, dv)
+            motion_cross(work, ap, s, dA + 6 * i)
+            motion_cross(work, vp, dv, tmp)
+            for k in range(6):
+                work[dA + 6 * i + k] += work[tmp + k]
+                work[v + k] = work[vp + k] + work[s + k] * qd[i]
+                work[a + k] = work[ap + k] + work[s + k] * qdd[i] + work[dv + k] * qd[i]
         else:
-            px, py, pz = px + q[i] * R[0, 2], py + q[i] * R[1, 2], pz + q[i] * R[2, 2]
-            S[i, 5] = 1.0
-        # X = [R^T, 0; -R^T [p]x, R^T]: the child's axes, the child's origin
-        for r in range(3):
-            for c in range(3):
-                X[i, r, c] = X[i, 3 + r, 3 + c] = R[c, r]
-                X[i, r, 3 + c] = 0.0
-            # row r of -R^T [p]x: -(column r of R) x p ... written as -(R^T [p]x)[r, :]
-            a0, a1, a2 = R[0, r], R[1, r], R[2, r]
-            X[i, 3 + r, 0] = -(a1 * pz - a2 * py)
-            X[i, 3 + r, 1] = -(a2 * px - a0 * pz)
-            X[i, 3 + r, 2] = -(a0 * py - a1 * px)
-        m = model[b + MASS]
-        hx, hy, hz = model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2]
-        k = b + INERTIA
-        body = inertia[i]
-        body[0, 0], body[0, 1], body[0, 2] = model[k], model[k + 1], model[k + 2]
-        body[1, 0], body[1, 1], body[1, 2] = model[k + 1], model[k + 3], model[k + 4]
-        body[2, 0], body[2, 1], body[2, 2] = model[k + 2], model[k + 4], model[k + 5]
-        # [[I_O, [h]x], [-[h]x, m 1]]
-        body[0, 3], body[0, 4], body[0, 5] = 0.0, -hz, hy
-        body[1, 3], body[1, 4], body[1, 5] = hz, 0.0, -hx
-        body[2, 3], body[2, 4], body[2, 5] = -hy, hx, 0.0
-        body[3, 0], body[3, 1], body[3, 2] = 0.0, hz, -hy
-        body[4, 0], body[4, 1], body[4, 2] = -hz, 0.0, hx
-        body[5, 0], body[5, 1], body[5, 2] = hy, -hx, 0.0
-        for r in range(3):
-            for c in range(3):
-                body[3 + r, 3 + c] = m if r == c else 0.0
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def _times(A: np.ndarray, u: np.ndarray, out: np.ndarray) -> None:
-    """out = A u for a 6 x 6 matrix (written out: no temporary, no BLAS call)."""
-    for r in range(6):
-        total = 0.0
-        for c in range(6):
-            total += A[r, c] * u[c]
-        out[r] = total
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def _add_transposed(A: np.ndarray, u: np.ndarray, out: np.ndarray) -> None:
-    """out += A^T u for a 6 x 6 matrix."""
-    for c in range(6):
-        total = 0.0
-        for r in range(6):
-            total += A[r, c] * u[r]
-        out[c] += total
-
-
-@njit(**NUMBA_OPTIONS)
-def rnea_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, dq: np.ndarray,
-                         dqd: np.ndarray) -> int:  # fmt: skip
-    """d tau/dq and d tau/dqd (n, n) of tau = M qdd + Vm qd + F + G at one state (the module's
-    recursion); 0, or the status of the inverse dynamics (a state that is not finite).
-
-    Only directions k that are joint i or an ancestor of it move body i (``moves``), so the forward
-    pass skips the others."""
-    n = int(model[N_JOINTS])
-    tau = np.empty(n)
-    status = inverse_dynamics_one(model, q, qd, qdd, tau)  # checks the state
-    if status != 0:
-        return status
-    X, inertia, S = np.empty((n, 6, 6)), np.empty((n, 6, 6)), np.empty((n, 6))
-    _joint_frames(model, q, X, inertia, S)
-    moves = np.zeros((n, n), dtype=np.bool_)
-    for i in range(n):
-        moves[i, i] = True
-        parent = int(model[HEADER + STRIDE * i])
-        if parent >= 0:
-            for k in range(n):
-                moves[i, k] = moves[i, k] or moves[parent, k]
-    v, a, F = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6))
-    dv, da, dF = np.zeros((2, n, n, 6)), np.zeros((2, n, n, 6)), np.zeros((2, n, n, 6))
-    base_v, base_a = np.zeros(6), np.zeros(6)
-    base_a[3], base_a[4], base_a[5] = -model[1], -model[2], -model[3]  # a_0 = -g
-    Xv, Xa, work, other, momentum, dmomentum, push = (np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6),
-                                                      np.empty(6), np.empty(6))  # fmt: skip
-    for i in range(n):
-        parent = int(model[HEADER + STRIDE * i])
-        _times(X[i], v[parent] if parent >= 0 else base_v, Xv)
-        _times(X[i], a[parent] if parent >= 0 else base_a, Xa)
-        _cross_motion(Xv, S[i], push)  # (X v_p) x S: also v_i x S, as S x S = 0
-        for r in range(6):
-            v[i, r] = Xv[r] + S[i, r] * qd[i]
-            a[i, r] = Xa[r] + S[i, r] * qdd[i] + push[r] * qd[i]
-        _times(inertia[i], v[i], momentum)
-        _cross_force(v[i], momentum, other)
-        _times(inertia[i], a[i], work)
-        for r in range(6):
-            F[i, r] = work[r] + other[r]
-        for w in range(2):  # w = 0: d/dq, w = 1: d/dqd
-            for k in range(n):
-                if not moves[i, k]:
-                    continue
-                tangent, rate = dv[w, i, k], da[w, i, k]
-                if parent >= 0 and k != i:
-                    _times(X[i], dv[w, parent, k], tangent)
-                    _times(X[i], da[w, parent, k], rate)
-                elif k == i:
-                    if parent >= 0:
-                        _times(X[i], dv[w, parent, k], tangent)
-                        _times(X[i], da[w, parent, k], rate)
-                    if w == 0:
-                        _cross_motion(Xa, S[i], work)
-                        for r in range(6):
-                            tangent[r] += push[r]
-                            rate[r] += work[r]
-                    else:
-                        for r in range(6):
-                            tangent[r] += S[i, r]
-                            rate[r] += push[r]
-                _cross_motion(tangent, S[i], work)
-                for r in range(6):
-                    rate[r] += work[r] * qd[i]
-                _times(inertia[i], tangent, dmomentum)
-                _cross_force(tangent, momentum, work)
-                _cross_force(v[i], dmomentum, other)
-                _times(inertia[i], rate, dF[w, i, k])
-                for r in range(6):
-                    dF[w, i, k, r] += work[r] + other[r]
-    for i in range(n - 1, -1, -1):
-        b = HEADER + STRIDE * i
-        parent = int(model[b])
-        axis = 2 if model[b + KIND] == 0.0 else 5  # S = e_axis
+            for k in range(6):
+                work[tmp + k] = 0.0 if k < 3 else -model[GRAVITY + k - 3]  # a_0 = -g
+                work[dv + k] = 0.0
+            motion_cross(work, tmp, s, dA + 6 * i)
+            for k in range(6):
+                work[v + k] = work[s + k] * qd[i]
+                work[a + k] = work[tmp + k] + work[s + k] * qdd[i]
+        for k in range(6):
+            work[dAv + 6 * i + k] = 2.0 * work[dv + k]
+        # the body's inertia in the world, its Coriolis matrix and its force I a + v x* I v
+        work[tmp] = model[b + MASS]
+        for k in range(3):
+            work[tmp + 1 + k] = model[b + FIRST_MOMENT + k]
+        for k in range(6):
+            work[tmp + 4 + k] = model[b + INERTIA + k]
+        ic, fc = IC + 10 * i, FC + 6 * i
+        for k in range(10):
+            work[ic + k] = 0.0
+        add_inertia_to_parent(work, pose + 12 * i, tmp, ic)
+        body_coriolis(work, v, ic, BC + 12 * i)
+        rigid_times(work, ic, v, F2)
+        force_cross(work, v, F2, F3)
+        rigid_times(work, ic, a, fc)
+        for k in range(6):
+            work[fc + k] += work[F3 + k]
         for k in range(n):
-            dq[i, k] = dF[0, i, k, axis]
-            dqd[i, k] = dF[1, i, k, axis]
-        dqd[i, i] += model[b + VISCOUS]
+            dq[i, k] = 0.0
+            dqd[i, k] = 0.0
+            if with_mass:
+                M[i, k] = 0.0
+    for j in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * j
+        ic, bc, sj, fc = IC + 10 * j, BC + 12 * j, S + 6 * j, FC + 6 * j
+        rigid_times(work, ic, sj, F2)  # I^C S_j
+        ax, ay, az, sx, sy, sz = work[sj], work[sj + 1], work[sj + 2], work[sj + 3], work[sj + 4], work[sj + 5]
+        lx, ly, lz = work[bc + 9], work[bc + 10], work[bc + 11]
+        for r in range(3):  # D^C^T S_j = 2 [B11^T a + l x s; 0]
+            work[F3 + r] = 2.0 * (work[bc + r] * ax + work[bc + 3 + r] * ay + work[bc + 6 + r] * az)
+            work[F3 + 3 + r] = 0.0
+        work[F3] += 2.0 * (ly * sz - lz * sy)
+        work[F3 + 1] += 2.0 * (lz * sx - lx * sz)
+        work[F3 + 2] += 2.0 * (lx * sy - ly * sx)
+        f2 = (work[F2], work[F2 + 1], work[F2 + 2], work[F2 + 3], work[F2 + 4], work[F2 + 5])
+        f3 = (work[F3], work[F3 + 1], work[F3 + 2], 0.0, 0.0, 0.0)
+        inertia_and_coriolis_times(work, ic, bc, dA + 6 * j, dV + 6 * j, column)  # dF/dq_j less the carrying
+        dq[j, j] = dot6(work, sj, column)
+        force_cross(work, sj, fc, tmp)
+        col_q = (work[column] + work[tmp], work[column + 1] + work[tmp + 1], work[column + 2] + work[tmp + 2],
+                 work[column + 3] + work[tmp + 3], work[column + 4] + work[tmp + 4],
+                 work[column + 5] + work[tmp + 5])  # fmt: skip
+        inertia_and_coriolis_times(work, ic, bc, dAv + 6 * j, sj, column)  # dF/dqd_j
+        col_v = (work[column], work[column + 1], work[column + 2], work[column + 3], work[column + 4],
+                 work[column + 5])  # fmt: skip
+        dqd[j, j] += dot_with(work, sj, col_v) + model[b + VISCOUS] + coulomb_slope(model, j, qd[j], eps[j])
+        if with_mass:
+            M[j, j] = dot_with(work, sj, f2) + model[b + ARMATURE]
+        i = int(model[b + PARENT])
+        while i >= 0:
+            si = S + 6 * i
+            dq[i, j] = dot_with(work, si, col_q)
+            dq[j, i] = dot_with(work, dA + 6 * i, f2) + dot_with(work, dV + 6 * i, f3)
+            dqd[i, j] = dot_with(work, si, col_v)
+            dqd[j, i] = dot_with(work, dAv + 6 * i, f2) + dot_with(work, si, f3)
+            if with_mass:
+                M[i, j] = M[j, i] = dot_with(work, si, f2)
+            i = int(model[HEADER + STRIDE * i + PARENT])
+        parent = int(model[b + PARENT])
         if parent >= 0:
-            _add_transposed(X[i], F[i], F[parent])
-            _cross_force(S[i], F[i], work)
-            _add_transposed(X[i], work, dF[0, parent, i])
-            for w in range(2):
-                for k in range(n):
-                    _add_transposed(X[i], dF[w, i, k], dF[w, parent, k])
+            for k in range(10):
+                work[IC + 10 * parent + k] += work[ic + k]
+            for k in range(12):
+                work[BC + 12 * parent + k] += work[bc + k]
+            for k in range(6):
+                work[FC + 6 * parent + k] += work[fc + k]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def derivatives_workspace(n: int) -> int:
+    """Scratch values of forward_dynamics_derivatives_core for n joints: the larger of the two
+    recursions' workspaces, then tau (n), qdd (n), a Cholesky factor (n * n) and the reciprocals of
+    its diagonal (n)."""
+    return max(ABA_JOINT * n + ABA_FIXED, DERIVATIVE_JOINT * n + DERIVATIVE_FIXED) + 3 * n + n * n
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def cholesky_solve(factor: np.ndarray, f: int, n: int, B: np.ndarray, scale: float) -> None:
+    """B <- scale M^-1 B, in place, for M = L L^T with L's rows at factor[f:] (row major, lower) and
+    the reciprocals of its diagonal at factor[f + n * n:]. Row by row, every column at once: the
+    inner loops run along B's rows, contiguous."""
+    width = B.shape[1]
+    for r in range(n):  # L Y = scale B
+        if scale != 1.0:
+            for c in range(width):
+                B[r, c] *= scale
+        for k in range(r):
+            weight = factor[f + n * r + k]
+            for c in range(width):
+                B[r, c] -= weight * B[k, c]
+        inverse = factor[f + n * n + r]
+        for c in range(width):
+            B[r, c] *= inverse
+    for r in range(n - 1, -1, -1):  # L^T X = Y
+        for k in range(r + 1, n):
+            weight = factor[f + n * k + r]
+            for c in range(width):
+                B[r, c] -= weight * B[k, c]
+        inverse = factor[f + n * n + r]
+        for c in range(width):
+            B[r, c] *= inverse
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def forward_dynamics_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
+                                      tau: np.ndarray, eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray,
+                                      dtau: np.ndarray) -> int:  # fmt: skip
+    """d qdd/dq, d qdd/dqd and d qdd/dtau = M^-1 at one state (the module docstring's last paragraph).
+
+    Returns -1, or the joint where M(q) is singular (nothing written then)."""
+    n = int(model[N_JOINTS])
+    base = derivatives_workspace(n) - 3 * n - n * n
+    torque, qdd, factor = work[base : base + n], work[base + n : base + 2 * n], base + 2 * n
+    for k in range(n):  # the plant's Coulomb law: the smoothed one where eps > 0
+        torque[k] = tau[k] - coulomb_smoothed_minus_exact(model, k, qd[k], eps[k])
+    singular = aba_core(model, work, q, qd, torque, qdd)
+    if singular >= 0:
+        return singular
+    rnea_derivatives_core(model, work, q, qd, qdd, eps, dq, dqd, dtau)
+    for c in range(n):  # M = L L^T, L row by row into factor
+        for r in range(c, n):
+            total = dtau[r, c]
+            for k in range(c):
+                total -= work[factor + n * r + k] * work[factor + n * c + k]
+            if r == c:
+                if not total > 0.0:
+                    return c
+                work[factor + n * c + c] = math.sqrt(total)
+                work[factor + n * n + c] = 1.0 / work[factor + n * c + c]
+            else:
+                work[factor + n * r + c] = total * work[factor + n * n + c]
+    cholesky_solve(work, factor, n, dq, -1.0)
+    cholesky_solve(work, factor, n, dqd, -1.0)
+    for r in range(n):
+        for c in range(n):
+            dtau[r, c] = 1.0 if r == c else 0.0
+    cholesky_solve(work, factor, n, dtau, 1.0)
+    return -1
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def shapes_status(model: np.ndarray, eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray, third: np.ndarray,
+                  third_optional: bool) -> int:  # fmt: skip
+    """4 when eps is not (n,) or an output is not (n, n) (the third may be (0, 0) when optional), else 0."""
+    n = int(model[N_JOINTS])
+    if eps.shape[0] != n or dq.shape[0] != n or dq.shape[1] != n or dqd.shape[0] != n or dqd.shape[1] != n:
+        return 4
+    if not (third.shape[0] == n and third.shape[1] == n) and not (third_optional and third.shape[0] == 0):
+        return 4
     return 0
 
 
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR, MATRIX, MATRIX, MATRIX))
+def rnea_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, eps: np.ndarray,
+                         dq: np.ndarray, dqd: np.ndarray, M: np.ndarray) -> int:  # fmt: skip
+    """d tau/dq, d tau/dqd and (when M is (n, n), not (0, 0)) M at one state; the status of
+    states_status, or 4 for an eps or output of the wrong shape."""
+    status = states_status(model, q, qd, qdd, 3)
+    if status == 0:
+        status = shapes_status(model, eps, dq, dqd, M, True)
+    if status == 0:
+        n = int(model[N_JOINTS])
+        rnea_derivatives_core(model, scratch(DERIVATIVE_JOINT * n + DERIVATIVE_FIXED), q, qd, qdd, eps, dq, dqd, M)
+    return status
+
+
 @njit(parallel=True, **NUMBA_OPTIONS)
-def rnea_derivatives_batch(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray, DQ: np.ndarray,
-                           DQD: np.ndarray, status: np.ndarray) -> None:  # fmt: skip
-    """rnea_derivatives_one over the rows of (B, n) states, in parallel; status (B,) per state."""
-    for s in prange(Q.shape[0]):
-        status[s] = rnea_derivatives_one(model, Q[s], QD[s], QDD[s], DQ[s], DQD[s])
+def rnea_derivatives_batch(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray, eps: np.ndarray,
+                           DQ: np.ndarray, DQD: np.ndarray) -> None:  # fmt: skip
+    """d tau/dq and d tau/dqd for each row of (B, n) states, in parallel chunks."""
+    count, n = Q.shape[0], int(model[N_JOINTS])
+    chunks = min(count, BATCH_CHUNKS)
+    for chunk in prange(chunks):
+        work, no_mass = np.empty(DERIVATIVE_JOINT * n + DERIVATIVE_FIXED), np.empty((0, 0))
+        for s in range(chunk * count // chunks, (chunk + 1) * count // chunks):
+            rnea_derivatives_core(model, work, Q[s], QD[s], QDD[s], eps, DQ[s], DQD[s], no_mass)
+
+
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR, MATRIX, MATRIX, MATRIX))
+def forward_dynamics_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray,
+                                     eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray,
+                                     dtau: np.ndarray) -> int:  # fmt: skip
+    """d qdd/dq, d qdd/dqd, d qdd/dtau at one state; the status of states_status, 4 for an eps or
+    output of the wrong shape, or SINGULAR_STATUS when M(q) is singular."""
+    status = states_status(model, q, qd, tau, 3)
+    if status == 0:
+        status = shapes_status(model, eps, dq, dqd, dtau, False)
+    if status == 0:
+        work = scratch(derivatives_workspace(int(model[N_JOINTS])))
+        if forward_dynamics_derivatives_core(model, work, q, qd, tau, eps, dq, dqd, dtau) >= 0:
+            status = SINGULAR_STATUS
+    return status
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
+def forward_dynamics_derivatives_batch(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray,
+                                       eps: np.ndarray, DQ: np.ndarray, DQD: np.ndarray, DTAU: np.ndarray,
+                                       singular: np.ndarray) -> None:  # fmt: skip
+    """The forward-dynamics derivatives for each row of (B, n) states, in parallel chunks; singular[s]
+    is the joint where M is singular at state s (-1 where it is not)."""
+    count = Q.shape[0]
+    chunks = min(count, BATCH_CHUNKS)
+    for chunk in prange(chunks):
+        work = np.empty(derivatives_workspace(int(model[N_JOINTS])))
+        for s in range(chunk * count // chunks, (chunk + 1) * count // chunks):
+            singular[s] = forward_dynamics_derivatives_core(model, work, Q[s], QD[s], TAU[s], eps, DQ[s], DQD[s],
+                                                            DTAU[s])  # fmt: skip

@@ -45,6 +45,7 @@ COMPOSITE = 10  # a composite inertia (m, h, I_O)
 CORIOLIS_JOINT, CORIOLIS_FIXED = 64, 10  # local and world transforms, S, Sdot, v, I^c, B^c | one inertia
 ABA_JOINT, ABA_FIXED = 98, 26  # transforms, S, v, c, I^A, p^A, U, a, (D, u) | one inertia, momentum
 ENERGY_JOINT, ENERGY_FIXED = 30, 6  # local and world transforms, v | I v
+DERIVATIVE_JOINT, DERIVATIVE_FIXED = 88, 28  # transforms, S, dV, dA, dAv, v, a, I^C, B^C, F^C | inertia, 3 vectors
 WORK_PER_JOINT = max(RNEA_JOINT + COMPOSITE, TRANSFORM + COMPOSITE, GRAVITY_JOINT, CORIOLIS_JOINT, ABA_JOINT,
                      ENERGY_JOINT)  # fmt: skip
 WORK_FIXED = max(RNEA_FIXED, CORIOLIS_FIXED, ABA_FIXED, ENERGY_FIXED)
