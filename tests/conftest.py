@@ -37,3 +37,15 @@ def pinocchio_pair(path: Path):
     q_index = np.array([model.joints[i].idx_q for i in ids])
     v_index = np.array([model.joints[i].idx_v for i in ids])
     return arm, model, model.createData(), q_index, v_index
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[object, Path]:
+    """``armdyn demo -o FOLDER`` run once for the whole session (it takes seconds): (its CliRunner result,
+    the folder it wrote)."""
+    from typer.testing import CliRunner
+
+    from armdyn.cli import app
+
+    folder = tmp_path_factory.mktemp("demo") / "out"
+    return CliRunner().invoke(app, ["demo", "-o", str(folder)], prog_name="armdyn"), folder

@@ -440,9 +440,12 @@ def test_cli_writes_tables_by_suffix(tmp_path: Path) -> None:
     assert checked.exit_code == 0, checked.output
     header = next(csv.reader((tmp_path / "scara.csv").open(encoding="utf-8")))
     assert header == list(ad.properties.COLUMNS)
-    demo = invoke("demo", "-o", tmp_path / "demo")
+
+
+def test_cli_demo_writes_its_figures(demo_run: tuple) -> None:
+    demo, folder = demo_run
     assert demo.exit_code == 0, demo.output
-    assert {p.name for p in (tmp_path / "demo").iterdir()} == {"demo.png", "demo.csv", "demo-drives.png"}
+    assert {p.name for p in folder.iterdir()} == {"demo.png", "demo.csv", "demo.gif", "demo-drives.png"}
 
 
 def test_cli_tables_carry_units() -> None:

@@ -241,7 +241,23 @@ def kinematics_targets() -> list[Target]:
         _method("link_transform_derivatives", {"q": q}),
         _method("jacobian", {"q": q, "frame": FRAME, "link": LINK}),
         _method("jacobian_dot", {"q": q, "qd": qd, "frame": FRAME, "link": LINK}),
+        Target("Robot.plot", _drawn, {"q": _one_state("q", none_ok=True)}, SMALL_ARMS),
     ]
+
+
+def _drawn(arm: ad.Robot, **kwargs: object) -> np.ndarray:
+    """Robot.plot's figure as the vertices of its lines (the figure closed: hundreds of cases)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = arm.plot(**kwargs)
+    try:
+        lines = fig.axes[0].lines
+        return np.concatenate([np.ravel(getattr(line, "get_data_3d", line.get_data)()) for line in lines])
+    finally:
+        plt.close(fig)
 
 
 # ----- model variants and constructors --------------------------------------------------------
@@ -1807,7 +1823,7 @@ def _tokens(command: str, parameter: object) -> dict[str, str]:
     """The tokens to try for an option, by its name and type."""
     if command == "demo":  # only bad folders: a valid one runs the whole demo, seconds each
         return {"missing/out": "bad", "/proc/nope/out": "bad", "x\x00y": "bad", "/dev/null": "bad"}
-    if parameter.name in ("output", "plot", "csv"):
+    if parameter.name in ("output", "plot", "csv", "animate", "draw"):
         return PATHS
     annotation = parameter.type_descriptor.annotation
     return INTEGERS if annotation is int else NUMBERS if annotation is float else STRINGS

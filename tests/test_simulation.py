@@ -189,13 +189,13 @@ def test_simulate_command(tmp_path: Path) -> None:
     assert CliRunner().invoke(app, ["simulate", "puma560", "--controller", "magic"]).exit_code == 2
 
 
-def test_demo_is_the_main_job(tmp_path: Path) -> None:
-    result = CliRunner().invoke(app, ["demo", "--output", str(tmp_path)])
+def test_demo_is_the_main_job(demo_run: tuple) -> None:
+    result, folder = demo_run
     assert result.exit_code == 0, result.output
-    assert (tmp_path / "demo.png").exists() and (tmp_path / "demo.csv").exists()
+    assert (folder / "demo.png").exists() and (folder / "demo.csv").exists() and (folder / "demo.gif").exists()
     assert "final tracking errors" in result.output and "Table 3.3.1" in result.output
     assert "Section 3.5" in result.output and "Mbar" in result.output
-    assert "poles -8.702, -2.298" in result.output and (tmp_path / "demo-drives.png").exists()
+    assert "poles -8.702, -2.298" in result.output and (folder / "demo-drives.png").exists()
 
 
 def test_the_top_level_names() -> None:

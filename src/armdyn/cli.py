@@ -318,6 +318,28 @@ def _output_folder(path: str, option: str) -> Path:
     return folder
 
 
+def _animation_file(path: str, option: str) -> Path:
+    """An animation's file, checked as ``_output_file``, ending in .gif (or .mp4 with ffmpeg installed)."""
+    from armdyn.plotting import check_animation_path
+
+    return _plotting_file(path, option, check_animation_path)
+
+
+def _picture_file(path: str, option: str) -> Path:
+    """A picture's file, checked as ``_output_file``, its suffix an image format (.png, .pdf, .svg, ...)."""
+    from armdyn.plotting import check_picture_path
+
+    return _plotting_file(path, option, check_picture_path)
+
+
+def _plotting_file(path: str, option: str, check: Callable[[Path], Path]) -> Path:
+    target = _output_file(path, option)
+    try:
+        return check(target)
+    except ModelError as error:
+        _fail(f"{option} {error}")
+
+
 TABLE_FORMATS = {".csv": "CSV", ".md": "Markdown", ".txt": "text"}
 
 
@@ -512,6 +534,13 @@ def models(
         console.print(f"wrote {output}")
 
 
+DRAW_HELP = "Also draw the arm (a stick figure with its joint axes and frames) to this image: .png, .pdf, .svg, ..."
+DRAW_Q_HELP = (
+    "The configuration --draw draws (rad or m): a configuration of the arm (qz, qr, ...), one number for every "
+    "joint, or one per joint separated by commas. Default: the arm's qn, else its qz, else zeros."
+)
+
+
 @app.command()
 def show(
     name: str = typer.Argument(..., help=ARM_HELP),
@@ -520,11 +549,17 @@ def show(
         None, "--output", "-o", help="Also write the tables to this file: .csv, .md or .txt (by its suffix)."
     ),
     actuators: str | None = typer.Option(None, "--actuators", help=ACTUATORS_HELP),
+    draw: str | None = typer.Option(None, "--draw", help=DRAW_HELP),
+    q: str | None = typer.Option(None, "--q", help=DRAW_Q_HELP),
 ) -> None:
     """Print an arm's DH (or joint) table and its dynamics table, with units; with --actuators, its drives
-    (Section 3.6) with their time constants."""
+    (Section 3.6) with their time constants; with --draw, a picture of the arm."""
     target = _table_file(output, "--output") if output else None
+    picture = _picture_file(draw, "--draw") if draw else None
     arm = _arm(name, strict)
+    configuration = _joint_state(q, "--q", arm) if q is not None else None
+    if configuration is not None and picture is None:
+        _fail("--q is the configuration of the picture: give --draw PATH too")
     driven = _actuated(arm, name, actuators) if actuators is not None else None
     from rich.markup import escape
 
@@ -548,6 +583,10 @@ def show(
             sheets.append(_Sheet("Configurations", columns, rows))
         _write_sheets(target, sheets, [f"{described} (n = {arm.n}, {gravity})"])
         console.print(f"wrote {output}")
+    if picture is not None:
+        named = q.strip() if q is not None and q.strip() in arm.configurations else None
+        arm.plot(named if named is not None else configuration, path=picture)
+        console.print(f"wrote {draw}")
 
 
 def _actuated(arm: Robot, name: str, kind: str) -> object:
@@ -1048,6 +1087,10 @@ Q0_HELP = (
     f"Start positions (rad or m): a configuration of the arm (qz, qn, ...) or {PER_JOINT}. The trajectory runs "
     "about it. Default: the arm's qz, or zeros."
 )
+ANIMATE_HELP = (
+    "Write an animation of the run to this .gif (or .mp4, with ffmpeg installed): the arm moving along the "
+    "desired tool path, beside the tracking error against time."
+)
 SIMULATE_OUTPUT_HELP = (
     "Write ARM.png (the figure), ARM.csv (the samples) and ARM-report.md (the report table) into this folder "
     "(made if missing; its parent must exist)."
@@ -1174,6 +1217,7 @@ def simulate(
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
     plot: str | None = typer.Option(None, help="Write the figure to this PNG file."),
     csv: str | None = typer.Option(None, help="Write the samples to this CSV file."),
+    animate: str | None = typer.Option(None, "--animate", help=ANIMATE_HELP),
     output: str | None = typer.Option(None, "--output", "-o", help=SIMULATE_OUTPUT_HELP),
     actuators: str | None = typer.Option(None, "--actuators", help=ACTUATORS_HELP + " " + SIMULATE_DRIVES_HELP),
 ) -> None:
@@ -1186,6 +1230,7 @@ def simulate(
         controller = "pid" if actuators is not None else "computed-torque"
     plot_file = _output_file(plot, "--plot") if plot else None
     csv_file = _output_file(csv, "--csv") if csv else None
+    animation_file = _animation_file(animate, "--animate") if animate else None
     folder = _output_folder(output, "--output") if output else None
     arm = _arm(name, strict)
     start = _joint_state(q0, "--q0", arm) if q0 is not None else None
@@ -1242,6 +1287,10 @@ def simulate(
     if csv_file is not None:
         result.to_csv(csv_file)
         console.print(f"wrote {csv}")
+    if animation_file is not None:
+        _activity.status(f"writing the animation {animate}")
+        result.animate(animation_file)
+        console.print(f"wrote {animate}")
 
 
 def _drive_controller(driven: object, kind: str, controller: str, kp: str | None, kv: str | None, ki: str) -> object:
@@ -1426,7 +1475,7 @@ def demo(
         "out",
         "--output",
         "-o",
-        help="Folder for demo.png, demo.csv and demo-drives.png (made if missing; its parent must exist).",
+        help="Folder for demo.png, demo.csv, demo.gif and demo-drives.png (made if missing; its parent must exist).",
     ),
 ) -> None:
     """The chapter end to end on the RR arm of Example 3.2-2: closed form, properties, Example 4.4-1, task
@@ -1462,7 +1511,9 @@ def demo(
     folder.mkdir(exist_ok=True)
     result.plot(folder / "demo.png", title="Example 4.4-1: PD computed-torque control of the two-link arm")
     result.to_csv(folder / "demo.csv")
-    console.print(f"wrote {folder / 'demo.png'} and {folder / 'demo.csv'}")
+    _activity.status("writing the animation of Example 4.4-1")
+    result.animate(folder / "demo.gif", title="Example 4.4-1: PD computed-torque control of the two-link arm")
+    console.print(f"wrote {folder / 'demo.png'}, {folder / 'demo.csv'} and {folder / 'demo.gif'} (the arm moving)")
     final = np.abs(result.error[-1])
     console.print(f"final tracking errors: e1 = {final[0]:.2e} rad, e2 = {final[1]:.2e} rad")
     _demo_task_space(arm)

@@ -1,11 +1,23 @@
-"""Figures of simulated runs, laid out as the book's Chapter 4 figures."""
+"""Figures of simulated runs, laid out as the book's Chapter 4 figures; the arm as a stick figure, and
+animations of a run.
+
+The arm is read by duck typing (its ``link_transforms``, ``tool_pose``, ``links``, ``base``, ``tool_link``):
+this module imports no Robot, so armdyn.robot can draw itself through it.
+"""
 
 from __future__ import annotations
 
+import io
+import math
 import textwrap
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from armdyn import inputs
+from armdyn.errors import ModelError
 
 TITLE_WIDTH = 100  # characters per title line: a 9 inch figure at 10 points holds about 110
 
@@ -239,3 +251,630 @@ def plot_study(result: object, path: str | Path | None = None) -> object:
         fig.savefig(path, dpi=150)
         plt.close(fig)
     return fig
+
+
+# ----- the arm as a stick figure (its forward kinematics, Appendix A) ------------------------------------
+FRAME_COLOURS = ("tab:red", "tab:green", "tab:blue")  # x, y, z of a frame
+LINK_STYLE = {"color": "0.25", "linewidth": 5.0, "solid_capstyle": "round", "solid_joinstyle": "round"}
+JOINT_STYLES = {
+    "revolute": {"color": "tab:orange", "linewidth": 4.0, "marker": "o", "markersize": 9, "markevery": [1],
+                 "markerfacecolor": "white", "markeredgewidth": 2.0, "solid_capstyle": "butt"},
+    "prismatic": {"color": "tab:purple", "linewidth": 2.5, "linestyle": (0, (3, 1.5)), "marker": "s",
+                  "markersize": 8, "markevery": [1], "markerfacecolor": "white", "markeredgewidth": 2.0},
+}  # fmt: skip
+DESIRED_PATH_STYLE = {"color": "0.45", "linestyle": "--", "linewidth": 1.2}
+ACTUAL_PATH_STYLE = {"color": "tab:cyan", "linewidth": 1.8}
+PLANE_TOLERANCE = 1e-9  # m, and for the cosines between joint axes
+MAX_FRAMES = 150
+ANIMATION_FORMATS = (".gif", ".mp4")
+
+
+@dataclass(frozen=True)
+class _Scene:
+    """The arm at one configuration, in world coordinates (m): what the stick figure draws.
+
+    ``links[i]`` runs from the parent's link-frame origin (the base's for a root) through joint i's
+    origin, the origin moved by a prismatic joint, to link i's frame origin (Appendix A:
+    T_i = T_parent placement motion(q_i) frame_offset).
+    """
+
+    links: tuple[np.ndarray, ...]  # each (4, 3)
+    joints: np.ndarray  # (n, 3) origin of each joint frame, where the joint's axis passes
+    axes: np.ndarray  # (n, 3) the joints' unit axes in the world
+    kinds: tuple[str, ...]
+    base: np.ndarray  # (4, 4)
+    tool: np.ndarray  # (4, 4)
+    tool_link: int
+
+    def points(self) -> np.ndarray:
+        """Every point drawn, (k, 3): the links' vertices, the base and the tool."""
+        return np.vstack([*self.links, self.base[None, :3, 3], self.tool[None, :3, 3]])
+
+
+def _scene(arm: object, q: np.ndarray) -> _Scene:
+    """The stick figure of ``arm`` at q from the compiled forward kinematics (link_transforms, tool_pose)."""
+    transforms = arm.link_transforms(q)
+    base = np.asarray(arm.base, dtype=float)
+    links, joints, axes = [], [], []
+    for i, link in enumerate(arm.links):
+        parent = base if link.parent < 0 else transforms[link.parent]
+        frame = parent @ np.asarray(link.joint.placement, dtype=float)
+        axis = frame[:3, :3] @ np.asarray(link.joint.axis, dtype=float)
+        moved = frame[:3, 3] + (q[i] * axis if link.kind == "prismatic" else 0.0)
+        links.append(np.array([parent[:3, 3], frame[:3, 3], moved, transforms[i, :3, 3]]))
+        joints.append(frame[:3, 3])
+        axes.append(axis)
+    return _Scene(tuple(links), np.array(joints), np.array(axes), tuple(arm.kinds), base,
+                  np.asarray(arm.tool_pose(q), dtype=float), arm.tool_link)  # fmt: skip
+
+
+def _plane(scene: _Scene) -> tuple[np.ndarray, tuple[str, str]] | None:
+    """The plane of a planar arm, as two orthonormal rows spanning it and their axis labels; None for a
+    spatial arm. Planar: the revolute axes parallel (to the plane's normal), the prismatic ones
+    perpendicular to it, every point of the figure in one plane perpendicular to the normal."""
+    revolute = scene.axes[[kind == "revolute" for kind in scene.kinds]]
+    prismatic = scene.axes[[kind == "prismatic" for kind in scene.kinds]]
+    if len(revolute):
+        normal = revolute[0]
+    else:
+        cross = np.cross(prismatic[0], prismatic[1:]) if len(prismatic) > 1 else np.zeros((1, 3))
+        longest = cross[np.argmax(np.linalg.norm(cross, axis=1))]
+        if np.linalg.norm(longest) < PLANE_TOLERANCE:
+            return None
+        normal = longest / np.linalg.norm(longest)
+    points = scene.points()
+    scale = max(1.0, float(np.ptp(points, axis=0).max()))
+    if (
+        np.abs(np.cross(normal, revolute)).max(initial=0.0) > PLANE_TOLERANCE
+        or np.abs(prismatic @ normal).max(initial=0.0) > PLANE_TOLERANCE
+        or np.ptp(points @ normal) > PLANE_TOLERANCE * scale
+    ):
+        return None
+    return _plane_basis(normal)
+
+
+def _plane_basis(normal: np.ndarray) -> tuple[np.ndarray, tuple[str, str]]:
+    """Two orthonormal rows spanning the plane normal to ``normal``: world axes when the normal is one
+    (x, y for z; x, z for y, so that a vertical arm stands up; y, z for x), else the world x (or y)
+    projected on the plane and the normal's cross product with it."""
+    closest = int(np.argmax(np.abs(normal)))
+    if abs(abs(normal[closest]) - 1.0) < PLANE_TOLERANCE:
+        kept = [axis for axis in range(3) if axis != closest]
+        return np.eye(3)[kept], tuple(f"{'xyz'[axis]} (m)" for axis in kept)
+    first = np.eye(3)[0] if abs(normal[0]) < 0.9 else np.eye(3)[1]
+    first = first - (first @ normal) * normal
+    first /= np.linalg.norm(first)
+    basis = np.array([first, np.cross(normal, first)])
+    return basis, tuple(f"along ({', '.join(f'{v:.3g}' for v in row)}) (m)" for row in basis)
+
+
+class _ArmDrawing:
+    """The artists of the stick figure on one axes (2-D in a planar arm's plane, else 3-D), made once
+    and moved by ``show``: plot_arm draws one configuration with it, animate every frame."""
+
+    def __init__(self, ax: object, scene: _Scene, basis: np.ndarray | None, size: float) -> None:
+        self.ax, self.basis, self.size = ax, basis, size
+        self.links = [self._line(gid=f"link {i}", zorder=3, **LINK_STYLE) for i in range(len(scene.links))]
+        self.joints = [self._line(gid=f"joint {i}", zorder=4, **JOINT_STYLES[kind]) for i, kind in
+                       enumerate(scene.kinds)]  # fmt: skip
+        self.tool_line = self._line(gid="tool", zorder=3, color="0.25", linewidth=2.0)
+        self.frames = {name: [self._line(gid=f"{name} {'xyz'[k]}", zorder=5, color=FRAME_COLOURS[k], linewidth=2.0)
+                              for k in range(3)] for name in ("base", "tool")}  # fmt: skip
+        self.labels = {name: ax.text(*self._coordinates(np.zeros((1, 3)))[:, 0], name, fontsize=8, zorder=6,
+                                     ha="right", va="top") for name in ("base", "tool")}  # fmt: skip
+        self.down = -(basis[1] if basis is not None else np.eye(3)[2])  # labels go below their frame's origin
+        self.show(scene)
+
+    def _coordinates(self, points: np.ndarray) -> np.ndarray:
+        """Points (k, 3) as the axes' coordinates: (2, k) in the plane, else (3, k)."""
+        return (points @ self.basis.T).T if self.basis is not None else points.T
+
+    def _line(self, **style: object) -> object:
+        (line,) = self.ax.plot(*np.zeros((2 if self.basis is not None else 3, 2)), **style)
+        return line
+
+    def _put(self, artist: object, points: np.ndarray) -> None:
+        coordinates = self._coordinates(points)
+        if self.basis is not None:
+            artist.set_data(*coordinates)
+        else:
+            artist.set_data_3d(*coordinates)
+
+    def show(self, scene: _Scene) -> None:
+        """Move every artist to the arm at ``scene``."""
+        half = 0.8 * self.size  # a joint's axis a little longer than a frame's
+        for line, points in zip(self.links, scene.links, strict=True):
+            self._put(line, points)
+        for line, joint, axis, kind in zip(self.joints, scene.joints, scene.axes, scene.kinds, strict=True):
+            start = joint - half * axis if kind == "revolute" else joint  # a prismatic joint's sleeve: from its origin
+            self._put(line, start + np.outer([0.0, half, 2.0 * half], axis))
+        self._put(self.tool_line, np.array([scene.links[scene.tool_link][-1], scene.tool[:3, 3]]))
+        for name, pose in (("base", scene.base), ("tool", scene.tool)):
+            for k, line in enumerate(self.frames[name]):
+                self._put(line, np.array([pose[:3, 3], pose[:3, 3] + self.size * pose[:3, k]]))
+            corner = pose[:3, 3] + 0.3 * self.size * self.down
+            if self.basis is not None:
+                self.labels[name].set_position(self._coordinates(corner[None])[:, 0])
+            else:
+                self.labels[name].set_position_3d(corner)
+
+    def artists(self) -> list[object]:
+        """Every artist of the figure (for an animation's frame)."""
+        frames = [line for lines in self.frames.values() for line in lines]
+        return [*self.links, *self.joints, self.tool_line, *frames, *self.labels.values()]
+
+
+def _legend_handles(scene: _Scene, basis: np.ndarray | None) -> list[object]:
+    """The legend's entries: links, the kinds of joint the arm has, and the frames' axes that show
+    (in a plane, an axis along its normal is a point)."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], label="link", **LINK_STYLE)]
+    for kind in ("revolute", "prismatic"):
+        if kind in scene.kinds:
+            handles.append(Line2D([], [], label=f"{kind} joint, along its axis", **JOINT_STYLES[kind]))
+    for k, colour in enumerate(FRAME_COLOURS):
+        shown = basis is None or any(np.linalg.norm(basis @ pose[:3, k]) > 1e-6 for pose in (scene.base, scene.tool))
+        if shown:
+            handles.append(Line2D([], [], color=colour, linewidth=2.0, label=f"frame {'xyz'[k]} axis"))
+    return handles
+
+
+def _legend(ax: object, scene: _Scene, basis: np.ndarray | None) -> None:
+    """The legend of the stick figure, below its axes (the arm moves everywhere inside them)."""
+    ax.legend(handles=_legend_handles(scene, basis), loc="upper center", bbox_to_anchor=(0.5, -0.08), ncols=3,
+              fontsize=8, frameon=False)  # fmt: skip
+
+
+def _figure_size(scene: _Scene) -> float:
+    """The length of a frame's axes and of a joint's axis: a tenth of the figure's extent, at least 5 cm."""
+    return max(0.05, 0.12 * float(np.ptp(scene.points(), axis=0).max()))
+
+
+def _set_limits(ax: object, points: np.ndarray, basis: np.ndarray | None, pad: float) -> None:
+    """Equal scales on every axis (an undistorted arm), the points inside with ``pad`` (m) to spare."""
+    coordinates = (points @ basis.T) if basis is not None else points
+    low, high = coordinates.min(axis=0), coordinates.max(axis=0)
+    centre, half = 0.5 * (low + high), 0.5 * float((high - low).max()) + pad
+    if basis is not None:
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_aspect("equal", adjustable="box")
+    else:
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_zlim(centre[2] - half, centre[2] + half)
+        ax.set_box_aspect((1.0, 1.0, 1.0), zoom=1.1)
+
+
+def _label_axes(ax: object, basis: np.ndarray | None, names: tuple[str, str] | None) -> None:
+    if basis is not None:
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1])
+        ax.grid(True, alpha=0.3)
+    else:
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_zlabel("z (m)")
+
+
+def _configuration(arm: object, q: object) -> tuple[np.ndarray, str | None]:
+    """q checked as one configuration of the arm (a name of one of its configurations, or n numbers),
+    with its name; None gives the arm's qn, else its qz, else zeros."""
+    named = getattr(arm, "configurations", {})
+    if q is None:
+        q = next((key for key in ("qn", "qz") if key in named), None)
+        if q is None:
+            return np.zeros(arm.n), None
+    if isinstance(q, str):
+        if q not in named:
+            raise ModelError(f"robot '{arm.name}' has no configuration '{q}' (it has {sorted(named) or 'none'})")
+        return np.asarray(named[q], dtype=float), q
+    array = inputs.state(q, arm.n, "q", f" for '{arm.name}'")
+    if array.ndim != 1:
+        raise ModelError(f"q must be one configuration, {arm.n} joint values for '{arm.name}', got shape {array.shape}")
+    return array, None
+
+
+def _checked_arm(arm: object) -> None:
+    if not all(hasattr(arm, name) for name in ("link_transforms", "tool_pose", "links", "base", "kinds")):
+        raise TypeError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+    if getattr(arm, "is_symbolic", False):
+        raise ModelError(f"robot '{arm.name}' has symbolic (SymPy) parameters; drawing it needs numbers")
+
+
+def _checked_path(path: str | Path, suffixes: Sequence[str], what: str) -> Path:
+    """An output file in an existing folder, ending in one of ``suffixes``; a ModelError otherwise."""
+    target = Path(path)
+    if not target.parent.is_dir():
+        raise ModelError(f"{path}: the folder {target.parent} does not exist")
+    if target.is_dir():
+        raise ModelError(f"{path} is a folder; give a file name")
+    if target.suffix.lower() not in suffixes:
+        raise ModelError(f"{path}: {what} must end in {', '.join(suffixes[:-1])} or {suffixes[-1]}")
+    return target
+
+
+def check_picture_path(path: str | Path) -> Path:
+    """A picture's file checked before any work: in an existing folder, its suffix an image format
+    matplotlib writes (.png, .pdf, .svg, ...).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+
+    Returns
+    -------
+    Path
+        The file.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the folder does not exist, the path is a folder, or the suffix is no image format.
+    """
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = tuple(f".{suffix}" for suffix in FigureCanvasBase.get_supported_filetypes())
+    return _checked_path(path, formats, "a picture")
+
+
+def _q_title(arm: object, q: np.ndarray, name: str | None) -> str:
+    values = ", ".join(f"{value:.4g}" if abs(value) >= 5e-5 else "0" for value in q)
+    unit = units(list(arm.kinds), "rad", "m") if len(set(arm.kinds)) == 1 else "(rad for R, m for P)"
+    return f"{arm.name} at {name or 'q'} = ({values}) {unit}"
+
+
+def plot_arm(
+    arm: object, q: object = None, ax: object = None, path: str | Path | None = None, title: str | None = None
+) -> object:
+    """The arm at one configuration as a stick figure: its forward kinematics (Appendix A) drawn.
+
+    Each link is a thick line from its parent's link-frame origin (the base's for a root link)
+    through its joint's origin to its own frame origin, so a tree draws each branch from its
+    parent; each joint's axis is a short segment through its origin (revolute: solid, with a
+    circle; prismatic: dashed, with a square); the base and tool frames are triads (x red,
+    y green, z blue). An arm whose revolute axes are parallel and whose joints lie in one plane
+    perpendicular to them is drawn in 2-D in that plane's coordinates; any other in 3-D.
+    Scales are equal on every axis, in metres.
+
+    Parameters
+    ----------
+    arm : Robot
+        The arm (numeric parameters).
+    q : array_like or str, optional
+        Joint positions (n,), rad or m, or the name of one of the arm's configurations
+        (e.g. "qr"); default its "qn", else its "qz", else zeros.
+    ax : matplotlib.axes.Axes, optional
+        Draw on these axes (3-D axes for a spatial arm); default a new figure's.
+    path : str or Path, optional
+        Also write the figure to this file (its format by the suffix, e.g. .png, .pdf, .svg).
+    title : str, optional
+        The title; default the arm's name and q.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn on.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When q is not n finite numbers or a configuration of the arm, the arm is symbolic, the
+        folder of ``path`` does not exist, its suffix is no image format, or ``ax`` is 2-D for a
+        spatial arm.
+    TypeError
+        When ``arm`` is not an armdyn arm.
+    """
+    _checked_arm(arm)
+    q, name = _configuration(arm, q)
+    target = check_picture_path(path) if path is not None else None
+    import matplotlib
+
+    if target is not None and ax is None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scene = _scene(arm, q)
+    plane = _plane(scene)
+    basis, names = plane if plane is not None else (None, None)
+    own = ax is None
+    if own:
+        fig = plt.figure(figsize=(7.0, 6.4), layout="constrained")
+        ax = fig.add_subplot(projection=None if basis is not None else "3d")
+    elif basis is None and getattr(ax, "name", "") != "3d":
+        raise ModelError(f"robot '{arm.name}' is spatial: draw it on 3-D axes (projection='3d'), or give no ax")
+    size = _figure_size(scene)
+    _ArmDrawing(ax, scene, basis, size)
+    _set_limits(ax, np.vstack([scene.points(), _frame_tips(scene, size)]), basis, 0.6 * size)
+    _label_axes(ax, basis, names)
+    _legend(ax, scene, basis)
+    ax.set_title(textwrap.fill(title or _q_title(arm, q, name), 70), fontsize=10)
+    fig = ax.figure
+    if target is not None:
+        fig.savefig(target, dpi=150)
+        if own:
+            plt.close(fig)
+    return fig
+
+
+def _frame_tips(scene: _Scene, size: float) -> np.ndarray:
+    """The ends of the base's and the tool's axes, (6, 3): inside the limits too."""
+    return np.vstack([pose[:3, 3] + size * pose[:3, :3].T for pose in (scene.base, scene.tool)])
+
+
+# ----- animations of a run ------------------------------------------------------------------------------
+def check_animation_path(path: str | Path) -> Path:
+    """An animation's file checked before any work: in an existing folder, a .gif (written with Pillow)
+    or an .mp4 (written with ffmpeg, which must be installed).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+
+    Returns
+    -------
+    Path
+        The file.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the folder does not exist, the path is a folder, the suffix is neither .gif nor .mp4,
+        or it is .mp4 and ffmpeg is not on the PATH.
+    """
+    target = _checked_path(path, ANIMATION_FORMATS, "an animation")
+    if target.suffix.lower() == ".mp4":
+        from matplotlib import animation
+
+        if not animation.writers.is_available("ffmpeg"):
+            raise ModelError(f"{path}: writing an .mp4 needs ffmpeg, which is not installed (not on the PATH); "
+                             "install it, or write a .gif")  # fmt: skip
+    return target
+
+
+def _frame_indices(samples: int, frames: int) -> np.ndarray:
+    """At most ``frames`` sample indices evenly spread from the first sample to the last."""
+    return np.unique(np.linspace(0, samples - 1, min(frames, samples)).round().astype(int))
+
+
+def _positive(value: object, name: str, integer: bool = False) -> float:
+    """A positive finite number (a whole one when ``integer``), or a ModelError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ModelError(f"{name} must be a positive {'whole ' if integer else ''}number, got {value!r}")
+    if not math.isfinite(value) or value <= 0 or (integer and value != int(value)):
+        raise ModelError(f"{name} must be a positive {'whole ' if integer else ''}number, got {value!r}")
+    return float(value)
+
+
+def _frame_rate(fps: object, times: np.ndarray, frames: int) -> float:
+    """The frames per second: ``fps`` checked (at most 50, what GIF viewers show), or real time (the frames'
+    intervals over the run's duration) within 2 to 30."""
+    if fps is not None:
+        rate = _positive(fps, "fps")
+        if rate > 50:
+            raise ModelError(f"fps must be at most 50 (GIF viewers slow faster frames down), got {fps!r}")
+        return rate
+    duration = float(times[-1] - times[0]) if len(times) else 0.0
+    return float(np.clip((frames - 1) / duration, 2.0, 30.0)) if duration > 0 else 10.0
+
+
+@dataclass
+class _Panels:
+    """What moves in an animation: the stick figure, the tool's path so far, the time cursor and the
+    error's dots, with the run's numbers they are moved to."""
+
+    drawing: _ArmDrawing
+    path: object  # the tool's path so far
+    cursor: object
+    dots: object
+    times: np.ndarray
+    values: np.ndarray  # (samples, n): what the right panel plots
+    actual: np.ndarray  # (k, 3): the tool's positions at ``samples``
+    samples: np.ndarray
+
+    def show(self, scene: _Scene, index: int) -> list[object]:
+        """Move everything to sample ``index`` (the arm at ``scene``); the artists moved."""
+        self.drawing.show(scene)
+        shown = self.actual[self.samples <= index]
+        self.drawing._put(self.path, shown if len(shown) else self.actual[:1])
+        t = self.times[index]
+        self.cursor.set_xdata([t, t])
+        self.dots.set_data(np.full(self.values.shape[1], t), self.values[index])
+        self.drawing.ax.title.set_text(f"t = {t:.2f} s")
+        return [*self.drawing.artists(), self.path, self.cursor, self.dots, self.drawing.ax.title]
+
+
+def _tool_paths(result: object, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The tool's actual and desired positions (forward kinematics of q and q_d) at ``samples``, (k, 3)."""
+    actual = result.arm.tool_pose(result.q[samples])[:, :3, 3]
+    desired = None if result.q_d is None else result.arm.tool_pose(result.q_d[samples])[:, :3, 3]
+    return actual, desired
+
+
+def _time_panel(ax: object, result: object) -> tuple[object, object]:
+    """The tracking error per joint against time (the joint positions for a run without a desired
+    trajectory), with a time cursor and a dot per joint that animate moves."""
+    values = result.error if result.q_d is not None else result.q
+    position = units(list(result.arm.kinds), "rad", "m")
+    for i, name in enumerate(result.arm.joint_names):
+        ax.plot(result.t, values[:, i], color=f"C{i % 10}", label=name)
+    (dots,) = ax.plot(
+        result.t[:1].repeat(values.shape[1]), values[0], "o", color="0.2", markersize=4, zorder=5, clip_on=False
+    )
+    cursor = ax.axvline(result.t[0], color="0.3", linewidth=1.0)
+    ax.axhline(0.0, color="0.6", linewidth=0.8)
+    label = f"error q_d - q ({position})" if result.q_d is not None else f"joint position ({position})"
+    ax.set(xlabel="time (s)", ylabel=label, xlim=(result.t[0], result.t[-1]))
+    ax.set_title("tracking error" if result.q_d is not None else "joint positions (no desired trajectory)",
+                 fontsize=10)  # fmt: skip
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right", fontsize=8, ncols=2 if values.shape[1] > 3 else 1)
+    return cursor, dots
+
+
+def _animation_figure(
+    result: object, scenes: list[_Scene], samples: np.ndarray, title: str | None, dpi: int
+) -> tuple[object, _Panels]:
+    """The figure of an animation at its first frame: the arm (left), the error against time (right)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    plane = _plane(scenes[0])
+    basis, names = plane if plane is not None else (None, None)
+    fig = plt.figure(figsize=(11.5, 5.4), dpi=dpi, layout="constrained")
+    grid = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])
+    left = fig.add_subplot(grid[0], projection=None if basis is not None else "3d")
+    right = fig.add_subplot(grid[1])
+    actual, desired = _tool_paths(result, samples)
+    size = _figure_size(scenes[0])
+    handles = _legend_handles(scenes[0], basis)
+    styles = {"desired tool path": DESIRED_PATH_STYLE, "tool path so far": ACTUAL_PATH_STYLE}
+    if desired is not None:
+        left.plot(*(desired @ basis.T if basis is not None else desired).T, gid="desired tool path", zorder=2,
+                  **DESIRED_PATH_STYLE)  # fmt: skip
+    (path,) = left.plot(*np.zeros((2 if basis is not None else 3, 1)), gid="tool path", zorder=2, **ACTUAL_PATH_STYLE)
+    handles += [Line2D([], [], label=label, **style) for label, style in styles.items()
+                if desired is not None or style is ACTUAL_PATH_STYLE]  # fmt: skip
+    drawing = _ArmDrawing(left, scenes[0], basis, size)
+    reach = [scene.points() for scene in scenes] + [_frame_tips(scene, size) for scene in scenes] + [actual]
+    _set_limits(left, np.vstack(reach + ([desired] if desired is not None else [])), basis, 0.6 * size)
+    _label_axes(left, basis, names)
+    left.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncols=3, fontsize=7, frameon=False)
+    cursor, dots = _time_panel(right, result)
+    fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
+    values = result.error if result.q_d is not None else result.q
+    return fig, _Panels(drawing, path, cursor, dots, result.t, values, actual, samples)
+
+
+def animate(
+    result: object,
+    path: str | Path,
+    fps: float | None = None,
+    frames: int = MAX_FRAMES,
+    dpi: int = 90,
+    title: str | None = None,
+) -> Path:
+    """An animation of a simulated run (Chapter 4): the arm's stick figure moving (as plot_arm draws
+    it) with the desired tool path (q_d through the forward kinematics, when the run has a desired
+    trajectory) and the tool's path so far, beside the tracking error e = q_d - q of every joint
+    against time with a moving time cursor.
+
+    Parameters
+    ----------
+    result : armdyn.simulation.Result
+        The run.
+    path : str or Path
+        The file: .gif (Pillow) or .mp4 (ffmpeg, when installed).
+    fps : float, optional
+        Frames per second, at most 50; default real time (frames over the run's duration),
+        kept within 2 to 30.
+    frames : int, optional
+        The most frames (default 150), spread evenly over the run: a 10 s run writes in a few seconds.
+    dpi : int, optional
+        Pixels per inch of the 11.5 x 5.4 inch figure (default 90).
+    title : str, optional
+        The title; default the arm, controller and trajectory, as Result.plot's.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the folder of ``path`` does not exist, its suffix is neither .gif nor .mp4, an .mp4
+        is asked for without ffmpeg, ``fps``, ``frames`` or ``dpi`` is not a positive number
+        (a whole one for ``frames`` and ``dpi``), or the run has no samples.
+    """
+    target = check_animation_path(path)
+    count = int(_positive(frames, "frames", integer=True))
+    resolution = int(_positive(dpi, "dpi", integer=True))
+    if len(result.t) == 0:
+        raise ModelError("the run has no samples to animate")
+    _checked_arm(result.arm)
+    indices = _frame_indices(len(result.t), count)
+    rate = _frame_rate(fps, result.t[indices], len(indices))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scenes = [_scene(result.arm, result.q[k]) for k in indices]
+    fig, panels = _animation_figure(result, scenes, _frame_indices(len(result.t), 2000), title, resolution)
+    try:
+        if target.suffix.lower() == ".gif":
+            _write_gif(target, _blitted_frames(fig, panels, scenes, indices), rate)
+        else:
+            _write_mp4(target, fig, panels, scenes, indices, rate)
+    finally:
+        plt.close(fig)
+    return target
+
+
+def _blitted_frames(fig: object, panels: _Panels, scenes: list[_Scene], indices: np.ndarray) -> Iterator[np.ndarray]:
+    """The frames as RGBA arrays: the still parts (axes, ticks, legends, the error curves) drawn once,
+    then per frame only the moving artists over them (blitting): a frame costs a few milliseconds."""
+    canvas = fig.canvas
+    moving = panels.show(scenes[0], indices[0])
+    canvas.draw()  # the layout once, with the first frame's labels; then kept, so that nothing jumps
+    fig.set_layout_engine("none")
+    for artist in moving:
+        artist.set_animated(True)
+    canvas.draw()
+    still = canvas.copy_from_bbox(fig.bbox)
+    for scene, index in zip(scenes, indices, strict=True):
+        canvas.restore_region(still)
+        for artist in panels.show(scene, index):
+            fig.draw_artist(artist)
+        yield np.asarray(canvas.buffer_rgba())
+
+
+def _write_gif(target: Path, frames: Iterator[np.ndarray], fps: float) -> None:
+    """A looping GIF of the frames, each reduced to one palette (made from the first frame, the
+    figure's colours) so that colours do not flicker between frames."""
+    from PIL import Image
+
+    first = Image.fromarray(next(frames)).convert("RGB")
+    palette = first.quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+    images = [palette] + [Image.fromarray(frame).convert("RGB").quantize(palette=palette, dither=Image.Dither.NONE)
+                          for frame in frames]  # fmt: skip
+    images[0].save(target, save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0)
+
+
+def _write_mp4(target: Path, fig: object, panels: _Panels, scenes: list[_Scene], indices: np.ndarray,
+               fps: float) -> None:  # fmt: skip
+    """An MP4 through matplotlib's FFMpegWriter: every frame drawn in full."""
+    from matplotlib import animation
+
+    writer = animation.FFMpegWriter(fps=fps)
+    with writer.saving(fig, target, fig.dpi):
+        for scene, index in zip(scenes, indices, strict=True):
+            panels.show(scene, index)
+            writer.grab_frame()
+
+
+def png_bytes(fig: object) -> bytes:
+    """A figure as PNG bytes (for Jupyter's display), the figure closed afterwards.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+
+    Returns
+    -------
+    bytes
+        The PNG file's bytes.
+    """
+    import matplotlib.pyplot as plt
+
+    buffer = io.BytesIO()
+    try:
+        fig.savefig(buffer, format="png", dpi=100)
+    finally:
+        plt.close(fig)
+    return buffer.getvalue()

@@ -17,6 +17,7 @@ DEFAULT_MAX_CONDITION = 1e3); the extremes are refined by SLSQP under the same c
 
 from __future__ import annotations
 
+import html
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -61,6 +62,11 @@ COLUMNS = (
     "property", "statement", "holds", "bound (computed)", "book value", "extreme sampled", "residual or margin", "how",
 )  # fmt: skip
 """The columns of ``Report.records`` and ``Report.table``; each means one thing (see ``Report.records``)."""
+
+_LEGEND = (
+    "residual: the largest relative error of an identity (0 is exact); "
+    "margin: the largest lhs - rhs of an inequality found (<= 0 where it holds)"
+)
 
 MEASURES = ("extreme", "residual", "margin")
 """What a Row's ``worst`` is (see Row)."""
@@ -262,8 +268,7 @@ class Report:
 
         table = Table(
             title=self.title(),
-            caption="residual: the largest relative error of an identity (0 is exact); "
-            "margin: the largest lhs - rhs of an inequality found (<= 0 where it holds)",
+            caption=_LEGEND,
         )
         columns, rows = self.records()
         for column in columns:
@@ -272,6 +277,29 @@ class Report:
             cells[2] = "[green]yes[/green]" if cells[2] == "yes" else "[red]NO[/red]"
             table.add_row(*cells)
         return table
+
+    def _repr_html_(self) -> str:
+        """The report as an HTML table for notebooks: the columns of ``records``, one row per property
+        ("holds" in green or red), titled by ``title``, with the notes below; every text escaped."""
+        columns, rows = self.records()
+        head = "".join(f'<th style="text-align:left">{html.escape(column)}</th>' for column in columns)
+        body = []
+        for cells in rows:
+            colour = "green" if cells[2] == "yes" else "red"
+            styles = ["text-align:left"] * len(cells)
+            styles[2] += f";color:{colour};font-weight:bold"
+            body.append(
+                "<tr>"
+                + "".join(
+                    f'<td style="{style}">{html.escape(cell)}</td>' for cell, style in zip(cells, styles, strict=True)
+                )
+                + "</tr>"
+            )
+        items = "".join(f"<li>{html.escape(note)}</li>" for note in [_LEGEND, *self.notes])
+        return (
+            f'<div class="armdyn-report"><table class="armdyn-properties"><caption>{html.escape(self.title())}'
+            f"</caption><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table><ul>{items}</ul></div>"
+        )
 
 
 def _si(robot: Robot, revolute: str, prismatic: str) -> str:

@@ -1,12 +1,14 @@
 """Robot: an ArmModel with its dynamics and kinematics as methods, the object users hold.
 
 The only place where methods meet data. Each method is a free function of armdyn.dynamics
-(or armdyn.kinematics) taking the arm first; the arm is packed for the compiled kernels once,
-when it is made, and never changes afterwards.
+(or armdyn.kinematics) taking the arm first, and ``plot`` draws the arm through armdyn.plotting
+(imported when first drawn; that module never imports this one); the arm is packed for the
+compiled kernels once, when it is made, and never changes afterwards.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from armdyn import kinematics
@@ -61,3 +63,38 @@ class Robot(ArmModel):
     jacobian = api.jacobian
     jacobian_dot = api.jacobian_dot
     link_transform_derivatives = kinematics.link_transform_derivatives
+
+    def plot(
+        self, q: object = None, ax: object = None, path: str | Path | None = None, title: str | None = None
+    ) -> object:
+        """The arm at one configuration as a stick figure: links, joint axes, base and tool frames
+        (armdyn.plotting.plot_arm; the forward kinematics of Appendix A). A planar arm is drawn in 2-D, any
+        other in 3-D, with equal scales in metres.
+
+        Parameters
+        ----------
+        q : array_like or str, optional
+            Joint positions (n,), rad or m, or the name of one of the arm's configurations (e.g.
+            "qr"); default its "qn", else its "qz", else zeros.
+        ax : matplotlib.axes.Axes, optional
+            Draw on these axes (3-D axes for a spatial arm); default a new figure's.
+        path : str or Path, optional
+            Also write the figure to this file (its format by the suffix: .png, .pdf, .svg, ...).
+        title : str, optional
+            The title; default the arm's name and q.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure drawn on.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When q is not n finite numbers or a configuration of the arm, the arm is symbolic, the
+            folder of ``path`` does not exist or its suffix is no image format, or ``ax`` is 2-D
+            for a spatial arm.
+        """
+        from armdyn.plotting import plot_arm
+
+        return plot_arm(self, q, ax=ax, path=path, title=title)

@@ -114,6 +114,38 @@ class Result:
 
         return plot_result(self, path, title)
 
+    def animate(self, path: str | Path, **options: object) -> Path:
+        """An animation of the run: the arm moving with its desired and actual tool paths, beside the
+        tracking error with a moving time cursor (armdyn.plotting.animate).
+
+        Parameters
+        ----------
+        path : str or Path
+            The file: .gif, or .mp4 when ffmpeg is installed.
+        **options
+            fps, frames, dpi and title, as armdyn.plotting.animate takes them.
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        ModelError
+            When the file's folder does not exist, its suffix is neither .gif nor .mp4, an .mp4 is
+            asked for without ffmpeg, or an option is out of range.
+        """
+        from armdyn.plotting import animate
+
+        return animate(self, path, **options)
+
+    def _repr_png_(self) -> bytes:
+        """The run's figure (Result.plot's) as PNG bytes: Jupyter shows a Result as its figure."""
+        from armdyn.plotting import png_bytes
+
+        return png_bytes(self.plot())
+
     def plot_task(self, path: str | Path | None = None, title: str | None = None) -> object:
         """The task-space path over the desired one and the task error (a run under a task-space law)."""
         from armdyn.plotting import plot_task

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from armdyn.errors import ModelError
+from armdyn.model import display
 from armdyn.model.inertial import Inertial, parameter_array, real_array, real_number, whole_number
 from armdyn.model.joint import Joint, check_rigid, dh_joint, dh_parameters
 
@@ -143,6 +144,10 @@ class ArmModel:
 
     The arm never changes once made: assigning an attribute raises AttributeError, and
     ``replace``, ``with_payload`` and the like give new arms.
+
+    ``print(arm)`` (and ``repr(arm)``) shows a summary, as the Robotics Toolbox prints a
+    robot: its DH table or joint table and its dynamics; a Jupyter notebook shows the same
+    as HTML tables.
 
     Raises
     ------
@@ -611,9 +616,22 @@ class ArmModel:
                 f"robot '{self.name}' has no configuration '{name}' (it has {sorted(self._configurations)})"
             ) from None
 
+    # ----- display ------------------------------------------------------------------
     def __repr__(self) -> str:
-        kinds = "".join("R" if kind == "revolute" else "P" for kind in self.kinds)
-        return f"{type(self).__name__}('{self.name}', n={self.n}, joints={kinds})"
+        """The arm's summary, as the Robotics Toolbox prints a robot (``print(arm)`` shows the same).
+
+        The name, the number of joints and their kinds; the Denavit-Hartenberg table (theta,
+        d, a, alpha, the offset added to q, the joint limits) when the arm was built from one,
+        else a table of the joints (kind, parent, axis, placement as xyz and roll-pitch-yaw,
+        limits); then the masses, whether inertias are given, gravity, friction, motors, the
+        tool and base when they are not the identity, and the named configurations. Angles
+        in degrees, lengths in metres, SymPy parameters by name (see armdyn.model.display).
+        """
+        return display.summary(self).text()
+
+    def _repr_html_(self) -> str:
+        """The same summary as HTML tables, for Jupyter notebooks."""
+        return display.summary(self).html()
 
 
 def _dh_rows(table: object) -> tuple[Mapping[str, Any], ...]:

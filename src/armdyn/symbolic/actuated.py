@@ -33,6 +33,7 @@ import sympy
 from armdyn import inputs
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
+from armdyn.symbolic import notebook
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -506,6 +507,18 @@ class ActuatedClosedForm:
 
     def __repr__(self) -> str:
         return f"ActuatedClosedForm('{self.robot.name}', n={self.robot.n})"
+
+    def _repr_latex_(self) -> str:
+        r"""The terms for a notebook: M' qdd + V' qd + F' + G' = K' v, then M', V' = Vm, G', F' and K',
+        in one ``$$\begin{aligned} ... \end{aligned}$$`` display of bounded size
+        (armdyn.symbolic.notebook: long entries are named, not shown; ``latex`` gives them all)."""
+        terms = []
+        for plain, label, term in self._terms(False):
+            entry = plain.split("(")[0].split(" ")[0]  # M', V', G', F', K'
+            shown = term.applyfunc(lambda e: self._notation(e, True))
+            terms.append(notebook.Term(label, entry, shown, entry == "M'"))
+        equation = r"M'(q)\,\ddot{q} + V'(q, \dot{q})\,\dot{q} + F'(\dot{q}) + G'(q) &= K' v"
+        return notebook.display(equation, terms, "latex() gives every entry.")
 
     # ----- evaluation -----------------------------------------------------------------------------
     def compile(self, values: dict[Any, float] | None = None) -> CompiledActuatedForm:

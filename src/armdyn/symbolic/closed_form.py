@@ -15,7 +15,7 @@ import sympy
 
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
-from armdyn.symbolic import codegen
+from armdyn.symbolic import codegen, notebook
 from armdyn.symbolic.algebra import collapse_sums
 from armdyn.symbolic.derive import Derivation, derive_raw
 
@@ -406,6 +406,19 @@ class ClosedForm:
 
     def __repr__(self) -> str:
         return f"ClosedForm('{self.robot.name}', n={self.robot.n}, method='{self.method}')"
+
+    def _repr_latex_(self) -> str:
+        r"""The equations for a notebook: M qdd + Vm qd + F + G = tau, then M, Vm, V, G and (when not
+        zero) F, in one ``$$\begin{aligned} ... \end{aligned}$$`` display of bounded size
+        (armdyn.symbolic.notebook: long entries are named, not shown; ``latex`` gives them all)."""
+        terms = [
+            notebook.Term(
+                shown.label, "(V_m)" if shown.entry == "V_m" else shown.entry, shown.matrix, shown.entry == "M"
+            )
+            for shown in self._display()
+        ]
+        equation = r"M(q)\,\ddot{q} + V_m(q,\dot{q})\,\dot{q} + F(\dot{q}) + G(q) &= \tau"
+        return notebook.display(equation, terms, "latex() gives every entry; save('file.tex') writes a document.")
 
     # ----- code -------------------------------------------------------------------------------------
     def operation_counts(self, cse: bool = True) -> dict[str, int]:

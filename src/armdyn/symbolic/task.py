@@ -38,6 +38,7 @@ from armdyn import inputs, kinematics
 from armdyn.cartesian import Camera, LinkPoint, PlanarPosition, TaskOutput, ToolPose, ToolPosition
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
+from armdyn.symbolic import notebook
 from armdyn.symbolic.algebra import number, transform
 from armdyn.symbolic.codegen import count_operations
 from armdyn.symbolic.derive import _Arm
@@ -298,6 +299,17 @@ class TaskClosedForm:
 
     def __repr__(self) -> str:
         return f"TaskClosedForm('{self.robot.name}', {self.output!r}, n={self.robot.n})"
+
+    def _repr_latex_(self) -> str:
+        r"""The terms for a notebook: Mbar yddot + Nbar = f, then h, J, J^-1, Mbar, Vmbar, Gbar, Fbar (when
+        not zero) and Nbar, in one ``$$\begin{aligned} ... \end{aligned}$$`` display of bounded size
+        (armdyn.symbolic.notebook: long entries are named, not shown; ``latex`` gives them all)."""
+        names = {"y = h(q)": "h", "J(q)": "J", "J(q)^-1": "(J^{-1})", "Mbar(q)": r"\bar{M}",
+                 "Vmbar(q, qd)": r"(\bar{V}_m)", "Gbar(q)": r"\bar{G}", "Fbar(q, qd)": r"\bar{F}",
+                 "Nbar(q, qd)": r"\bar{N}"}  # fmt: skip
+        terms = [notebook.Term(label, names[plain], m, plain == "Mbar(q)") for plain, label, m in self._shown()]
+        equation = r"\bar{M}(q)\,\ddot{y} + \bar{N}(q, \dot{q}) &= f, \qquad \dot{y} = J(q)\,\dot{q}"
+        return notebook.display(equation, terms, "latex() gives every entry.")
 
     # ----- evaluation -----------------------------------------------------------------------------
     def compile(self, values: dict[Any, float] | None = None) -> CompiledTaskForm:
