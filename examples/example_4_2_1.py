@@ -34,16 +34,11 @@ def path_error(result: Result) -> np.ndarray:
     return np.linalg.norm(result.task.error, axis=1)
 
 
-if __name__ == "__main__":
-    import matplotlib
-
-    matplotlib.use("Agg")
+def figure(result: Result) -> object:
+    """The tool path drawn over the desired circle, and the path error on a log scale (a matplotlib Figure)."""
     import matplotlib.pyplot as plt
 
-    Path("out").mkdir(exist_ok=True)
-    result = run()
     error = path_error(result)
-    print(f"path error: {error[0]:.2e} m at the start, largest after 0.5 s {error[result.t >= 0.5].max():.2e} m")
     drawn = result.task.y
     turn = np.linspace(0.0, 2 * np.pi, 200)
     fig, (path, err) = plt.subplots(1, 2, figsize=(11, 4.8), layout="constrained")
@@ -56,5 +51,17 @@ if __name__ == "__main__":
     err.set(xlabel="time (s)", ylabel="path error |y - y_d| (m)", title="path error")
     err.grid(True, alpha=0.3)
     fig.suptitle("Example 4.2-1: computed torque in task coordinates (kp = 400, kv = 40), a1 = a2 = 2 m", fontsize=10)
-    fig.savefig("out/example_4_2_1.png", dpi=150)
+    return fig
+
+
+if __name__ == "__main__":
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+    Path("out").mkdir(exist_ok=True)
+    result = run()
+    error = path_error(result)
+    print(f"path error: {error[0]:.2e} m at the start, largest after 0.5 s {error[result.t >= 0.5].max():.2e} m")
+    figure(result).savefig("out/example_4_2_1.png", dpi=150)
     print("wrote out/example_4_2_1.png")

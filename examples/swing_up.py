@@ -23,7 +23,7 @@ from scipy.optimize import minimize
 
 import armdyn as ad
 from armdyn import statespace
-from armdyn.simulation import PythonLoopWarning
+from armdyn.simulation import PythonLoopWarning, Result
 
 ARM = ad.models.two_link_planar(1.0, 1.0, 1.0, 1.0, g=9.8)
 HANGING, UPRIGHT = np.array([-np.pi / 2, 0.0, 0.0, 0.0]), np.array([np.pi / 2, 0.0, 0.0, 0.0])
@@ -120,9 +120,9 @@ def optimize(analytic: bool) -> tuple[object, float]:
     return result, time.perf_counter() - start
 
 
-def hold_upright() -> float:
-    """LQR about the upright arm (tau0 = G), from statespace.linearize; the largest |q - q_up| after 3 s
-    from a 0.2 rad push."""
+def upright_run(push: float = 0.2, t_final: float = 3.0) -> Result:
+    """LQR about the upright arm (tau0 = G), from statespace.linearize: the run from ``push`` rad off upright
+    (joint 1 pushed by +push, joint 2 by -push)."""
     import control
 
     tau0 = ARM.gravity_vector(UPRIGHT[:2])
@@ -134,7 +134,12 @@ def hold_upright() -> float:
 
     with warnings.catch_warnings():  # a 3 s run of a NumPy law: the Python loop costs nothing worth compiling
         warnings.simplefilter("ignore", PythonLoopWarning)
-        run = ad.simulate(ARM, lqr, None, t_final=3.0, q0=UPRIGHT[:2] + [0.2, -0.2])
+        return ad.simulate(ARM, lqr, None, t_final=t_final, q0=UPRIGHT[:2] + [push, -push])
+
+
+def hold_upright() -> float:
+    """The largest |q - q_up| after 3 s from a 0.2 rad push, under LQR about the upright arm (``upright_run``)."""
+    run = upright_run()
     return float(np.abs(run.q[-1] - UPRIGHT[:2]).max())
 
 
