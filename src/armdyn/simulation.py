@@ -506,7 +506,7 @@ def simulate(
     its torque held in between. When the controller is one of armdyn.control's, the
     trajectory None, Sinusoid or Quintic and the disturbance constant, the whole run is
     one compiled call; a controller or trajectory of the user's own runs in a Python loop
-    of the same scheme, about 45 times slower, and simulate says so with a
+    of the same scheme, 80 to 300 times slower (more for smaller arms), and simulate says so with a
     PythonLoopWarning (silence it with the warnings module once the cost is known).
     Coulomb friction is smoothed through zero velocity (see the module docstring).
 
@@ -604,9 +604,9 @@ def simulate(
         if compiled else None  # fmt: skip
     if not compiled and (_users_own(controller) or _users_own(trajectory) or callable(disturbance)):
         warnings.warn(
-            "simulate runs this controller, trajectory or disturbance of your own in Python, about 45x slower than "
-            "the compiled code that armdyn.control's controllers with a Sinusoid or Quintic trajectory and a "
-            "constant disturbance run in",
+            "simulate runs this controller, trajectory or disturbance of your own in Python, 80 to 300 times "
+            "slower than the compiled code that armdyn.control's controllers with a Sinusoid or Quintic trajectory "
+            "and a constant disturbance run in",
             PythonLoopWarning,
             stacklevel=2,
         )

@@ -2,6 +2,17 @@
 
 from armdyn.symbolic.actuated import ActuatedClosedForm, SymbolicMotor, motor_symbols
 from armdyn.symbolic.closed_form import ClosedForm, derive
+from armdyn.symbolic.newton_euler import CompiledCode, GeneratedCode, generate_code
 from armdyn.symbolic.task import TaskClosedForm
 
-__all__ = ["ActuatedClosedForm", "ClosedForm", "SymbolicMotor", "TaskClosedForm", "derive", "motor_symbols"]
+__all__ = [
+    "ActuatedClosedForm",
+    "ClosedForm",
+    "CompiledCode",
+    "GeneratedCode",
+    "SymbolicMotor",
+    "TaskClosedForm",
+    "derive",
+    "generate_code",
+    "motor_symbols",
+]

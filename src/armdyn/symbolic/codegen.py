@@ -220,7 +220,8 @@ class CompiledClosedForm:
         return result
 
 
-def _batch_loop(one: Callable, arity: int) -> Callable:
+def batch_loop(one: Callable, arity: int) -> Callable:
+    """A parallel loop of ``one(*states, out)`` over the rows of a batch."""
     if arity == 1:
 
         def loop1(a: np.ndarray, out: np.ndarray) -> None:
@@ -267,7 +268,7 @@ def compile_closed_form(raw: Derivation, values: dict[str, float]) -> CompiledCl
         result = matrix if kind == "matrix" else vector
         signature = f"({', '.join([vector] * len(args))}, {result})"
         inner = numba.njit("void" + signature, fastmath={"contract"}, error_model="numpy")(namespace[name])
-        batch[name] = _batch_loop(inner, len(args))
+        batch[name] = batch_loop(inner, len(args))
         checked = _checked_source(name, args, kind, n)
         scope = {"inner": inner, "LARGEST": inputs.LARGEST_STATE}
         exec(compile(checked, f"<armdyn closed form {name}, checked>", "exec"), scope)
