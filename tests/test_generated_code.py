@@ -164,3 +164,23 @@ def test_bad_requests_are_model_errors() -> None:
     compiled = generate_code(ad.models.two_link_planar(), ["G"]).compile()
     with pytest.raises(ModelError, match="no tau"):
         compiled.tau(np.zeros(2), np.zeros(2), np.zeros(2))
+
+
+def test_the_command_line_generates_code_for_larger_arms(tmp_path: Path) -> None:
+    """`armdyn derive ARM --code c` takes the Newton-Euler route for a numeric arm of 5 joints or more (and with
+    --method newton-euler for any); the book's symbolic arms keep their closed form's code."""
+    from typer.testing import CliRunner
+
+    from armdyn.cli import app
+
+    runner = CliRunner()
+    puma = runner.invoke(app, ["derive", "puma560", "--code", "c", "-o", str(tmp_path / "puma.c")])
+    assert puma.exit_code == 0, puma.output
+    assert (
+        "void armdyn_tau(const double *q, const double *qd, const double *qdd, double *out)"
+        in (tmp_path / "puma.c").read_text()
+    )
+    small = runner.invoke(app, ["derive", "two_link_planar", "--method", "newton-euler", "--code", "python"])
+    assert small.exit_code == 0 and "def M(q, out):" in small.output
+    refused = runner.invoke(app, ["derive", "puma560", "--method", "newton-euler"])
+    assert refused.exit_code == 2 and "give --code" in refused.output

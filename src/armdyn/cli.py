@@ -710,7 +710,12 @@ def derive(
     symbolic: bool = typer.Option(
         True, help="For the book's arms: keep their parameters as symbols (m1, m2, a1, ...)."
     ),
-    method: str = typer.Option("auto", help="'lagrange' (the book's trace formula), 'recursive' or 'auto'."),
+    method: str = typer.Option(
+        "auto",
+        help="'lagrange' (the book's trace formula), 'recursive', 'newton-euler' (--code only: straight-line "
+        "code of the customized Newton-Euler recursion, for arms of any size) or 'auto' (newton-euler for "
+        "--code of a numeric arm of 5 joints or more, else recursive).",
+    ),
     task: str | None = typer.Option(
         None,
         "--task",
@@ -724,6 +729,13 @@ def derive(
 
     if code is not None and code not in ("python", "c"):
         _fail(f"--code must be 'python' or 'c', got '{code}'")
+    if method == "newton-euler" and code is None:
+        _fail("--method newton-euler generates code: give --code python or --code c")
+    if code is not None and task is None and method in ("auto", "newton-euler"):
+        generated = _generated_code(name, code, method, symbolic, strict)
+        if generated is not None:
+            _write_or_print(generated, output)
+            return
     if task is not None and code is not None:
         _fail("--task and --code exclude each other: code is generated for the joint-space equation")
     chosen = _task_output(task) if task is not None else None
@@ -745,6 +757,34 @@ def derive(
         text = form.pretty(limit=None) if target is not None else form.pretty()
     _activity.stop()
     if target is not None:
+        target.write_text(text, encoding="utf-8")
+        console.print(f"wrote {output}")
+    else:
+        print(text)
+
+
+def _generated_code(name: str, language: str, method: str, symbolic: bool, strict: bool) -> str | None:
+    """Source from armdyn.symbolic.generate_code for ``derive --code`` (method newton-euler, or auto for
+    a numeric arm of 5 joints or more); None where the closed form's code is wanted instead."""
+    from armdyn.symbolic import generate_code
+
+    book = {"two_link_planar", "polar_rp", "cylindrical"}
+    if method == "auto" and symbolic and name.lower() in book:
+        return None
+    arm = _arm(name, strict)
+    if method == "auto" and (arm.is_symbolic or arm.n < 5):
+        return None
+    if arm.is_symbolic:
+        _fail(f"--method newton-euler needs numeric parameters; '{arm.name}' has symbols")
+    code = generate_code(arm)
+    counts = ", ".join(f"{key} {value['total']}" for key, value in code.operation_counts().items())
+    _activity.status(f"generated {language} for {arm.name}: operations {counts}")
+    return code.python() if language == "python" else code.c()
+
+
+def _write_or_print(text: str, output: str | None) -> None:
+    if output:
+        target = _output_file(output, "--output")
         target.write_text(text, encoding="utf-8")
         console.print(f"wrote {output}")
     else:

@@ -579,6 +579,11 @@ def derive(
     M' qdd + V' qd + F' + G' = K' v instead (BOOK.md section 7; see
     ``armdyn.symbolic.actuated``).
 
+    The closed form expands every term into trigonometric polynomials: what reading, LaTeX and
+    the book's examples need. For code of a numeric arm, ``generate_code`` (the customized
+    Newton-Euler route, armdyn.symbolic.newton_euler) gives straight-line code whose cost grows
+    linearly with the joints; use it for arms of more than a few joints.
+
     Parameters
     ----------
     robot : Robot or ActuatedArm
