@@ -136,7 +136,7 @@ def inertia_and_coriolis_times(work: np.ndarray, ic: int, bc: int, m: int, d: in
     work[out + 5] -= 2.0 * (lx * ay - ly * ax)
 
 
-@njit(inline="always", **NUMBA_OPTIONS)
+@njit(**NUMBA_OPTIONS)  # called, not inlined: the one-state and batch kernels share one compiled copy
 def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
                           eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray, M: np.ndarray) -> None:  # fmt: skip
     """d tau/dq, d tau/dqd and M (written when M is (n, n)) at one state, by the module's recursion.
@@ -277,7 +277,7 @@ def cholesky_solve(factor: np.ndarray, f: int, n: int, B: np.ndarray, scale: flo
             B[r, c] *= inverse
 
 
-@njit(inline="always", **NUMBA_OPTIONS)
+@njit(**NUMBA_OPTIONS)  # called, not inlined: the one-state and batch kernels share one compiled copy
 def forward_dynamics_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
                                       tau: np.ndarray, eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray,
                                       dtau: np.ndarray) -> int:  # fmt: skip
