@@ -989,6 +989,7 @@ def parameterization_targets() -> list[Target]:
             lambda arm: 1e-9, lambda arm: scalar_values([1e-9, 0.5], lambda x: "same" if 0 < x < 1 else "bad")
         ),
         "drives": DRIVES,
+        "at_rest": Arg(lambda arm: False, lambda arm: choice_values([True, False, np.True_], [], ["no", 0, 1, None])),
     }
     return [
         Target(

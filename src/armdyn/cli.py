@@ -722,6 +722,12 @@ def derive(
         help="Task coordinates instead (Section 3.5): position or planar, as many as joints: "
         "Mbar, Vmbar, Gbar, Fbar, Nbar.",
     ),
+    functions: str | None = typer.Option(
+        None,
+        "--functions",
+        help="With --code, the Newton-Euler route's functions, comma-separated, of tau, M, G, N, Vm and Wb "
+        "(the base regressor, with the base parameters); default tau,M,G,N.",
+    ),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
 ) -> None:
     """Derive an arm's robot equation in closed form: M, Vm, V, G (and F), as text, LaTeX or code."""
@@ -731,8 +737,13 @@ def derive(
         _fail(f"--code must be 'python' or 'c', got '{code}'")
     if method == "newton-euler" and code is None:
         _fail("--method newton-euler generates code: give --code python or --code c")
+    if functions is not None:
+        if code is None or task is not None or method not in ("auto", "newton-euler"):
+            _fail("--functions chooses what the Newton-Euler route generates: give it with --code python or "
+                  "--code c, without --task, and with --method auto or newton-euler")  # fmt: skip
+        method = "newton-euler"
     if code is not None and task is None and method in ("auto", "newton-euler"):
-        generated = _generated_code(name, code, method, symbolic, strict)
+        generated = _generated_code(name, code, method, symbolic, strict, functions)
         if generated is not None:
             _write_or_print(generated, output)
             return
@@ -763,10 +774,12 @@ def derive(
         print(text)
 
 
-def _generated_code(name: str, language: str, method: str, symbolic: bool, strict: bool) -> str | None:
+def _generated_code(name: str, language: str, method: str, symbolic: bool, strict: bool,
+                    functions: str | None = None) -> str | None:  # fmt: skip
     """Source from armdyn.symbolic.generate_code for ``derive --code`` (method newton-euler, or auto for
     a numeric arm of 5 joints or more); None where the closed form's code is wanted instead."""
     from armdyn.symbolic import generate_code
+    from armdyn.symbolic.newton_euler import FUNCTIONS
 
     book = {"two_link_planar", "polar_rp", "cylindrical"}
     if method == "auto" and symbolic and name.lower() in book:
@@ -776,7 +789,11 @@ def _generated_code(name: str, language: str, method: str, symbolic: bool, stric
         return None
     if arm.is_symbolic:
         _fail(f"--method newton-euler needs numeric parameters; '{arm.name}' has symbols")
-    code = generate_code(arm)
+    names = FUNCTIONS if functions is None else [f.strip() for f in functions.split(",") if f.strip()]
+    try:
+        code = generate_code(arm, names)
+    except ModelError as error:
+        _fail(f"--functions: {error}")
     counts = ", ".join(f"{key} {value['total']}" for key, value in code.operation_counts().items())
     _activity.status(f"generated {language} for {arm.name}: operations {counts}")
     return code.python() if language == "python" else code.c()

@@ -400,7 +400,12 @@ def _term(coefficient: float, name: str) -> str:
 
 
 def base_parameters(
-    robot: ArmModel, samples: int = 200, seed: int = 0, tolerance: float = 1e-9, drives: bool = True
+    robot: ArmModel,
+    samples: int = 200,
+    seed: int = 0,
+    tolerance: float = 1e-9,
+    drives: bool = True,
+    at_rest: bool = False,
 ) -> BaseParameters:
     """The base parameters by QR with column pivoting of regressors stacked at random states.
 
@@ -408,7 +413,11 @@ def base_parameters(
     regrouped into the independent ones they are combinations of (Gautier, "Numerical
     calculation of the base inertial parameters of robots", J. Robot. Syst. 8(4), 1991).
     The random states are uniform within the joint limits (within [-pi, pi] where a limit
-    is infinite), with velocities and accelerations uniform in [-2, 2].
+    is infinite), with velocities and accelerations uniform in [-2, 2]. With every joint
+    moving, [qd > 0] + [qd < 0] is 1, so the Coulomb columns of a joint whose gravity torque is
+    constant (a vertical prismatic joint) take that constant in: such a set explains every
+    moving state, which is what ``identify`` estimates from; ``at_rest=True`` also samples joints
+    at rest (a quarter of the velocities 0) and gives the set that explains tau at rest too.
 
     Parameters
     ----------
@@ -424,6 +433,10 @@ def base_parameters(
     drives : bool, optional
         True (default) includes the friction and motor columns; False leaves them out
         (the rigid-body parameters only).
+    at_rest : bool, optional
+        False (default): sample moving joints only (the set ``identify`` estimates from moving
+        data); True: a quarter of the joint velocities 0, for a W_base phi_base equal to tau at
+        rest as well (``generate_code(arm, ["Wb"])`` uses this).
 
     Returns
     -------
@@ -437,7 +450,7 @@ def base_parameters(
         in (0, 1).
     TypeError
         When ``robot`` is not an arm (an ArmModel) or has symbolic (SymPy) parameters, when
-        ``samples`` or ``seed`` is not an integer, or when ``drives`` is not a bool.
+        ``samples`` or ``seed`` is not an integer, or when ``drives`` or ``at_rest`` is not a bool.
     """
     from scipy.linalg import qr
 
@@ -447,6 +460,7 @@ def base_parameters(
     )
     seed = inputs.integer(seed, "seed", 0)
     drives = _flag(drives, "drives")
+    at_rest = _flag(at_rest, "at_rest")
     tolerance = inputs.vector(tolerance, "tolerance")
     if tolerance.shape != (1,) or not 0 < tolerance[0] < 1:
         raise ModelError(f"tolerance must be one number in (0, 1), got {tolerance.tolist()}")
@@ -457,6 +471,8 @@ def base_parameters(
     high = np.where(np.isfinite(upper), upper, np.pi)
     q = rng.uniform(low, high, (samples, robot.n))
     qd, qdd = rng.uniform(-2, 2, (2, samples, robot.n))
+    if at_rest:
+        qd[rng.random(qd.shape) < 0.25] = 0.0
     width = 14 * robot.n if drives else 10 * robot.n
     stacked = regressor(robot, q, qd, qdd)[..., :width].reshape(-1, width)
     _, R, pivots = qr(stacked, mode="economic", pivoting=True)
