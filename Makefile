@@ -19,8 +19,9 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks examples
 	$(BIN)/ruff format --check src tests benchmarks examples
 
+# two workers, each test file in one (the files' own fixtures then run once)
 test: lint
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 fuzz: $(STAMP)
 	ARMDYN_FUZZ_REPORT=fuzz-report.txt $(BIN)/python -m pytest -q tests/test_fuzz.py
