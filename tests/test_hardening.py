@@ -179,3 +179,39 @@ def test_wrong_types_name_the_argument(value: object) -> None:
         arm.coriolis_matrix(np.zeros(2), value)
     with pytest.raises(ad.ModelError, match=r"^tau "):
         arm.forward_dynamics(np.zeros(2), np.zeros(2), value)
+
+
+READ_ONLY_CALLS = {
+    "inverse_dynamics": lambda arm, q: arm.inverse_dynamics(q, q, q),
+    "forward_dynamics": lambda arm, q: arm.forward_dynamics(q, q, q),
+    "inertia_matrix": lambda arm, q: arm.inertia_matrix(q),
+    "coriolis_matrix": lambda arm, q: arm.coriolis_matrix(q, q),
+    "gravity_vector": lambda arm, q: arm.gravity_vector(q),
+    "jacobian": lambda arm, q: arm.jacobian(q, "tool", 3),
+    "inverse_dynamics_derivatives": lambda arm, q: arm.inverse_dynamics_derivatives(q, q, q),
+    "task_inertia": lambda arm, q: ad.cartesian.task_inertia(arm, ad.cartesian.ToolPose(), q),
+    "operational_space": lambda arm, q: ad.cartesian.operational_space(arm, ad.cartesian.ToolPose(), q, q).Lambda,
+}
+
+
+@pytest.mark.parametrize("name", sorted(READ_ONLY_CALLS))
+def test_a_read_only_configuration_takes_the_one_state_kernel(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """arm.qn is read-only (Numba types it apart from a writable array): the call copies it and stays on the
+    one-state kernel, equal to the writable call, instead of the general path (which is refused here)."""
+    arm = ad.models.puma560()
+    assert not arm.qn.flags.writeable
+    expected = READ_ONLY_CALLS[name](arm, np.array(arm.qn))
+
+    def general_path(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the general path was taken")
+
+    monkeypatch.setattr(ad.inputs, "batch_states", general_path)
+    got = READ_ONLY_CALLS[name](arm, arm.qn)
+    for a, b in zip(got if isinstance(got, tuple) else (got,), expected if isinstance(expected, tuple) else (expected,),
+                    strict=True):  # fmt: skip
+        assert np.array_equal(a, b)
+    frozen = np.zeros(arm.n)
+    frozen.flags.writeable = False
+    monkeypatch.undo()
+    with pytest.raises(ad.ModelError, match="got read-only array of shape"):
+        arm.inverse_dynamics(arm.qn, arm.qn, arm.qn, out=frozen)

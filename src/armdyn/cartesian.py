@@ -804,7 +804,8 @@ def _kernel(
         if status == 0:
             return result if matrix else result[0]
     except _NOT_ONE_STATE:
-        pass
+        if (states := inputs.thawed(q, qd, v)) is not None:
+            return _kernel(arm, output, kind, damping, limit, matrix, *states, v_name)
     if arm.packed is None:
         return None
     named = [("q", q)] + ([("qd", qd)] if qd is not None else []) + ([(v_name, v)] if v is not None else [])
@@ -873,7 +874,8 @@ def task_inertia(
             if lambda_one(arm.packed, q, *fast, max_condition, result) == 0:
                 return _into(out, result)
         except _NOT_ONE_STATE:
-            pass
+            if (states := inputs.thawed(q)) is not None:
+                return task_inertia(arm, output, *states, damping=damping, max_condition=max_condition, out=out)
     result = _kernel(arm, output, kernels.LAMBDA, damping, max_condition, True, q)
     if result is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
         return _into(out, result)
@@ -1204,7 +1206,8 @@ def task_forward_dynamics(
             if task_one(arm.packed, q, qd, padded, fast[0], fast[1], 1.0, kernels.FORWARD, result) == 0:
                 return _into(out, result[0, : f.shape[0]])
         except _NOT_ONE_STATE:
-            pass
+            if (states := inputs.thawed(q, qd, f)) is not None:
+                return task_forward_dynamics(arm, output, *states, out=out)
     arm, output = _check_arm(arm), _check_output(output)
     states, (fq, fqd) = _states(arm, ("q", "qd"), (q, qd))
     J = output._jacobian(arm, fq)
@@ -1366,7 +1369,8 @@ def operational_inertia(
             if lambda_one(arm.packed, q, fast[0], fast[1], max_condition, result) == 0:
                 return _into(out, result)
         except _NOT_ONE_STATE:
-            pass
+            if (states := inputs.thawed(q)) is not None:
+                return operational_inertia(arm, output, *states, damping=damping, max_condition=max_condition, out=out)
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=False)
     Lambda, _ = _lambda(arm, task)
     return _into(out, _shaped(Lambda, task.batch))
@@ -1434,7 +1438,8 @@ def operational_space(
             if operational_one(arm.packed, q, qd, fast[0], fast[1], max_condition, *parts) == 0:
                 return OperationalSpace(*parts)
         except _NOT_ONE_STATE:
-            pass
+            if (states := inputs.thawed(q, qd)) is not None:
+                return operational_space(arm, output, *states, damping=damping, max_condition=max_condition)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=False)
     fq, fqd = task.states
     J, n = task.J, arm.n

@@ -39,9 +39,10 @@ def state(
         raise ModelError(f"{name} must be an array of numbers of shape ({n},) or (..., {n}){where}") from None
     if array.ndim == 0 or array.shape[-1] != n:
         raise ModelError(f"{name} must have shape ({n},) or (..., {n}){where}, got {array.shape}")
-    if array.size and not _finite(array):
+    largest = _magnitude(array)
+    if not math.isfinite(largest):
         raise ModelError(f"{name} must be finite (it holds NaN or infinity){where}")
-    if array.size and _largest(array) >= LARGEST_STATE:
+    if largest >= LARGEST_STATE:
         if name == "q":
             raise ModelError(
                 f"q holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: angles that large have no "
@@ -55,18 +56,30 @@ def state(
     return array
 
 
-def _largest(array: np.ndarray) -> float:
-    """The largest magnitude in the array, without a temporary array of its size (a stride-0 view
-    of a billion states has no memory of its own, and must not be given one here)."""
-    if np.iscomplexobj(array):
+SMALL_ARRAY = 4096  # values: below this, |array| as a temporary costs less than a second reduction
+
+
+def _magnitude(array: np.ndarray) -> float:
+    """The largest magnitude in the array (0 when empty), NaN or infinity where it holds one (NaN
+    propagates through max and min). A large array is not given a temporary of its size: a
+    stride-0 view of a billion states has no memory of its own."""
+    if not array.size:
+        return 0.0
+    if array.size <= SMALL_ARRAY or np.iscomplexobj(array):
         return float(np.abs(array).max())
-    return float(max(-array.min(), array.max()))
+    low, high = float(array.min()), float(array.max())
+    return math.nan if math.isnan(low) or math.isnan(high) else max(-low, high)
 
 
-def _finite(array: np.ndarray) -> bool:
-    if np.iscomplexobj(array):
-        return bool(np.isfinite(array).all())
-    return bool(np.isfinite(array.min()) and np.isfinite(array.max()))  # NaN propagates through min and max
+def thawed(*states: object) -> tuple | None:
+    """Writable copies of the states when one is a read-only vector, one state (a named configuration such
+    as arm.qn is read-only, and Numba types a read-only array apart, so a one-state kernel refuses it);
+    None otherwise: the call then takes its general path (which copies a batch only where it can afford
+    to: a read-only stride-0 view of a billion states is no state to copy here)."""
+    frozen = [type(x) is np.ndarray and x.ndim == 1 and not x.flags.writeable for x in states]
+    if not any(frozen):
+        return None
+    return tuple(np.array(x) if is_frozen else x for x, is_frozen in zip(states, frozen, strict=True))
 
 
 def batch_states(
@@ -83,8 +96,9 @@ def batch_states(
         raise ModelError(f"the batch shapes of {shapes} do not broadcast together") from None
     shape = (*batch, n)
     copies = sum(a.shape != shape or not a.flags.c_contiguous for a in arrays)
-    shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
-    memory.affordable(copies * math.prod(shape) * 8, f"a batch of {math.prod(batch):,} states ({shapes}){where}")
+    if copies:  # the message is formatted only where copies are made
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
+        memory.affordable(copies * math.prod(shape) * 8, f"a batch of {math.prod(batch):,} states ({shapes}){where}")
     flat = [
         np.require(np.asarray(a if a.shape == shape else np.broadcast_to(a, shape)), np.float64, ["C", "W"]).reshape(
             -1, n
@@ -107,6 +121,14 @@ def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
         and out.flags.writeable
     ):
         got = getattr(out, "shape", type(out).__name__)
+        if isinstance(out, np.ndarray):
+            checks = (
+                ("read-only", not out.flags.writeable),
+                ("not C-contiguous", not out.flags.c_contiguous),
+                (str(out.dtype), out.dtype != np.float64),
+            )
+            flaws = [name for name, flaw in checks if flaw]
+            got = f"{', '.join(flaws)} array of shape {out.shape}" if flaws else f"shape {out.shape}"
         raise ModelError(f"out must be a writable C-contiguous float64 array of shape {shape}, got {got}")
     return out
 
@@ -180,9 +202,10 @@ def numbers(value: object, name: str, shape: tuple[int, ...] | None = None, wher
         raise ModelError(f"{name} must be {expected}{where}, got {_shown(value)}") from None
     if shape is not None and array.shape != shape:
         raise ModelError(f"{name} must be {expected}{where}, got shape {array.shape}")
-    if array.size and not _finite(array):
+    largest = _magnitude(array)
+    if not math.isfinite(largest):
         raise ModelError(f"{name} must be finite{where} (it holds NaN or infinity)")
-    if array.size and _largest(array) >= LARGEST_STATE:
+    if largest >= LARGEST_STATE:
         raise ModelError(
             f"{name} holds values of {LARGEST_STATE:.0e} or more in magnitude{where}: beyond the range the "
             "dynamics are computed in (products of such values overflow)"

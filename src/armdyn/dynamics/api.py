@@ -171,7 +171,8 @@ def inverse_dynamics(
             if inverse_dynamics_one(arm.packed, q, qd, qdd, tau) == 0:
                 return tau
         except _NOT_ONE_STATE:  # not one state of 1-D float64 arrays: the general path
-            pass
+            if (thawed := inputs.thawed(q, qd, qdd)) is not None:
+                return inverse_dynamics(arm, *thawed, out=out)
     return _rnea(arm, INVERSE_DYNAMICS, ("q", "qd", "qdd"), (q, qd, qdd), out, f_ext)
 
 
@@ -202,7 +203,8 @@ def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
         if nonlinear_one(arm.packed, q, qd, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q, qd)) is not None:
+            return nonlinear_terms(arm, *thawed, out=out)
     return _rnea(arm, NONLINEAR, ("q", "qd"), (q, qd), out)
 
 
@@ -233,7 +235,8 @@ def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
         if coriolis_vector_one(arm.packed, q, qd, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q, qd)) is not None:
+            return coriolis_vector(arm, *thawed, out=out)
     return _rnea(arm, CORIOLIS, ("q", "qd"), (q, qd), out)
 
 
@@ -264,7 +267,8 @@ def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
         if gravity_one(arm.packed, q, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q)) is not None:
+            return gravity_vector(arm, *thawed, out=out)
     return _rnea(arm, GRAVITY_ONLY, ("q",), (q,), out)
 
 
@@ -296,7 +300,8 @@ def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.nda
         if friction_one(arm.packed, qd, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(qd)) is not None:
+            return friction(arm, *thawed, out=out)
     return _batch(arm, friction_batch, ("qd",), (qd,), out, (arm.n,))
 
 
@@ -330,7 +335,8 @@ def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
         if crba_one(arm.packed, q, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q)) is not None:
+            return inertia_matrix(arm, *thawed, out=out)
     return _batch(arm, crba_batch, ("q",), (q,), out, (n, n))
 
 
@@ -364,7 +370,8 @@ def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
         if coriolis_one(arm.packed, q, qd, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q, qd)) is not None:
+            return coriolis_matrix(arm, *thawed, out=out)
     return _batch(arm, coriolis_batch, ("q", "qd"), (q, qd), out, (n, n))
 
 
@@ -401,7 +408,8 @@ def forward_dynamics(
         if aba_one(arm.packed, q, qd, tau, qdd) == 0:
             return qdd
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q, qd, tau)) is not None:
+            return forward_dynamics(arm, *thawed, out=out)
     model = _model(arm)
     batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), arm.n, _where(arm))
     result = inputs.result(out, (*batch, arm.n))
@@ -452,7 +460,8 @@ def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = N
         if energy_one(arm.packed, q, qd, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q, qd)) is not None:
+            return energies(arm, *thawed, out=out)
     return _batch(arm, energy_batch, ("q", "qd"), (q, qd), out, (2,))
 
 
@@ -575,7 +584,8 @@ def link_transforms(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> 
         if transforms_one(arm.packed, q, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q)) is not None:
+            return link_transforms(arm, *thawed, out=out)
     return _batch(arm, frames.transforms_batch, ("q",), (q,), out, (arm.n, 4, 4))
 
 
@@ -606,7 +616,8 @@ def tool_pose(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.nda
         if pose_one(arm.packed, q, TOOL, result) == 0:
             return result
     except _NOT_ONE_STATE:
-        pass
+        if (thawed := inputs.thawed(q)) is not None:
+            return tool_pose(arm, *thawed, out=out)
     return _batch(arm, _with_target(frames.pose_batch, frames.TOOL), ("q",), (q,), out, (4, 4))
 
 
@@ -651,7 +662,8 @@ def jacobian(
         if jacobian_one(arm.packed, q, target, _FRAMES[frame], result) == 0:
             return result
     except _NOT_ONE_STATE_OR_OPTION:
-        pass
+        if (thawed := inputs.thawed(q)) is not None:
+            return jacobian(arm, *thawed, frame, link, out)
     target, axes = _target(arm, link), _frame(frame)
     kernel = _with_target(frames.jacobian_batch, target, axes)
     return _batch(arm, kernel, ("q",), (q,), out, (6, arm.n))
@@ -701,7 +713,8 @@ def jacobian_dot(
         if jacobian_dot_one(arm.packed, q, qd, target, _FRAMES[frame], result) == 0:
             return result
     except _NOT_ONE_STATE_OR_OPTION:
-        pass
+        if (thawed := inputs.thawed(q, qd)) is not None:
+            return jacobian_dot(arm, *thawed, frame, link, out)
     target, axes = _target(arm, link), _frame(frame)
     kernel = _with_target(frames.jacobian_dot_batch, target, axes)
     return _batch(arm, kernel, ("q", "qd"), (q, qd), out, (6, arm.n))
@@ -783,7 +796,8 @@ def inverse_dynamics_derivatives(
             if rnea_derivatives_one(model, q, qd, qdd, eps, d_q, d_qd, _NO_MATRIX) == 0:
                 return d_q, d_qd
         except _NOT_ONE_STATE:
-            pass
+            if (thawed := inputs.thawed(q, qd, qdd)) is not None:
+                return inverse_dynamics_derivatives(arm, *thawed, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, _where(arm))
     results = _pair(out, (*batch, n, n), 2)
     if flat[0].shape[0]:
@@ -833,7 +847,8 @@ def forward_dynamics_derivatives(
             if forward_dynamics_derivatives_one(model, q, qd, tau, eps, d_q, d_qd, d_tau) == 0:
                 return d_q, d_qd, d_tau
         except _NOT_ONE_STATE:
-            pass
+            if (thawed := inputs.thawed(q, qd, tau)) is not None:
+                return forward_dynamics_derivatives(arm, *thawed, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), n, _where(arm))
     results = _pair(out, (*batch, n, n), 3)
     singular = np.full(flat[0].shape[0], -1)
