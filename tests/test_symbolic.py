@@ -168,6 +168,19 @@ def test_regressor_of_a_numeric_arm_reproduces_tau() -> None:
 
 
 # ----- the generated code --------------------------------------------------------------------------
+def test_a_closed_form_too_deep_to_compile_points_to_generated_code(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 7-joint arm's expanded closed form nests deeper than Python's compiler goes (RecursionError after
+    half a minute, measured on the Panda): compile() says so and names the route that scales."""
+    from armdyn.symbolic import codegen
+
+    def too_deep(*args: object) -> None:
+        raise RecursionError("maximum recursion depth exceeded during compilation")
+
+    monkeypatch.setattr(codegen, "_compiled", too_deep)
+    with pytest.raises(ad.ModelError, match=r"2-joint arm is too deep .*generate_code\(arm\)\.compile\(\)"):
+        derive(ad.models.two_link_planar()).compile()
+
+
 def test_compiled_puma560_takes_one_state_or_a_batch() -> None:
     arm = ad.models.puma560()
     compiled = derive(arm).compile()

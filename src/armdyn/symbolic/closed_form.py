@@ -486,7 +486,8 @@ class ClosedForm:
         Raises
         ------
         armdyn.ModelError
-            When a symbolic parameter of the arm has no value in ``values``.
+            When a symbolic parameter of the arm has no value in ``values``, or when the closed form
+            is too deep for Python's compiler (a 7-joint arm's: ``generate_code`` is the route there).
         """
         names = self._parameter_names()
         given = {str(k): float(v) for k, v in (values or {}).items()}

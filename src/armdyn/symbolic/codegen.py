@@ -12,6 +12,7 @@ import symengine as se
 import sympy
 
 from armdyn import inputs
+from armdyn.errors import ModelError
 from armdyn.symbolic.derive import Derivation
 
 FUNCTIONS = {  # name -> (state arguments, shape of the result)
@@ -259,11 +260,21 @@ def compile_closed_form(raw: Derivation, values: dict[str, float]) -> CompiledCl
             **{name: [numeric(x) for x in getattr(raw, name)] for name in ("G", "tau", "V", "F")},
         }
     )
+    try:
+        return _compiled(substituted, len(raw.q))
+    except RecursionError:  # an expression nested deeper than Python's compiler goes (a 7-joint arm's)
+        raise ModelError(
+            f"the closed form of this {len(raw.q)}-joint arm is too deep for Python's compiler: "
+            "armdyn.symbolic.generate_code(arm).compile() gives tau, M, G, N (and Vm where asked) as lean "
+            "straight-line code of the customized Newton-Euler recursion"
+        ) from None
+
+
+def _compiled(substituted: Derivation, n: int) -> CompiledClosedForm:
     namespace: dict[str, object] = {"cos": math.cos, "sin": math.sin, "sign": np.sign}
     exec(compile(python_source(substituted, [], returns=False), "<armdyn closed form>", "exec"), namespace)
     vector, matrix = "float64[::1]", "float64[:, ::1]"
     one, batch = {}, {}
-    n = len(raw.q)
     for name, (args, kind) in FUNCTIONS.items():
         result = matrix if kind == "matrix" else vector
         signature = f"({', '.join([vector] * len(args))}, {result})"
