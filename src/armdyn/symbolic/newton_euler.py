@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.dynamics.packed import (
     ARMATURE,
     COULOMB_NEG,
@@ -968,8 +969,6 @@ class CompiledCode:
         return self._call("Wb", (q, qd, qdd), out)
 
     def _call(self, name: str, states: tuple, out: np.ndarray | None) -> np.ndarray:
-        from armdyn import inputs
-
         if name not in self._one:
             raise ModelError(f"this code has no {name}: generate it with functions including '{name}'")
         shape = self.shapes[name]
