@@ -6,6 +6,9 @@ from __future__ import annotations
 import ast
 import pickle
 import shutil
+import subprocess
+import sys
+import textwrap
 import threading
 from pathlib import Path
 
@@ -142,13 +145,16 @@ def test_packed_model_unchanged_by_every_call_from_two_threads(name: str) -> Non
     failures: list[str] = []
 
     def work(seed: int) -> None:
-        local = np.random.default_rng(seed)
-        for _ in range(20):
-            _every_call(arm, local)
-            got = arm.inverse_dynamics(q, qd, qdd), arm.inertia_matrix(q), arm.forward_dynamics(q, qd, qdd)
-            if not all(np.array_equal(a, b) for a, b in zip(got, expected, strict=True)):
-                failures.append("a one-state result changed while another thread ran")
-        ad.simulate(arm, ComputedTorque(100, 20), Sinusoid(0.1, 0.5), t_final=0.02)
+        try:
+            local = np.random.default_rng(seed)
+            for _ in range(20):
+                _every_call(arm, local)
+                got = arm.inverse_dynamics(q, qd, qdd), arm.inertia_matrix(q), arm.forward_dynamics(q, qd, qdd)
+                if not all(np.array_equal(a, b) for a, b in zip(got, expected, strict=True)):
+                    failures.append("a one-state result changed while another thread ran")
+            ad.simulate(arm, ComputedTorque(100, 20), Sinusoid(0.1, 0.5), t_final=0.02)
+        except Exception as error:  # a thread's exception would otherwise pass unseen
+            failures.append(f"{type(error).__name__}: {error}")
 
     threads = [threading.Thread(target=work, args=(seed,)) for seed in (2, 3)]
     for thread in threads:
@@ -157,6 +163,37 @@ def test_packed_model_unchanged_by_every_call_from_two_threads(name: str) -> Non
         thread.join()
     assert not failures
     np.testing.assert_array_equal(arm.packed, original)
+
+
+def test_two_threads_first_calls_compile_each_kernel_once() -> None:
+    """A fresh interpreter whose first calls of each one-state kernel come from two threads at once: one
+    compiles (or loads from the cache), the other waits for it; neither fails."""
+    script = textwrap.dedent(
+        """
+        import threading
+        import numpy as np
+        import armdyn as ad
+
+        arm = ad.models.puma560()
+        q = np.full(6, 0.3)
+        start, errors = threading.Barrier(2), []
+
+        def first_calls():
+            start.wait()
+            try:
+                arm.inverse_dynamics(q, q, q), arm.inertia_matrix(q), arm.jacobian(q)
+            except Exception as error:
+                errors.append(repr(error))
+
+        threads = [threading.Thread(target=first_calls) for _ in range(2)]
+        [t.start() for t in threads]
+        [t.join() for t in threads]
+        print(errors or "ok")
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.strip() == "ok", done.stdout
 
 
 def test_kernel_cache_folder_follows_every_compiled_source(tmp_path: Path) -> None:

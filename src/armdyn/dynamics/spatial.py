@@ -14,6 +14,7 @@ all are inlined into their callers.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from types import MethodType
 
@@ -52,11 +53,13 @@ def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
 
     def decorate(function: Callable) -> Dispatcher:
         dispatcher = njit(**NUMBA_OPTIONS)(function)
+        first_call = threading.Lock()  # two threads' first calls: one compiles, the other waits and runs it
 
         def compile_signature(self: Dispatcher, *args: object, **kwargs: object) -> Dispatcher:
-            if self._can_compile:
-                self.compile(signature)
-                self.disable_compile()
+            with first_call:
+                if self._can_compile:
+                    self.compile(signature)
+                    self.disable_compile()
             return self
 
         def no_conversion(self: Dispatcher, *args: object, **kwargs: object) -> bool:
