@@ -953,7 +953,9 @@ class ActuatedArm:
         tau = np.where(rigid, self._K_M * current / self._r, 0.0)
         tau[..., f] = _shaft_torque(q[..., f], qd[..., f], q_M, w_M, self._r[f], self._K[f], self._B_s[f])
         tau[..., h] = self._A[h] * P_L
-        qdd = self._mechanical.forward_dynamics(q, qd, tau)
+        # one state as a batch of one: the batch kernel either way, so one state rounds as in a batch
+        qdd = self._mechanical.forward_dynamics(q[None], qd[None], tau[None])[0] if not batch else (
+            self._mechanical.forward_dynamics(q, qd, tau))  # fmt: skip
         F_M = _rotor_friction(w_M, self._Tc_pos[f], self._Tc_neg[f])
         wd_M = _rotor_acceleration(
             current[..., f], w_M, tau[..., f], self._J_M[f], self._B_M[f], F_M, self._K_M[f], self._r[f]
