@@ -236,6 +236,14 @@ def test_the_command_line_generates_code_for_larger_arms(tmp_path: Path) -> None
     assert small.exit_code == 0 and "def M(q, out):" in small.output
     refused = runner.invoke(app, ["derive", "puma560", "--method", "newton-euler"])
     assert refused.exit_code == 2 and "give --code" in refused.output
+    chosen = runner.invoke(app, ["derive", "scara", "--code", "c", "--functions", "Wb,tau"])
+    assert chosen.exit_code == 0, chosen.output
+    assert "armdyn_phi_base[" in chosen.output and "void armdyn_Wb(" in chosen.output
+    assert "void armdyn_M(" not in chosen.output
+    unknown = runner.invoke(app, ["derive", "scara", "--code", "c", "--functions", "Wx"])
+    assert unknown.exit_code == 2 and "functions must be some of" in unknown.output
+    alone = runner.invoke(app, ["derive", "scara", "--functions", "Wb"])
+    assert alone.exit_code == 2 and "give it with --code" in alone.output
 
 
 @pytest.mark.parametrize("name", ["puma560", "stanford", "polar_rp", "xarm7"])

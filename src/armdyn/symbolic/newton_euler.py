@@ -697,8 +697,9 @@ def c_source(function: GeneratedFunction, prefix: str = "armdyn_") -> str:
 
 class GeneratedCode:
     """The robot equation of one numeric arm as generated code: tau(q, qd, qdd), M(q), G(q) and
-    N(q, qd) = Vm qd + F + G, each straight-line code of named intermediate quantities from the
-    customized Newton-Euler (tau, G, N) and composite-rigid-body (M) recursions.
+    N(q, qd) = Vm qd + F + G, and where asked Vm(q, qd) and the base regressor Wb(q, qd, qdd), each
+    straight-line code of named intermediate quantities from the customized Newton-Euler (tau, G, N),
+    composite-rigid-body (M), Coriolis (Vm) and regressor (Wb) recursions.
 
     Make one with ``armdyn.symbolic.generate_code(arm)``. ``python()`` and ``c()`` give the source,
     ``operation_counts()`` what it costs, ``compile()`` Numba functions of one state or a batch.
@@ -789,8 +790,8 @@ class GeneratedCode:
 
 class CompiledCode:
     """Generated code compiled by Numba: ``tau(q, qd, qdd)``, ``M(q)``, ``G(q)``, ``N(q, qd)`` and, where
-    generated, ``Vm(q, qd)``, each for one state or a batch (leading axes), with ``out=``, as the Robot's
-    methods.
+    generated, ``Vm(q, qd)`` and ``Wb(q, qd, qdd)``, each for one state or a batch (leading axes), with
+    ``out=``, as the Robot's methods.
 
     Parameters
     ----------
@@ -870,13 +871,6 @@ class CompiledCode:
         armdyn.ModelError
             When a state or ``out`` is invalid, or the code has no such function.
         """
-        if out is None and "M" in self._one:
-            result = np.empty((self.n, self.n))
-            try:
-                if self._one["M"](q, result) == 0:
-                    return result
-            except TypeError:
-                pass
         return self._call("M", (q,), out)
 
     def G(self, q: object, out: np.ndarray | None = None) -> np.ndarray:
