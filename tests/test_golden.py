@@ -12,7 +12,10 @@ SCENARIOS = scenarios()
 
 # scenario name -> rtol, for a case whose order of additions had to change; say why beside each entry, e.g.
 #   "dyn.puma560.rnea": 1e-14,  # the forward pass now sums the link forces in another order
-TOLERANCES: dict[str, float] = {}
+# Many runs at once (simulate with runs=, and the studies built on it) vary from one process to the next by an
+# ulp or two (4e-16 relative seen): the parallel loop's vectorized kernels take an aligned or unaligned path
+# by where the allocator put each run's arrays, and the two round differently. One run is bit for bit.
+TOLERANCES: dict[str, float] = {name: 1e-14 for name in SCENARIOS if name.startswith(("many.", "study."))}
 
 
 def _stored() -> dict[str, dict[str, np.ndarray]]:

@@ -239,6 +239,21 @@ def _solve(
     return -1
 
 
+@njit(inline="always", **NUMBA_OPTIONS)
+def rk4_stage_state(y: np.ndarray, rate: np.ndarray, c: float, h: float, out: np.ndarray) -> None:
+    """The state at which RK4 evaluates its next stage: out = y + c h k (c = 1/2, 1/2, 1)."""
+    for j in range(y.shape[0]):
+        out[j] = y[j] + c * h * rate[j]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def rk4_advance(y: np.ndarray, rates: np.ndarray, h: float) -> None:
+    """The classical fourth-order Runge-Kutta step y += h/6 (k1 + 2 k2 + 2 k3 + k4) from the four stage
+    rates (4, size): the one compiled RK4 of the fixed-step runs, with or without drives."""
+    for j in range(y.shape[0]):
+        y[j] += h / 6.0 * (rates[0, j] + 2.0 * rates[1, j] + 2.0 * rates[2, j] + rates[3, j])
+
+
 @njit(**NUMBA_OPTIONS)
 def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, state: tuple, record: tuple) -> None:
     """Steps first..last-1 of fixed-step RK4 (the book's TRESP), recording each step's start.
@@ -264,12 +279,10 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     work = np.empty(workspace_size(n))
     control_work = np.empty(workspace_size(n))
     goal = np.empty((3, n))
-    q, qd = x[:n].copy(), x[n:].copy()
-    stages = np.empty((8, n))  # the RK4 slopes of q and qd
-    k1q, k1v, k2q, k2v, k3q, k3v, k4q, k4v = stages[0], stages[1], stages[2], stages[3], stages[4], stages[5], \
-        stages[6], stages[7]  # fmt: skip
-    scratch = np.empty((6, n))
-    qs, vs, net, applied, u, Nv = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
+    y, stage_y = x.copy(), np.empty(2 * n)  # [q; qd], and the state of a stage
+    q, qd = y[:n], y[n:]
+    rates = np.empty((4, 2 * n))  # each stage's [qd; qdd]
+    net, applied, u, Nv = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     M_, Mp = np.empty((n, n)), np.empty((n, n))
     for k in range(first, last):
         t = t0 + k * dt
@@ -285,33 +298,24 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             control_law(kind, model, model_coulomb, eps, control_work, q, qd, goal, e_int, gain, u, M_, Nv, tau_held)
         for i in range(n):
             applied[i] = tau_held[i] - disturbance[i]
+        rates[0, :n] = qd
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
-            singular = _solve(Mp, Nv, applied, coulomb, eps, qd, k1v, plant_model[PIVOT_FLOOR])
+            singular = _solve(Mp, Nv, applied, coulomb, eps, qd, rates[0, n:], plant_model[PIVOT_FLOOR])
         else:
-            singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, k1v)
+            singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, rates[0, n:])
         if singular >= 0:
             outcome[0], outcome[1], outcome[2] = k, SINGULAR, singular
             break
         T_[k] = t
         for i in range(n):
-            Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], goal[0, i]
-        for i in range(n):
-            k1q[i] = qd[i]
-            qs[i], vs[i] = q[i] + 0.5 * dt * k1q[i], qd[i] + 0.5 * dt * k1v[i]
-        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k2v))
-        for i in range(n):
-            k2q[i] = vs[i]
-            qs[i], vs[i] = q[i] + 0.5 * dt * k2q[i], qd[i] + 0.5 * dt * k2v[i]
-        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k3v))
-        for i in range(n):
-            k3q[i] = vs[i]
-            qs[i], vs[i] = q[i] + dt * k3q[i], qd[i] + dt * k3v[i]
-        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k4v))
-        for i in range(n):
-            k4q[i] = vs[i]
-            q[i] += dt / 6.0 * (k1q[i] + 2.0 * k2q[i] + 2.0 * k3q[i] + k4q[i])
-            qd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
+            Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], rates[0, n + i], tau_held[i], goal[0, i]
+        for stage in range(1, 4):
+            rk4_stage_state(y, rates[stage - 1], 0.5 if stage < 3 else 1.0, dt, stage_y)
+            rates[stage, :n] = stage_y[n:]
+            singular = max(singular, _accelerations(plant_model, coulomb, eps, work, stage_y[:n], stage_y[n:],
+                                                    applied, Mp, net, rates[stage, n:]))  # fmt: skip
+        rk4_advance(y, rates, dt)
         for i in range(n):  # a state that blew up explains a singular stage too
             if not (abs(q[i]) < LARGEST_STATE and abs(qd[i]) < np.inf):  # NaN fails both
                 outcome[0], outcome[1], outcome[2] = k + 1, DIVERGED, i
@@ -320,8 +324,7 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             outcome[0], outcome[1], outcome[2] = k + 1, SINGULAR, singular
         if outcome[0] >= 0:
             break
-    x[:n] = q
-    x[n:] = qd
+    x[:] = y
 
 
 # ----- the Python side ---------------------------------------------------------------------------------
