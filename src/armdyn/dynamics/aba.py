@@ -9,9 +9,20 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.friction import joint_friction
 from armdyn.dynamics.packed import (
+    ABA_ACCELERATION,
+    ABA_BIAS,
     ABA_FIXED,
+    ABA_INERTIA,
     ABA_JOINT,
+    ABA_LOCAL,
+    ABA_MOMENTUM,
+    ABA_PIVOT,
+    ABA_POSE,
+    ABA_SUBSPACE,
+    ABA_U,
+    ABA_VELOCITY,
     ARMATURE,
+    ARTICULATED,
     FIRST_MOMENT,
     GRAVITY,
     HEADER,
@@ -20,7 +31,9 @@ from armdyn.dynamics.packed import (
     N_JOINTS,
     PARENT,
     PIVOT_FLOOR,
+    SPATIAL,
     STRIDE,
+    TRANSFORM,
     workspace_size,
 )
 from armdyn.dynamics.rnea import BATCH_CHUNKS
@@ -39,8 +52,7 @@ from armdyn.dynamics.spatial import (
     world_motion_subspace,
     world_pose,
 )
-
-SINGULAR_STATUS = 50  # aba_one: M(q) is singular
+from armdyn.dynamics.status import OK, SINGULAR, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -59,19 +71,26 @@ def aba_core(
     PIVOT_FLOOR: M(q) is singular there and qdd is not computed.
     """
     n = int(model[N_JOINTS])
-    local, pose, S, vel, bias = 0, 12 * n, 24 * n, 30 * n, 36 * n
-    IA, pA, U, acc, Du, tmp = 42 * n, 78 * n, 84 * n, 90 * n, 96 * n, 98 * n
+    local, pose, S, vel, bias = ABA_LOCAL * n, ABA_POSE * n, ABA_SUBSPACE * n, ABA_VELOCITY * n, ABA_BIAS * n
+    IA, pA, U, acc, Du, tmp = (
+        ABA_INERTIA * n,
+        ABA_MOMENTUM * n,
+        ABA_U * n,
+        ABA_ACCELERATION * n,
+        ABA_PIVOT * n,
+        ABA_JOINT * n,
+    )
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(model[b + PARENT])
-        s, v, c, ia = S + 6 * i, vel + 6 * i, bias + 6 * i, IA + 36 * i
-        joint_transform(model, i, q[i], work, local + 12 * i)
-        world_pose(model, work, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
-        world_motion_subspace(model, i, work, pose + 12 * i, s)
+        s, v, c, ia = S + SPATIAL * i, vel + SPATIAL * i, bias + SPATIAL * i, IA + ARTICULATED * i
+        joint_transform(model, i, q[i], work, local + TRANSFORM * i)
+        world_pose(model, work, local + TRANSFORM * i, pose + TRANSFORM * parent, pose + TRANSFORM * i, parent >= 0)
+        world_motion_subspace(model, i, work, pose + TRANSFORM * i, s)
         rate = qd[i]
         for k in range(6):
             work[tmp + k] = work[s + k] * rate
-            work[v + k] = (work[vel + 6 * parent + k] if parent >= 0 else 0.0) + work[tmp + k]
+            work[v + k] = (work[vel + SPATIAL * parent + k] if parent >= 0 else 0.0) + work[tmp + k]
         motion_cross(work, v, tmp, c)
         # the body's inertia in world coordinates, 10 parameters at tmp + 6, then as 6x6
         work[tmp + 16] = model[b + MASS]
@@ -81,7 +100,7 @@ def aba_core(
             work[tmp + 20 + k] = model[b + INERTIA + k]
         for k in range(10):
             work[tmp + 6 + k] = 0.0
-        add_inertia_to_parent(work, pose + 12 * i, tmp + 16, tmp + 6)
+        add_inertia_to_parent(work, pose + TRANSFORM * i, tmp + 16, tmp + 6)
         mass, hx, hy, hz = work[tmp + 6], work[tmp + 7], work[tmp + 8], work[tmp + 9]
         i0, i1, i2, i3, i4, i5 = (
             work[tmp + 10],
@@ -102,7 +121,7 @@ def aba_core(
         for r in range(6):
             row = rows[r]
             for k in range(6):
-                work[ia + 6 * r + k] = row[k]
+                work[ia + SPATIAL * r + k] = row[k]
         rigid_times(work, tmp + 6, v, tmp + 16)  # momentum [k; l]; p^A = v x* [k; l] = [w x k + u x l; w x l]
         wx, wy, wz, ux, uy, uz = work[v], work[v + 1], work[v + 2], work[v + 3], work[v + 4], work[v + 5]
         kx, ky, kz, lx, ly, lz = (
@@ -113,7 +132,7 @@ def aba_core(
             work[tmp + 20],
             work[tmp + 21],
         )
-        p = pA + 6 * i
+        p = pA + SPATIAL * i
         work[p] = wy * kz - wz * ky + uy * lz - uz * ly
         work[p + 1] = wz * kx - wx * kz + uz * lx - ux * lz
         work[p + 2] = wx * ky - wy * kx + ux * ly - uy * lx
@@ -122,11 +141,11 @@ def aba_core(
         work[p + 5] = wx * ly - wy * lx
     for i in range(n - 1, -1, -1):
         b = HEADER + STRIDE * i
-        s, ia, p, u, c = S + 6 * i, IA + 36 * i, pA + 6 * i, U + 6 * i, bias + 6 * i
+        s, ia, p, u, c = S + SPATIAL * i, IA + ARTICULATED * i, pA + SPATIAL * i, U + SPATIAL * i, bias + SPATIAL * i
         for r in range(6):
             total = 0.0
             for k in range(6):
-                total += work[ia + 6 * r + k] * work[s + k]
+                total += work[ia + SPATIAL * r + k] * work[s + k]
             work[u + r] = total
         D = dot6(work, s, u) + model[b + ARMATURE]
         if not model[PIVOT_FLOOR] < D:
@@ -137,26 +156,26 @@ def aba_core(
         parent = int(model[b + PARENT])
         if parent < 0:
             continue
-        target, pt = IA + 36 * parent, pA + 6 * parent
+        target, pt = IA + ARTICULATED * parent, pA + SPATIAL * parent
         uc = dot6(work, u, c) / D
         gain = value / D
         for r in range(6):
             ur = work[u + r] / D
             total = work[p + r] + work[u + r] * (gain - uc)
             for k in range(6):
-                total += work[ia + 6 * r + k] * work[c + k]
-                work[target + 6 * r + k] += work[ia + 6 * r + k] - ur * work[u + k]
+                total += work[ia + SPATIAL * r + k] * work[c + k]
+                work[target + SPATIAL * r + k] += work[ia + SPATIAL * r + k] - ur * work[u + k]
             work[pt + r] += total
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(model[b + PARENT])
-        a, s, c = acc + 6 * i, S + 6 * i, bias + 6 * i
+        a, s, c = acc + SPATIAL * i, S + SPATIAL * i, bias + SPATIAL * i
         for k in range(6):
             if parent >= 0:
-                work[a + k] = work[acc + 6 * parent + k] + work[c + k]
+                work[a + k] = work[acc + SPATIAL * parent + k] + work[c + k]
             else:
                 work[a + k] = (-model[GRAVITY + k - 3] if k >= 3 else 0.0) + work[c + k]
-        result = (work[Du + 2 * i + 1] - dot6(work, U + 6 * i, a)) / work[Du + 2 * i]
+        result = (work[Du + 2 * i + 1] - dot6(work, U + SPATIAL * i, a)) / work[Du + 2 * i]
         qdd[i] = result
         for k in range(6):
             work[a + k] += work[s + k] * result
@@ -165,13 +184,13 @@ def aba_core(
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR))
 def aba_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray) -> int:
-    """qdd for one state; the status of states_status, 4 when qdd has the wrong length, or
-    SINGULAR_STATUS when M(q) is singular."""
+    """qdd for one state; the status of states_status, WRONG_SHAPE when qdd has the wrong length, or
+    SINGULAR when M(q) is singular."""
     status = states_status(model, q, qd, tau, 3)
-    if status == 0 and qdd.shape[0] != int(model[N_JOINTS]):
-        status = 4
-    if status == 0 and aba_core(model, scratch(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd) >= 0:
-        status = SINGULAR_STATUS
+    if status == OK and qdd.shape[0] != int(model[N_JOINTS]):
+        status = WRONG_SHAPE
+    if status == OK and aba_core(model, scratch(ABA_JOINT * int(model[N_JOINTS]) + ABA_FIXED), q, qd, tau, qdd) >= 0:
+        status = SINGULAR
     return status
 
 

@@ -10,11 +10,18 @@ that checks lengths and finiteness itself (an explicit signature, so any other i
 the type match with a TypeError). Anything else, and any input the kernel refuses, takes
 the general path: armdyn.inputs converts, checks (raising a ModelError that names the
 argument), broadcasts, and one batch kernel runs over all states.
+
+The functions with that pair of paths are declared below with their signatures and docstrings,
+and written out from one row each of TABLE (their one-state and batch kernels, the names of
+their states, the shape of their result) by ``_public``, once, at import.
 """
 
 from __future__ import annotations
+import __future__
 
+import inspect
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -49,6 +56,7 @@ from armdyn.dynamics.rnea import (
     rnea_batch,
 )
 from armdyn.dynamics.rnea_blocks import rnea_blocks
+from armdyn.dynamics.status import OK
 from armdyn.errors import ModelError
 
 if TYPE_CHECKING:
@@ -95,14 +103,42 @@ def _model(arm: Robot) -> np.ndarray:
     return arm.packed
 
 
+_FRAMES = {"base": frames.WORLD, "tool": frames.LOCAL}
+# the fast path's link and frame go unchecked to the kernel: a link that is not an int fails the
+# signature (TypeError; OverflowError beyond int64), a frame not in _FRAMES fails the lookup (KeyError)
+_NOT_ONE_STATE_OR_OPTION = (*_NOT_ONE_STATE, KeyError, OverflowError)
+
+
+def _target(arm: Robot, link: object) -> int:
+    """frames.TOOL for None, else the checked link index."""
+    return frames.TOOL if link is None else kinematics.link_index(arm, link)
+
+
+def _frame(frame: object) -> int:
+    """frames.WORLD or frames.LOCAL for "base" or "tool", else the ModelError of check_frame."""
+    if type(frame) is str and frame in _FRAMES:
+        return _FRAMES[frame]
+    kinematics.check_frame(frame)
+    return _FRAMES[frame]
+
+
+def _with_target(kernel: Callable, *options: int) -> Callable:
+    """A batch kernel with its trailing integer options (target, frame) bound."""
+
+    def call(model: np.ndarray, *arrays: np.ndarray) -> None:
+        kernel(model, *arrays[:-1], *options, arrays[-1])
+
+    return call
+
+
 def _rnea(
-    arm: Robot, flags: int, names: tuple[str, ...], states: tuple, out: object, f_ext: object = None
+    arm: Robot, flags: int, names: tuple[str, ...], states: tuple, out: object, trailing: tuple, f_ext: object = None
 ) -> np.ndarray:
     """The general path of the RNEA family: checked, broadcast, vectorized across states."""
     model = _model(arm)
     batch, flat = inputs.batch_states(names, states, arm.n, _where(arm))
     flat += [flat[-1]] * (3 - len(flat))
-    result = inputs.result(out, (*batch, arm.n))
+    result = inputs.result(out, (*batch, *trailing))
     target = result.reshape(-1, arm.n)
     if not target.shape[0]:
         return result
@@ -127,6 +163,139 @@ def _batch(
     return result
 
 
+def _forward(
+    arm: Robot, kernel: Callable, names: tuple[str, ...], states: tuple, out: object, trailing: tuple
+) -> np.ndarray:
+    """The general path of a kernel that may find M(q) singular: checked, broadcast, one parallel
+    batch call that marks each singular state's joint, and the error naming the first."""
+    model = _model(arm)
+    batch, flat = inputs.batch_states(names, states, arm.n, _where(arm))
+    result = inputs.result(out, (*batch, *trailing))
+    singular = np.full(flat[0].shape[0], -1)
+    if singular.size:
+        _launch(kernel, result.size, model, *flat, result.reshape(-1, *trailing), singular)
+    if singular.max(initial=-1) >= 0:
+        raise _singular(arm, flat[0], singular, batch)
+    return result
+
+
+@dataclass(frozen=True)
+class Row:
+    """How one public function computes: its compiled kernel pair and the shape of its result.
+
+    The one-state kernel takes (model, *states, *options, result) and returns a status; the
+    general path ``general(arm, batch, names, states, out, trailing)`` checks and broadcasts the
+    states and runs ``batch`` over all of them (for the RNEA family ``batch`` is the flags of
+    rnea.rnea_core and ``general`` is _rnea).
+    """
+
+    one: Callable
+    batch: Callable | int
+    shape: str  # the result's shape for one state, in n: "n", "n, n", "2", "n, 4, 4"...
+    general: Callable = _batch
+    options: str = ""  # the one-state kernel's arguments between the states and the result
+    wrench: bool = False  # takes f_ext (the one-state kernel only when it is None)
+    target: bool = False  # takes frame and link, as jacobian
+
+
+TABLE = {
+    "inverse_dynamics": Row(inverse_dynamics_one, INVERSE_DYNAMICS, "n", _rnea, wrench=True),
+    "nonlinear_terms": Row(nonlinear_one, NONLINEAR, "n", _rnea),
+    "coriolis_vector": Row(coriolis_vector_one, CORIOLIS, "n", _rnea),
+    "gravity_vector": Row(gravity_one, GRAVITY_ONLY, "n", _rnea),
+    "friction": Row(friction_one, friction_batch, "n"),
+    "inertia_matrix": Row(crba_one, crba_batch, "n, n"),
+    "coriolis_matrix": Row(coriolis_one, coriolis_batch, "n, n"),
+    "forward_dynamics": Row(aba_one, aba_blocks, "n", _forward),
+    "energies": Row(energy_one, energy_batch, "2"),
+    "link_transforms": Row(transforms_one, frames.transforms_batch, "n, 4, 4"),
+    "tool_pose": Row(pose_one, _with_target(frames.pose_batch, TOOL), "4, 4", options="TOOL"),
+    "jacobian": Row(jacobian_one, frames.jacobian_batch, "6, n", target=True),
+    "jacobian_dot": Row(jacobian_dot_one, frames.jacobian_dot_batch, "6, n", target=True),
+}
+"""The public functions with a one-state fast path and a general path, by name (see _public)."""
+
+# the link unchecked when a plain non-negative int (the kernel refuses it out of range); anything else made out
+# of range, for the general path's checks (Numba would convert a bool or a float to the kernel's int)
+SOURCES: dict[str, str] = {}
+"""The source written out for each public function of TABLE (for reading; tracebacks name it)."""
+_TARGET = "target = TOOL if link is None else link if type(link) is int and link >= 0 else arm.n\n        "
+_TEMPLATE = """
+def {name}({parameters}):
+    {guard}{shape_prelude}result = _empty({shape}) if out is None else out
+    {indent}try:
+        {indent}{target}if {one}(arm.packed, {states}, {options}result) == {ok}:
+            {indent}return result
+    {indent}except {refused}:
+        {indent}if (thawed := inputs.thawed({states})) is not None:
+            {indent}return {name}(arm, *thawed, {passed}out=out)
+    return {general}(arm, {batch}, {names}, ({states},), out, {trailing}{wrench})
+"""
+
+
+def _public(declaration: Callable) -> Callable:
+    """The public function of TABLE's row for ``declaration`` (its name, signature and docstring):
+
+        result = new (n-shaped) array, or out
+        if one-state kernel(model, *states, result) == OK: return result   (the fast path)
+        a read-only vector among the states: again with writable copies
+        return the general path (checked, broadcast, one batch call)
+
+    The body is written out for each row once, at import, so that the fast path runs no more
+    Python than a hand-written one (about 1 us a call on a six-joint arm)."""
+    name = declaration.__name__
+    row = TABLE[name]
+    signature = inspect.signature(declaration)
+    extra = {"f_ext"} if row.wrench else {"frame", "link"} if row.target else set()
+    states = [p for p in signature.parameters if p not in {"arm", "out", *extra}]
+    if list(signature.parameters) != ["arm", *states, *(["f_ext"] if row.wrench else []),
+                                      *(["frame", "link"] if row.target else []), "out"]:  # fmt: skip
+        raise TypeError(f"{name}: its parameters do not match its row of TABLE")
+    dims = [d.strip() for d in row.shape.split(",")]
+    shared = dims.count("n") > 1
+    n = "n" if shared else "arm.n"
+    shape = ", ".join(n if d == "n" else d for d in dims)
+    passed = "frame=frame, link=link, " if row.target else ""
+    batch = f"_{name}_batch"
+    if row.target:  # the general path checks the link and the frame first, then binds them
+        batch = f"_with_target({batch}, _target(arm, link), _frame(frame))"
+    source = _TEMPLATE.format(
+        name=name,
+        parameters=", ".join(signature.parameters),
+        guard="if f_ext is None:\n        " if row.wrench else "",
+        indent="    " if row.wrench else "",
+        shape_prelude=f"n = arm.n\n    {'    ' if row.wrench else ''}" if shared else "",
+        shape=f"({shape})" if len(dims) > 1 else shape,
+        target=_TARGET if row.target else "",
+        one=f"_{name}_one",
+        states=", ".join(states),
+        options=f"{row.options}, " if row.options else "target, _FRAMES[frame], " if row.target else "",
+        ok=OK,
+        refused="_NOT_ONE_STATE_OR_OPTION" if row.target else "_NOT_ONE_STATE",
+        passed=passed,
+        general=f"_{name}_general",
+        batch=batch,
+        names=repr(tuple(states)),
+        trailing=f"({shape})" if len(dims) > 1 else f"({shape},)",
+        wrench=", f_ext" if row.wrench else "",
+    )
+    namespace = globals()
+    namespace[f"_{name}_one"], namespace[f"_{name}_batch"], namespace[f"_{name}_general"] = (
+        row.one, row.batch, row.general
+    )  # fmt: skip
+    exec(
+        compile(source, f"<armdyn.dynamics.api {name}>", "exec", flags=__future__.annotations.compiler_flag), namespace
+    )
+    SOURCES[name] = source
+    function = namespace[name]
+    function.__defaults__ = declaration.__defaults__
+    function.__doc__ = declaration.__doc__
+    function.__annotations__ = declaration.__annotations__
+    function.__qualname__ = declaration.__qualname__
+    return function
+
+
+@_public
 def inverse_dynamics(
     arm: Robot,
     q: ArrayLike,
@@ -165,17 +334,9 @@ def inverse_dynamics(
         When a state has the wrong shape or holds NaN or infinity, when ``out`` does not fit,
         or when the arm has symbolic parameters.
     """
-    if f_ext is None:
-        tau = _empty(arm.n) if out is None else out
-        try:
-            if inverse_dynamics_one(arm.packed, q, qd, qdd, tau) == 0:
-                return tau
-        except _NOT_ONE_STATE:  # not one state of 1-D float64 arrays: the general path
-            if (thawed := inputs.thawed(q, qd, qdd)) is not None:
-                return inverse_dynamics(arm, *thawed, out=out)
-    return _rnea(arm, INVERSE_DYNAMICS, ("q", "qd", "qdd"), (q, qd, qdd), out, f_ext)
 
 
+@_public
 def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """N(q, qd) = Vm(q, qd) qd + F(qd) + G(q), so that M qdd + N = tau (BOOK.md section 1).
 
@@ -198,16 +359,9 @@ def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     ModelError
         When a state or ``out`` is invalid (see inverse_dynamics).
     """
-    result = _empty(arm.n) if out is None else out
-    try:
-        if nonlinear_one(arm.packed, q, qd, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q, qd)) is not None:
-            return nonlinear_terms(arm, *thawed, out=out)
-    return _rnea(arm, NONLINEAR, ("q", "qd"), (q, qd), out)
 
 
+@_public
 def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """V(q, qd) = Vm(q, qd) qd, the Coriolis and centripetal torques (BOOK.md section 1).
 
@@ -230,16 +384,9 @@ def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     ModelError
         When a state or ``out`` is invalid (see inverse_dynamics).
     """
-    result = _empty(arm.n) if out is None else out
-    try:
-        if coriolis_vector_one(arm.packed, q, qd, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q, qd)) is not None:
-            return coriolis_vector(arm, *thawed, out=out)
-    return _rnea(arm, CORIOLIS, ("q", "qd"), (q, qd), out)
 
 
+@_public
 def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """G(q), the gravity torques, dP/dq (BOOK.md section 2, 3.2.43).
 
@@ -262,16 +409,9 @@ def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
     ModelError
         When q or ``out`` is invalid (see inverse_dynamics).
     """
-    result = _empty(arm.n) if out is None else out
-    try:
-        if gravity_one(arm.packed, q, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q)) is not None:
-            return gravity_vector(arm, *thawed, out=out)
-    return _rnea(arm, GRAVITY_ONLY, ("q",), (q,), out)
 
 
+@_public
 def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """F(qd) = Fv qd + Fd(qd), joint side: G^2 B qd plus |G| Tc+ (qd > 0) or |G| Tc- (qd < 0)
     (BOOK.md section 1, Table 3.3.1 property 6).
@@ -295,16 +435,9 @@ def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.nda
     ModelError
         When qd or ``out`` is invalid (see inverse_dynamics).
     """
-    result = _empty(arm.n) if out is None else out
-    try:
-        if friction_one(arm.packed, qd, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(qd)) is not None:
-            return friction(arm, *thawed, out=out)
-    return _batch(arm, friction_batch, ("qd",), (qd,), out, (arm.n,))
 
 
+@_public
 def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """M(q), symmetric positive definite, with G^2 Jm on the diagonal (BOOK.md section 2, 3.2.31).
 
@@ -329,17 +462,9 @@ def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
     ModelError
         When q or ``out`` is invalid (see inverse_dynamics).
     """
-    n = arm.n
-    result = _empty((n, n)) if out is None else out
-    try:
-        if crba_one(arm.packed, q, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q)) is not None:
-            return inertia_matrix(arm, *thawed, out=out)
-    return _batch(arm, crba_batch, ("q",), (q,), out, (n, n))
 
 
+@_public
 def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """The Christoffel form Vm(q, qd) (BOOK.md section 3, 3.3.48): Mdot - 2 Vm is skew symmetric.
 
@@ -364,17 +489,9 @@ def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
     ModelError
         When a state or ``out`` is invalid (see inverse_dynamics).
     """
-    n = arm.n
-    result = _empty((n, n)) if out is None else out
-    try:
-        if coriolis_one(arm.packed, q, qd, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q, qd)) is not None:
-            return coriolis_matrix(arm, *thawed, out=out)
-    return _batch(arm, coriolis_batch, ("q", "qd"), (q, qd), out, (n, n))
 
 
+@_public
 def forward_dynamics(
     arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: np.ndarray | None = None
 ) -> np.ndarray:
@@ -403,22 +520,6 @@ def forward_dynamics(
         state (a joint about which nothing with mass or inertia moves): the message names the
         state and the joint.
     """
-    qdd = _empty(arm.n) if out is None else out
-    try:
-        if aba_one(arm.packed, q, qd, tau, qdd) == 0:
-            return qdd
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q, qd, tau)) is not None:
-            return forward_dynamics(arm, *thawed, out=out)
-    model = _model(arm)
-    batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), arm.n, _where(arm))
-    result = inputs.result(out, (*batch, arm.n))
-    singular = np.full(flat[0].shape[0], -1)
-    if singular.size:
-        _launch(aba_blocks, result.size, model, *flat, result.reshape(-1, arm.n), singular)
-    if singular.max(initial=-1) >= 0:
-        raise _singular(arm, flat[0], singular, batch)
-    return result
 
 
 def _singular(arm: Robot, q: np.ndarray, singular: np.ndarray, batch: tuple[int, ...]) -> ModelError:
@@ -433,6 +534,7 @@ def _singular(arm: Robot, q: np.ndarray, singular: np.ndarray, batch: tuple[int,
     )
 
 
+@_public
 def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """Kinetic and potential energy together, [K, P] (BOOK.md section 2, 3.2.29 and 3.2.35).
 
@@ -455,14 +557,6 @@ def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = N
     ModelError
         When a state or ``out`` is invalid (see inverse_dynamics).
     """
-    result = _empty(2) if out is None else out
-    try:
-        if energy_one(arm.packed, q, qd, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q, qd)) is not None:
-            return energies(arm, *thawed, out=out)
-    return _batch(arm, energy_batch, ("q", "qd"), (q, qd), out, (2,))
 
 
 def kinetic_energy(arm: Robot, q: ArrayLike, qd: ArrayLike) -> float | np.ndarray:
@@ -537,26 +631,7 @@ def inertia_matrix_dot(arm: Robot, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
     return Vm + np.swapaxes(Vm, -1, -2)
 
 
-# ----- kinematics, compiled (armdyn.kinematics holds the NumPy reference) -----------------------
-_FRAMES = {"base": frames.WORLD, "tool": frames.LOCAL}
-# the fast path's link and frame go unchecked to the kernel: a link that is not an int fails the
-# signature (TypeError; OverflowError beyond int64), a frame not in _FRAMES fails the lookup (KeyError)
-_NOT_ONE_STATE_OR_OPTION = (*_NOT_ONE_STATE, KeyError, OverflowError)
-
-
-def _target(arm: Robot, link: object) -> int:
-    """frames.TOOL for None, else the checked link index."""
-    return frames.TOOL if link is None else kinematics.link_index(arm, link)
-
-
-def _frame(frame: object) -> int:
-    """frames.WORLD or frames.LOCAL for "base" or "tool", else the ModelError of check_frame."""
-    if type(frame) is str and frame in _FRAMES:
-        return _FRAMES[frame]
-    kinematics.check_frame(frame)
-    return _FRAMES[frame]
-
-
+@_public
 def link_transforms(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """T_i(q), the world pose of every link frame (Appendix A), compiled.
 
@@ -579,16 +654,9 @@ def link_transforms(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> 
     ModelError
         When q is invalid (see inverse_dynamics) or ``out`` does not fit.
     """
-    result = _empty((arm.n, 4, 4)) if out is None else out
-    try:
-        if transforms_one(arm.packed, q, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q)) is not None:
-            return link_transforms(arm, *thawed, out=out)
-    return _batch(arm, frames.transforms_batch, ("q",), (q,), out, (arm.n, 4, 4))
 
 
+@_public
 def tool_pose(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """The tool's world pose T_k(q) @ tool (k the tool link), compiled.
 
@@ -611,16 +679,9 @@ def tool_pose(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.nda
     ModelError
         When q is invalid (see inverse_dynamics) or ``out`` does not fit.
     """
-    result = _empty((4, 4)) if out is None else out
-    try:
-        if pose_one(arm.packed, q, TOOL, result) == 0:
-            return result
-    except _NOT_ONE_STATE:
-        if (thawed := inputs.thawed(q)) is not None:
-            return tool_pose(arm, *thawed, out=out)
-    return _batch(arm, _with_target(frames.pose_batch, frames.TOOL), ("q",), (q,), out, (4, 4))
 
 
+@_public
 def jacobian(
     arm: Robot, q: ArrayLike, frame: str = "base", link: int | None = None, out: np.ndarray | None = None
 ) -> np.ndarray:
@@ -654,21 +715,9 @@ def jacobian(
         When q is invalid (see inverse_dynamics), ``out`` does not fit, ``frame`` is not
         "base" or "tool", or ``link`` is not None or an integer index of a link.
     """
-    result = _empty((6, arm.n)) if out is None else out
-    try:  # a link that is not an int, or a frame not in _FRAMES, falls through to the checks below
-        # the link unchecked when a plain non-negative int (the kernel refuses it out of range); anything else
-        # made out of range, for the checks below (Numba would convert a bool or a float to the kernel's int)
-        target = TOOL if link is None else link if type(link) is int and link >= 0 else arm.n
-        if jacobian_one(arm.packed, q, target, _FRAMES[frame], result) == 0:
-            return result
-    except _NOT_ONE_STATE_OR_OPTION:
-        if (thawed := inputs.thawed(q)) is not None:
-            return jacobian(arm, *thawed, frame, link, out)
-    target, axes = _target(arm, link), _frame(frame)
-    kernel = _with_target(frames.jacobian_batch, target, axes)
-    return _batch(arm, kernel, ("q",), (q,), out, (6, arm.n))
 
 
+@_public
 def jacobian_dot(
     arm: Robot,
     q: ArrayLike,
@@ -707,26 +756,6 @@ def jacobian_dot(
     ModelError
         As for ``jacobian``, and when qd is invalid.
     """
-    result = _empty((6, arm.n)) if out is None else out
-    try:
-        target = TOOL if link is None else link if type(link) is int and link >= 0 else arm.n  # as in jacobian
-        if jacobian_dot_one(arm.packed, q, qd, target, _FRAMES[frame], result) == 0:
-            return result
-    except _NOT_ONE_STATE_OR_OPTION:
-        if (thawed := inputs.thawed(q, qd)) is not None:
-            return jacobian_dot(arm, *thawed, frame, link, out)
-    target, axes = _target(arm, link), _frame(frame)
-    kernel = _with_target(frames.jacobian_dot_batch, target, axes)
-    return _batch(arm, kernel, ("q", "qd"), (q, qd), out, (6, arm.n))
-
-
-def _with_target(kernel: Callable, *options: int) -> Callable:
-    """A batch kernel with its trailing integer options (target, frame) bound."""
-
-    def call(model: np.ndarray, *arrays: np.ndarray) -> None:
-        kernel(model, *arrays[:-1], *options, arrays[-1])
-
-    return call
 
 
 def _pair(out: object, shape: tuple[int, ...], count: int) -> list[np.ndarray]:

@@ -19,7 +19,9 @@ import os
 import shutil
 from pathlib import Path
 
-from numba.core import caching, config
+from numba.core import config
+
+from armdyn.dynamics.numba_compat import CacheImpl, CacheLocator
 
 PACKAGE = Path(__file__).resolve().parent.parent
 PREFIX = "kernels-"
@@ -53,12 +55,11 @@ def remove_stale(folder: Path) -> None:
             shutil.rmtree(sibling, ignore_errors=True)
 
 
-_CACHE_IMPL = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # renamed in Numba 0.62
 STAMP = sources_hash()
 FOLDER = cache_folder(STAMP)
 
 
-class KernelCacheLocator(caching._CacheLocator):
+class KernelCacheLocator(CacheLocator):
     """Numba cache locator for armdyn's own compiled functions (see the module docstring)."""
 
     def __init__(self, py_func: object, py_file: str) -> None:
@@ -88,7 +89,7 @@ class KernelCacheLocator(caching._CacheLocator):
 
 def install() -> None:
     """Put the locator first in Numba's list (once), and clear out stale kernel folders."""
-    if KernelCacheLocator not in _CACHE_IMPL._locator_classes:
-        _CACHE_IMPL._locator_classes.insert(0, KernelCacheLocator)
+    if KernelCacheLocator not in CacheImpl._locator_classes:
+        CacheImpl._locator_classes.insert(0, KernelCacheLocator)
         if FOLDER.parent.is_dir():
             remove_stale(FOLDER)

@@ -9,15 +9,26 @@ import numpy as np
 from numba import njit, prange, types
 
 from armdyn.dynamics.packed import (
+    COMPOSITE,
+    COMPOSITE_BIAS,
+    CORIOLIS_BIAS,
+    CORIOLIS_COMPOSITE,
     CORIOLIS_FIXED,
     CORIOLIS_JOINT,
+    CORIOLIS_LOCAL,
+    CORIOLIS_POSE,
+    CORIOLIS_SUBSPACE,
+    CORIOLIS_SUBSPACE_DOT,
+    CORIOLIS_VELOCITY,
     FIRST_MOMENT,
     HEADER,
     INERTIA,
     MASS,
     N_JOINTS,
     PARENT,
+    SPATIAL,
     STRIDE,
+    TRANSFORM,
     workspace_size,
 )
 from armdyn.dynamics.rnea import BATCH_CHUNKS
@@ -37,6 +48,7 @@ from armdyn.dynamics.spatial import (
     world_motion_subspace,
     world_pose,
 )
+from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -91,30 +103,32 @@ def coriolis_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.nda
     Work per joint: local transform 12, world pose 12, S 6, Sdot 6, v 6, I^c 10, B^c 12.
     """
     n = int(model[N_JOINTS])
-    local, pose, S, Sdot, vel = 0, 12 * n, 24 * n, 30 * n, 36 * n
-    IC, BC, tmp = 42 * n, 52 * n, 64 * n
+    local, pose, S, Sdot = CORIOLIS_LOCAL * n, CORIOLIS_POSE * n, CORIOLIS_SUBSPACE * n, CORIOLIS_SUBSPACE_DOT * n
+    vel, IC, BC, tmp = CORIOLIS_VELOCITY * n, CORIOLIS_COMPOSITE * n, CORIOLIS_BIAS * n, CORIOLIS_JOINT * n
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(model[b + PARENT])
-        joint_transform(model, i, q[i], work, local + 12 * i)
-        world_pose(model, work, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
-        world_motion_subspace(model, i, work, pose + 12 * i, S + 6 * i)
+        joint_transform(model, i, q[i], work, local + TRANSFORM * i)
+        world_pose(model, work, local + TRANSFORM * i, pose + TRANSFORM * parent, pose + TRANSFORM * i, parent >= 0)
+        world_motion_subspace(model, i, work, pose + TRANSFORM * i, S + SPATIAL * i)
         for k in range(6):
-            work[vel + 6 * i + k] = (work[vel + 6 * parent + k] if parent >= 0 else 0.0) + work[S + 6 * i + k] * qd[i]
-        motion_cross(work, vel + 6 * i, S + 6 * i, Sdot + 6 * i)
+            work[vel + SPATIAL * i + k] = (work[vel + SPATIAL * parent + k] if parent >= 0 else 0.0) + work[
+                S + SPATIAL * i + k
+            ] * qd[i]
+        motion_cross(work, vel + SPATIAL * i, S + SPATIAL * i, Sdot + SPATIAL * i)
         work[tmp] = model[b + MASS]
         for k in range(3):
             work[tmp + 1 + k] = model[b + FIRST_MOMENT + k]
         for k in range(6):
             work[tmp + 4 + k] = model[b + INERTIA + k]
         for k in range(10):
-            work[IC + 10 * i + k] = 0.0
-        add_inertia_to_parent(work, pose + 12 * i, tmp, IC + 10 * i)
-        body_coriolis(work, vel + 6 * i, IC + 10 * i, BC + 12 * i)
+            work[IC + COMPOSITE * i + k] = 0.0
+        add_inertia_to_parent(work, pose + TRANSFORM * i, tmp, IC + COMPOSITE * i)
+        body_coriolis(work, vel + SPATIAL * i, IC + COMPOSITE * i, BC + COMPOSITE_BIAS * i)
         for j in range(n):
             C[i, j] = 0.0
     for j in range(n - 1, -1, -1):
-        ic, bc, sj, dj = IC + 10 * j, BC + 12 * j, S + 6 * j, Sdot + 6 * j
+        ic, bc, sj, dj = IC + COMPOSITE * j, BC + COMPOSITE_BIAS * j, S + SPATIAL * j, Sdot + SPATIAL * j
         mass, hx, hy, hz = work[ic], work[ic + 1], work[ic + 2], work[ic + 3]
         i0, i1, i2, i3, i4, i5 = work[ic + 4], work[ic + 5], work[ic + 6], work[ic + 7], work[ic + 8], work[ic + 9]
         ax, ay, az, sx, sy, sz = work[sj], work[sj + 1], work[sj + 2], work[sj + 3], work[sj + 4], work[sj + 5]
@@ -139,7 +153,7 @@ def coriolis_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.nda
         parent = int(model[HEADER + STRIDE * j + PARENT])
         i = parent
         while i >= 0:
-            si, di = S + 6 * i, Sdot + 6 * i
+            si, di = S + SPATIAL * i, Sdot + SPATIAL * i
             C[i, j] = dot_with(work, si, (f1a, f1b, f1c, f1d, f1e, f1f))
             C[j, i] = dot_with(work, di, (f2a, f2b, f2c, f2d, f2e, f2f)) + (
                 work[si] * f3a + work[si + 1] * f3b + work[si + 2] * f3c
@@ -147,19 +161,19 @@ def coriolis_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.nda
             i = int(model[HEADER + STRIDE * i + PARENT])
         if parent >= 0:
             for k in range(10):
-                work[IC + 10 * parent + k] += work[ic + k]
+                work[IC + COMPOSITE * parent + k] += work[ic + k]
             for k in range(12):
-                work[BC + 12 * parent + k] += work[bc + k]
+                work[BC + COMPOSITE_BIAS * parent + k] += work[bc + k]
 
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR, MATRIX))
 def coriolis_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, C: np.ndarray) -> int:
-    """Vm(q, qd) for one state; the status of states_status, or 4 when C is not (n, n)."""
+    """Vm(q, qd) for one state; the status of states_status, or WRONG_SHAPE when C is not (n, n)."""
     n = int(model[N_JOINTS])
     status = states_status(model, q, qd, qd, 2)
-    if status == 0 and (C.shape[0] != n or C.shape[1] != n):
-        status = 4
-    if status == 0:
+    if status == OK and (C.shape[0] != n or C.shape[1] != n):
+        status = WRONG_SHAPE
+    if status == OK:
         coriolis_core(model, scratch(CORIOLIS_JOINT * n + CORIOLIS_FIXED), q, qd, C)
     return status
 

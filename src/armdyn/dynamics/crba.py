@@ -36,6 +36,7 @@ from armdyn.dynamics.spatial import (
     scratch,
     states_status,
 )
+from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -112,12 +113,12 @@ def mass_matrix_and_bias(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd:
 
 @one_state(types.int64(MODEL, VECTOR, MATRIX))
 def crba_one(model: np.ndarray, q: np.ndarray, M: np.ndarray) -> int:
-    """M(q) for one state; the status of states_status, or 4 when M is not (n, n)."""
+    """M(q) for one state; the status of states_status, or WRONG_SHAPE when M is not (n, n)."""
     n = int(model[N_JOINTS])
     status = states_status(model, q, q, q, 1)
-    if status == 0 and (M.shape[0] != n or M.shape[1] != n):
-        status = 4
-    if status == 0:
+    if status == OK and (M.shape[0] != n or M.shape[1] != n):
+        status = WRONG_SHAPE
+    if status == OK:
         crba_core(model, scratch((TRANSFORM + COMPOSITE) * n), q, M)
     return status
 

@@ -40,14 +40,28 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.aba import aba_core
 from armdyn.dynamics.coriolis import body_coriolis
+from armdyn.dynamics.linalg import cholesky, cholesky_solve
 from armdyn.dynamics.packed import (
     ABA_FIXED,
     ABA_JOINT,
     ARMATURE,
+    COMPOSITE,
+    COMPOSITE_BIAS,
     COULOMB_NEG,
     COULOMB_POS,
+    DERIVATIVE_ACCELERATION,
+    DERIVATIVE_BIAS,
+    DERIVATIVE_COMPOSITE,
+    DERIVATIVE_DA,
+    DERIVATIVE_DAV,
+    DERIVATIVE_DV,
     DERIVATIVE_FIXED,
+    DERIVATIVE_FORCE,
     DERIVATIVE_JOINT,
+    DERIVATIVE_LOCAL,
+    DERIVATIVE_POSE,
+    DERIVATIVE_SUBSPACE,
+    DERIVATIVE_VELOCITY,
     FIRST_MOMENT,
     GRAVITY,
     HEADER,
@@ -55,7 +69,9 @@ from armdyn.dynamics.packed import (
     MASS,
     N_JOINTS,
     PARENT,
+    SPATIAL,
     STRIDE,
+    TRANSFORM,
     VISCOUS,
 )
 from armdyn.dynamics.rnea import BATCH_CHUNKS
@@ -76,8 +92,7 @@ from armdyn.dynamics.spatial import (
     world_motion_subspace,
     world_pose,
 )
-
-SINGULAR_STATUS = 50  # forward_dynamics_derivatives_one: M(q) is singular
+from armdyn.dynamics.status import OK, SINGULAR, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -145,47 +160,49 @@ def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd
     S, dV, dA, dAv, v, a, I^C, B^C, F^C; then one inertia and three 6-vectors.
     """
     n = int(model[N_JOINTS])
-    local, pose, S, dV, dA, dAv, vel, acc = 0, 12 * n, 24 * n, 30 * n, 36 * n, 42 * n, 48 * n, 54 * n
-    IC, BC, FC, tmp = 60 * n, 70 * n, 82 * n, 88 * n
+    local, pose, S = DERIVATIVE_LOCAL * n, DERIVATIVE_POSE * n, DERIVATIVE_SUBSPACE * n
+    dV, dA, dAv = DERIVATIVE_DV * n, DERIVATIVE_DA * n, DERIVATIVE_DAV * n
+    vel, acc, IC = DERIVATIVE_VELOCITY * n, DERIVATIVE_ACCELERATION * n, DERIVATIVE_COMPOSITE * n
+    BC, FC, tmp = DERIVATIVE_BIAS * n, DERIVATIVE_FORCE * n, DERIVATIVE_JOINT * n
     F2, F3, column = tmp + 10, tmp + 16, tmp + 22
     with_mass = M.shape[0] == n
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(model[b + PARENT])
-        s, v, a, dv = S + 6 * i, vel + 6 * i, acc + 6 * i, dV + 6 * i
-        joint_transform(model, i, q[i], work, local + 12 * i)
-        world_pose(model, work, local + 12 * i, pose + 12 * parent, pose + 12 * i, parent >= 0)
-        world_motion_subspace(model, i, work, pose + 12 * i, s)
+        s, v, a, dv = S + SPATIAL * i, vel + SPATIAL * i, acc + SPATIAL * i, dV + SPATIAL * i
+        joint_transform(model, i, q[i], work, local + TRANSFORM * i)
+        world_pose(model, work, local + TRANSFORM * i, pose + TRANSFORM * parent, pose + TRANSFORM * i, parent >= 0)
+        world_motion_subspace(model, i, work, pose + TRANSFORM * i, s)
         if parent >= 0:
-            vp, ap = vel + 6 * parent, acc + 6 * parent
+            vp, ap = vel + SPATIAL * parent, acc + SPATIAL * parent
             motion_cross(work, vp, s, dv)
-            motion_cross(work, ap, s, dA + 6 * i)
+            motion_cross(work, ap, s, dA + SPATIAL * i)
             motion_cross(work, vp, dv, tmp)
             for k in range(6):
-                work[dA + 6 * i + k] += work[tmp + k]
+                work[dA + SPATIAL * i + k] += work[tmp + k]
                 work[v + k] = work[vp + k] + work[s + k] * qd[i]
                 work[a + k] = work[ap + k] + work[s + k] * qdd[i] + work[dv + k] * qd[i]
         else:
             for k in range(6):
                 work[tmp + k] = 0.0 if k < 3 else -model[GRAVITY + k - 3]  # a_0 = -g
                 work[dv + k] = 0.0
-            motion_cross(work, tmp, s, dA + 6 * i)
+            motion_cross(work, tmp, s, dA + SPATIAL * i)
             for k in range(6):
                 work[v + k] = work[s + k] * qd[i]
                 work[a + k] = work[tmp + k] + work[s + k] * qdd[i]
         for k in range(6):
-            work[dAv + 6 * i + k] = 2.0 * work[dv + k]
+            work[dAv + SPATIAL * i + k] = 2.0 * work[dv + k]
         # the body's inertia in the world, its Coriolis matrix and its force I a + v x* I v
         work[tmp] = model[b + MASS]
         for k in range(3):
             work[tmp + 1 + k] = model[b + FIRST_MOMENT + k]
         for k in range(6):
             work[tmp + 4 + k] = model[b + INERTIA + k]
-        ic, fc = IC + 10 * i, FC + 6 * i
+        ic, fc = IC + COMPOSITE * i, FC + SPATIAL * i
         for k in range(10):
             work[ic + k] = 0.0
-        add_inertia_to_parent(work, pose + 12 * i, tmp, ic)
-        body_coriolis(work, v, ic, BC + 12 * i)
+        add_inertia_to_parent(work, pose + TRANSFORM * i, tmp, ic)
+        body_coriolis(work, v, ic, BC + COMPOSITE_BIAS * i)
         rigid_times(work, ic, v, F2)
         force_cross(work, v, F2, F3)
         rigid_times(work, ic, a, fc)
@@ -198,7 +215,7 @@ def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd
                 M[i, k] = 0.0
     for j in range(n - 1, -1, -1):
         b = HEADER + STRIDE * j
-        ic, bc, sj, fc = IC + 10 * j, BC + 12 * j, S + 6 * j, FC + 6 * j
+        ic, bc, sj, fc = IC + COMPOSITE * j, BC + COMPOSITE_BIAS * j, S + SPATIAL * j, FC + SPATIAL * j
         rigid_times(work, ic, sj, F2)  # I^C S_j
         ax, ay, az, sx, sy, sz = work[sj], work[sj + 1], work[sj + 2], work[sj + 3], work[sj + 4], work[sj + 5]
         lx, ly, lz = work[bc + 9], work[bc + 10], work[bc + 11]
@@ -210,13 +227,15 @@ def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd
         work[F3 + 2] += 2.0 * (lx * sy - ly * sx)
         f2 = (work[F2], work[F2 + 1], work[F2 + 2], work[F2 + 3], work[F2 + 4], work[F2 + 5])
         f3 = (work[F3], work[F3 + 1], work[F3 + 2], 0.0, 0.0, 0.0)
-        inertia_and_coriolis_times(work, ic, bc, dA + 6 * j, dV + 6 * j, column)  # dF/dq_j less the carrying
+        inertia_and_coriolis_times(
+            work, ic, bc, dA + SPATIAL * j, dV + SPATIAL * j, column
+        )  # dF/dq_j less the carrying
         dq[j, j] = dot6(work, sj, column)
         force_cross(work, sj, fc, tmp)
         col_q = (work[column] + work[tmp], work[column + 1] + work[tmp + 1], work[column + 2] + work[tmp + 2],
                  work[column + 3] + work[tmp + 3], work[column + 4] + work[tmp + 4],
                  work[column + 5] + work[tmp + 5])  # fmt: skip
-        inertia_and_coriolis_times(work, ic, bc, dAv + 6 * j, sj, column)  # dF/dqd_j
+        inertia_and_coriolis_times(work, ic, bc, dAv + SPATIAL * j, sj, column)  # dF/dqd_j
         col_v = (work[column], work[column + 1], work[column + 2], work[column + 3], work[column + 4],
                  work[column + 5])  # fmt: skip
         dqd[j, j] += dot_with(work, sj, col_v) + model[b + VISCOUS] + coulomb_slope(model, j, qd[j], eps[j])
@@ -224,57 +243,29 @@ def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd
             M[j, j] = dot_with(work, sj, f2) + model[b + ARMATURE]
         i = int(model[b + PARENT])
         while i >= 0:
-            si = S + 6 * i
+            si = S + SPATIAL * i
             dq[i, j] = dot_with(work, si, col_q)
-            dq[j, i] = dot_with(work, dA + 6 * i, f2) + dot_with(work, dV + 6 * i, f3)
+            dq[j, i] = dot_with(work, dA + SPATIAL * i, f2) + dot_with(work, dV + SPATIAL * i, f3)
             dqd[i, j] = dot_with(work, si, col_v)
-            dqd[j, i] = dot_with(work, dAv + 6 * i, f2) + dot_with(work, si, f3)
+            dqd[j, i] = dot_with(work, dAv + SPATIAL * i, f2) + dot_with(work, si, f3)
             if with_mass:
                 M[i, j] = M[j, i] = dot_with(work, si, f2)
             i = int(model[HEADER + STRIDE * i + PARENT])
         parent = int(model[b + PARENT])
         if parent >= 0:
             for k in range(10):
-                work[IC + 10 * parent + k] += work[ic + k]
+                work[IC + COMPOSITE * parent + k] += work[ic + k]
             for k in range(12):
-                work[BC + 12 * parent + k] += work[bc + k]
+                work[BC + COMPOSITE_BIAS * parent + k] += work[bc + k]
             for k in range(6):
-                work[FC + 6 * parent + k] += work[fc + k]
+                work[FC + SPATIAL * parent + k] += work[fc + k]
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def derivatives_workspace(n: int) -> int:
     """Scratch values of forward_dynamics_derivatives_core for n joints: the larger of the two
-    recursions' workspaces, then tau (n), qdd (n), a Cholesky factor (n * n) and the reciprocals of
-    its diagonal (n)."""
-    return max(ABA_JOINT * n + ABA_FIXED, DERIVATIVE_JOINT * n + DERIVATIVE_FIXED) + 3 * n + n * n
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def cholesky_solve(factor: np.ndarray, f: int, n: int, B: np.ndarray, scale: float) -> None:
-    """B <- scale M^-1 B, in place, for M = L L^T with L's rows at factor[f:] (row major, lower) and
-    the reciprocals of its diagonal at factor[f + n * n:]. Row by row, every column at once: the
-    inner loops run along B's rows, contiguous."""
-    width = B.shape[1]
-    for r in range(n):  # L Y = scale B
-        if scale != 1.0:
-            for c in range(width):
-                B[r, c] *= scale
-        for k in range(r):
-            weight = factor[f + n * r + k]
-            for c in range(width):
-                B[r, c] -= weight * B[k, c]
-        inverse = factor[f + n * n + r]
-        for c in range(width):
-            B[r, c] *= inverse
-    for r in range(n - 1, -1, -1):  # L^T X = Y
-        for k in range(r + 1, n):
-            weight = factor[f + n * k + r]
-            for c in range(width):
-                B[r, c] -= weight * B[k, c]
-        inverse = factor[f + n * n + r]
-        for c in range(width):
-            B[r, c] *= inverse
+    recursions' workspaces, then tau (n), qdd (n) and a Cholesky factor of M (n * n)."""
+    return max(ABA_JOINT * n + ABA_FIXED, DERIVATIVE_JOINT * n + DERIVATIVE_FIXED) + 2 * n + n * n
 
 
 @njit(**NUMBA_OPTIONS)  # called, not inlined: the one-state and batch kernels share one compiled copy
@@ -285,56 +276,54 @@ def forward_dynamics_derivatives_core(model: np.ndarray, work: np.ndarray, q: np
 
     Returns -1, or the joint where M(q) is singular (nothing written then)."""
     n = int(model[N_JOINTS])
-    base = derivatives_workspace(n) - 3 * n - n * n
-    torque, qdd, factor = work[base : base + n], work[base + n : base + 2 * n], base + 2 * n
+    base = derivatives_workspace(n) - 2 * n - n * n
+    torque, qdd = work[base : base + n], work[base + n : base + 2 * n]
+    factor = work[base + 2 * n : base + 2 * n + n * n].reshape((n, n))
     for k in range(n):  # the plant's Coulomb law: the smoothed one where eps > 0
         torque[k] = tau[k] - coulomb_smoothed_minus_exact(model, k, qd[k], eps[k])
     singular = aba_core(model, work, q, qd, torque, qdd)
     if singular >= 0:
         return singular
     rnea_derivatives_core(model, work, q, qd, qdd, eps, dq, dqd, dtau)
-    for c in range(n):  # M = L L^T, L row by row into factor
-        for r in range(c, n):
-            total = dtau[r, c]
-            for k in range(c):
-                total -= work[factor + n * r + k] * work[factor + n * c + k]
-            if r == c:
-                if not total > 0.0:
-                    return c
-                work[factor + n * c + c] = math.sqrt(total)
-                work[factor + n * n + c] = 1.0 / work[factor + n * c + c]
-            else:
-                work[factor + n * r + c] = total * work[factor + n * n + c]
-    cholesky_solve(work, factor, n, dq, -1.0)
-    cholesky_solve(work, factor, n, dqd, -1.0)
+    for r in range(n):  # M (in dtau), its lower triangle
+        for c in range(r + 1):
+            factor[r, c] = dtau[r, c]
+    singular = cholesky(factor)
+    if singular >= 0:
+        return singular
     for r in range(n):
         for c in range(n):
+            dq[r, c] = -dq[r, c]
+            dqd[r, c] = -dqd[r, c]
             dtau[r, c] = 1.0 if r == c else 0.0
-    cholesky_solve(work, factor, n, dtau, 1.0)
+    cholesky_solve(factor, dq)
+    cholesky_solve(factor, dqd)
+    cholesky_solve(factor, dtau)
     return -1
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def shapes_status(model: np.ndarray, eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray, third: np.ndarray,
                   third_optional: bool) -> int:  # fmt: skip
-    """4 when eps is not (n,) or an output is not (n, n) (the third may be (0, 0) when optional), else 0."""
+    """WRONG_SHAPE when eps is not (n,) or an output is not (n, n) (the third
+    may be (0, 0) when optional), else OK."""
     n = int(model[N_JOINTS])
     if eps.shape[0] != n or dq.shape[0] != n or dq.shape[1] != n or dqd.shape[0] != n or dqd.shape[1] != n:
-        return 4
+        return WRONG_SHAPE
     if not (third.shape[0] == n and third.shape[1] == n) and not (third_optional and third.shape[0] == 0):
-        return 4
-    return 0
+        return WRONG_SHAPE
+    return OK
 
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR, MATRIX, MATRIX, MATRIX))
 def rnea_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, eps: np.ndarray,
                          dq: np.ndarray, dqd: np.ndarray, M: np.ndarray) -> int:  # fmt: skip
     """d tau/dq, d tau/dqd and (when M is (n, n), not (0, 0)) M at one state; the status of
-    states_status, or 4 for an eps or output of the wrong shape."""
+    states_status, or WRONG_SHAPE for an eps or output of the wrong shape."""
     status = states_status(model, q, qd, qdd, 3)
-    if status == 0:
+    if status == OK:
         status = shapes_status(model, eps, dq, dqd, M, True)
-    if status == 0:
+    if status == OK:
         n = int(model[N_JOINTS])
         rnea_derivatives_core(model, scratch(DERIVATIVE_JOINT * n + DERIVATIVE_FIXED), q, qd, qdd, eps, dq, dqd, M)
     return status
@@ -356,15 +345,15 @@ def rnea_derivatives_batch(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, QDD
 def forward_dynamics_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray,
                                      eps: np.ndarray, dq: np.ndarray, dqd: np.ndarray,
                                      dtau: np.ndarray) -> int:  # fmt: skip
-    """d qdd/dq, d qdd/dqd, d qdd/dtau at one state; the status of states_status, 4 for an eps or
-    output of the wrong shape, or SINGULAR_STATUS when M(q) is singular."""
+    """d qdd/dq, d qdd/dqd, d qdd/dtau at one state; the status of states_status, WRONG_SHAPE for an eps or
+    output of the wrong shape, or SINGULAR when M(q) is singular."""
     status = states_status(model, q, qd, tau, 3)
-    if status == 0:
+    if status == OK:
         status = shapes_status(model, eps, dq, dqd, dtau, False)
-    if status == 0:
+    if status == OK:
         work = scratch(derivatives_workspace(int(model[N_JOINTS])))
         if forward_dynamics_derivatives_core(model, work, q, qd, tau, eps, dq, dqd, dtau) >= 0:
-            status = SINGULAR_STATUS
+            status = SINGULAR
     return status
 
 

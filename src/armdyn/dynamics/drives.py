@@ -32,6 +32,7 @@ from armdyn.dynamics.aba import aba_one
 from armdyn.dynamics.packed import N_JOINTS
 from armdyn.dynamics.rnea import inverse_dynamics_one
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
+from armdyn.dynamics.status import OK
 from armdyn.trajectories import desired
 
 (KIND, RATIO, TORQUE_CONSTANT, BACK_EMF, RESISTANCE, INDUCTANCE, INPUT_LIMIT, CURRENT_LIMIT, ROTOR_INERTIA,
@@ -166,7 +167,7 @@ def current_computed_torque(
 def drive_inputs(model: np.ndarray, drives: np.ndarray, gains: np.ndarray, law: int, reference: np.ndarray,
                  x: np.ndarray, z: np.ndarray, u: np.ndarray, zdot: np.ndarray, work: np.ndarray) -> int:  # fmt: skip
     """The law's inputs u (before the limits) and the integrators' rates zdot; the status of the
-    inverse dynamics (computed torque), else 0."""
+    inverse dynamics (computed torque), else OK."""
     if law != DRIVE_PID:
         return current_computed_torque(model, drives, gains, reference, x, z, u, zdot, work)
     n = u.shape[0]
@@ -175,7 +176,7 @@ def drive_inputs(model: np.ndarray, drives: np.ndarray, gains: np.ndarray, law: 
         u[j] = gains[KP, j] * e + gains[KV, j] * de + gains[KI, j] * z[j]
         wound = abs(u[j]) >= drives[INPUT_LIMIT, j] and u[j] * e > 0
         zdot[j] = 0.0 if wound else e
-    return 0
+    return OK
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -188,7 +189,7 @@ def closed_loop(model: np.ndarray, drives: np.ndarray, gains: np.ndarray, law: i
     if fresh:
         desired(kind, params, t, q0, reference)
     status = drive_inputs(model, drives, gains, law, reference, y[:size], y[size:], u, out[size:], work)
-    if status != 0:
+    if status != OK:
         return status
     return full_rates(model, drives, y[:size], u, tau, out[:size])
 
@@ -230,7 +231,7 @@ def run_drives(
                 at = y if stage == 0 else stage_y
                 status = closed_loop(model, drives, gains, law, kind, params, q0, t + (step + c) * h, at, u, tau,
                                      reference, work, rates[stage], stage != 2)  # fmt: skip
-                if status != 0:
+                if status != OK:
                     return sample
                 if step == 0 and stage == 0:
                     times[sample] = t

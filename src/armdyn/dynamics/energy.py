@@ -11,6 +11,9 @@ from armdyn.dynamics.packed import (
     ARMATURE,
     ENERGY_FIXED,
     ENERGY_JOINT,
+    ENERGY_LOCAL,
+    ENERGY_POSE,
+    ENERGY_VELOCITY,
     FIRST_MOMENT,
     GRAVITY,
     HEADER,
@@ -18,7 +21,9 @@ from armdyn.dynamics.packed import (
     MASS,
     N_JOINTS,
     PARENT,
+    SPATIAL,
     STRIDE,
+    TRANSFORM,
     workspace_size,
 )
 from armdyn.dynamics.rnea import BATCH_CHUNKS
@@ -35,31 +40,32 @@ from armdyn.dynamics.spatial import (
     states_status,
     world_pose,
 )
+from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def energy_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
     """out[0] = K = 1/2 sum v_i^T I_i v_i + 1/2 sum G^2 Jm qd^2; out[1] = P = -g . sum (m p_w + R_w h)."""
     n = int(model[N_JOINTS])
-    local, pose, vel, tmp = 0, 12 * n, 24 * n, 30 * n
+    local, pose, vel, tmp = ENERGY_LOCAL * n, ENERGY_POSE * n, ENERGY_VELOCITY * n, ENERGY_JOINT * n
     kinetic = 0.0
     potential = 0.0
     for i in range(n):
         b = HEADER + STRIDE * i
         parent = int(model[b + PARENT])
-        t = local + 12 * i
+        t = local + TRANSFORM * i
         joint_transform(model, i, q[i], work, t)
-        world_pose(model, work, t, pose + 12 * parent, pose + 12 * i, parent >= 0)
-        v = vel + 6 * i
+        world_pose(model, work, t, pose + TRANSFORM * parent, pose + TRANSFORM * i, parent >= 0)
+        v = vel + SPATIAL * i
         if parent < 0:
             for k in range(6):
                 work[v + k] = 0.0
         else:
-            motion_to_child(work, t, work, vel + 6 * parent, work, v)
+            motion_to_child(work, t, work, vel + SPATIAL * parent, work, v)
         work[v + (5 if model[b + KIND] != 0.0 else 2)] += qd[i]
         inertia_times(model, i, work, v, work, tmp)
         kinetic += 0.5 * (dot6(work, v, tmp) + model[b + ARMATURE] * qd[i] * qd[i])
-        o = pose + 12 * i
+        o = pose + TRANSFORM * i
         mass = model[b + MASS]
         for r in range(3):
             moment = mass * work[o + 9 + r]
@@ -72,11 +78,11 @@ def energy_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarr
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR))
 def energy_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
-    """(K, P) for one state into out (2,); the status of states_status, or 4 when out is not (2,)."""
+    """(K, P) for one state into out (2,); the status of states_status, or WRONG_SHAPE when out is not (2,)."""
     status = states_status(model, q, qd, qd, 2)
-    if status == 0 and out.shape[0] != 2:
-        status = 4
-    if status == 0:
+    if status == OK and out.shape[0] != 2:
+        status = WRONG_SHAPE
+    if status == OK:
         energy_core(model, scratch(ENERGY_JOINT * int(model[N_JOINTS]) + ENERGY_FIXED), q, qd, out)
     return status
 

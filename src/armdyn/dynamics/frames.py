@@ -39,6 +39,7 @@ from armdyn.dynamics.spatial import (
     states_status,
     world_pose,
 )
+from armdyn.dynamics.status import BAD_FRAME, BAD_LINK, OK, WRONG_SHAPE
 
 TOOL, WORLD, LOCAL = -1, 0, 1
 POSE = 12  # a world pose in the workspace: R (9, row-major) and p (3)
@@ -267,20 +268,20 @@ def workspace_size(n: int) -> int:
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def target_status(model: np.ndarray, target: int, frame: int) -> int:
-    """0, or 5 for a target that is neither TOOL nor a link index, 6 for an unknown frame."""
+    """OK, or BAD_LINK for a target that is neither TOOL nor a link index, BAD_FRAME for an unknown frame."""
     if target < TOOL or target >= int(model[N_JOINTS]):
-        return 5
-    return 0 if frame in (WORLD, LOCAL) else 6
+        return BAD_LINK
+    return OK if frame in (WORLD, LOCAL) else BAD_FRAME
 
 
 @one_state(types.int64(MODEL, VECTOR, ARRAY3))
 def transforms_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
-    """Every link frame's world pose for one state; a status (spatial.states_status, 4: out)."""
+    """Every link frame's world pose for one state; a status (spatial.states_status, WRONG_SHAPE: out)."""
     n = int(model[N_JOINTS])
     status = states_status(model, q, q, q, 1)
-    if status == 0 and (out.shape[0] != n or out.shape[1] != 4 or out.shape[2] != 4):
-        status = 4
-    if status == 0:
+    if status == OK and (out.shape[0] != n or out.shape[1] != 4 or out.shape[2] != 4):
+        status = WRONG_SHAPE
+    if status == OK:
         transforms_core(model, q, scratch(workspace_size(n)), out)
     return status
 
@@ -289,11 +290,11 @@ def transforms_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
 def pose_one(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -> int:
     """The target's world pose for one state; a status."""
     status = states_status(model, q, q, q, 1)
-    if status == 0:
+    if status == OK:
         status = target_status(model, target, WORLD)
-    if status == 0 and (out.shape[0] != 4 or out.shape[1] != 4):
-        status = 4
-    if status == 0:
+    if status == OK and (out.shape[0] != 4 or out.shape[1] != 4):
+        status = WRONG_SHAPE
+    if status == OK:
         pose_core(model, q, target, scratch(workspace_size(int(model[N_JOINTS]))), out)
     return status
 
@@ -303,11 +304,11 @@ def jacobian_one(model: np.ndarray, q: np.ndarray, target: int, frame: int, out:
     """The target's Jacobian for one state; a status."""
     n = int(model[N_JOINTS])
     status = states_status(model, q, q, q, 1)
-    if status == 0:
+    if status == OK:
         status = target_status(model, target, frame)
-    if status == 0 and (out.shape[0] != 6 or out.shape[1] != n):
-        status = 4
-    if status == 0:
+    if status == OK and (out.shape[0] != 6 or out.shape[1] != n):
+        status = WRONG_SHAPE
+    if status == OK:
         jacobian_core(model, q, target, frame, scratch(workspace_size(n)), out)
     return status
 
@@ -317,11 +318,11 @@ def jacobian_dot_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, target: i
     """dJ/dt of the target's Jacobian for one state; a status."""
     n = int(model[N_JOINTS])
     status = states_status(model, q, qd, qd, 2)
-    if status == 0:
+    if status == OK:
         status = target_status(model, target, frame)
-    if status == 0 and (out.shape[0] != 6 or out.shape[1] != n):
-        status = 4
-    if status == 0:
+    if status == OK and (out.shape[0] != 6 or out.shape[1] != n):
+        status = WRONG_SHAPE
+    if status == OK:
         jacobian_dot_core(model, q, qd, target, frame, scratch(workspace_size(n)), np.empty((6, n)), out)
     return status
 

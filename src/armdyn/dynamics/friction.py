@@ -14,6 +14,7 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.packed import COULOMB_NEG, COULOMB_POS, HEADER, N_JOINTS, STRIDE, VISCOUS
 from armdyn.dynamics.spatial import MODEL, NUMBA_OPTIONS, VECTOR, one_state, states_status
+from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -52,11 +53,11 @@ def friction_core(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> None:
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR))
 def friction_one(model: np.ndarray, qd: np.ndarray, out: np.ndarray) -> int:
-    """F(qd) for one state; the status of states_status, or 4 when out has the wrong length."""
+    """F(qd) for one state; the status of states_status, or WRONG_SHAPE when out has the wrong length."""
     status = states_status(model, qd, qd, qd, 1)
-    if status == 0 and out.shape[0] != int(model[N_JOINTS]):
-        status = 4
-    if status == 0:
+    if status == OK and out.shape[0] != int(model[N_JOINTS]):
+        status = WRONG_SHAPE
+    if status == OK:
         friction_core(model, qd, out)
     return status
 

@@ -14,17 +14,17 @@ once and call a kernel directly, as Pinocchio's users hold a (model, data) pair:
             arm.inverse_dynamics(q, qd, qdd)
 
 Every kernel takes the model first, then C-contiguous float64 arrays (states of shape (n,), the
-result last), writes the result and returns a status: 0 when computed, 1-3 when the first,
-second or third state has the wrong length, 11-13 when it holds NaN, infinity or a value of 1e15
-or more, 4 when the result array has the wrong shape, 5 for a link index out of range,
-aba.SINGULAR_STATUS when M(q) is singular (forward dynamics). Any other argument type raises
+result last), writes the result and returns a status (armdyn.dynamics.status names them): OK (0)
+when computed, WRONG_LENGTH + k (1-3) when state k (from 0) has the wrong length, NOT_FINITE + k
+(11-13) when it holds NaN, infinity or a value of 1e15 or more, WRONG_SHAPE (4) when the result
+array has the wrong shape, BAD_LINK (5) for a link index out of range, SINGULAR_STATUS (50) when
+M(q) is singular (forward dynamics). Any other argument type raises
 TypeError. Kernels never write the model; each call keeps its own scratch, so threads may call
 them at once. The Robot method of the same name computes the same numbers bit for bit.
 """
 
 from __future__ import annotations
 
-from armdyn.dynamics.aba import SINGULAR_STATUS
 from armdyn.dynamics.aba import aba_one as forward_dynamics
 from armdyn.dynamics.coriolis import coriolis_one as coriolis_matrix
 from armdyn.dynamics.crba import crba_one as inertia_matrix
@@ -39,6 +39,7 @@ from armdyn.dynamics.rnea import coriolis_vector_one as coriolis_vector
 from armdyn.dynamics.rnea import gravity_one as gravity_vector
 from armdyn.dynamics.rnea import inverse_dynamics_one as inverse_dynamics
 from armdyn.dynamics.rnea import nonlinear_one as nonlinear_terms
+from armdyn.dynamics.status import SINGULAR as SINGULAR_STATUS
 
 __all__ = [
     "LOCAL",

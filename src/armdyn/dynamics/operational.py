@@ -9,7 +9,7 @@ and of J M^-1 J^T, and from them
 
 The singularity test is certified without an SVD: with B = J J^T (m x m, Cholesky L),
 lambda_min(B) >= det B / lambda_max^(m-1), so cond(J)^2 = cond(B) <= trace(B)^m / det(B). A
-state passes when that bound is at most max_condition^2; any other state returns SINGULAR, and
+state passes when that bound is at most max_condition^2; any other state returns TASK_SINGULAR, and
 the caller's general path decides with the exact condition number (and raises, or damps).
 """
 
@@ -23,57 +23,14 @@ from armdyn.dynamics.coriolis import coriolis_one
 from armdyn.dynamics.crba import crba_one
 from armdyn.dynamics.frames import WORLD, jacobian_dot_one, jacobian_one
 from armdyn.dynamics.friction import friction_one
+from armdyn.dynamics.linalg import cholesky, lu, lu_solve, lu_solve_transpose, solve_lower, solve_lower_transpose
 from armdyn.dynamics.packed import N_JOINTS
 from armdyn.dynamics.rnea import BATCH_CHUNKS, coriolis_vector_one, gravity_one, inverse_dynamics_one, nonlinear_one
 from armdyn.dynamics.spatial import MATRIX, MODEL, NUMBA_OPTIONS, VECTOR, one_state, scratch
+from armdyn.dynamics.status import BAD_ROWS, NOT_FINITE, NOT_SQUARE, OK, TASK_SINGULAR, WRONG_LENGTH, WRONG_SHAPE
 from armdyn.inputs import LARGEST_STATE
 
-SINGULAR = 7
-"""Status of a state whose J is not certified regular: the caller's general path takes it."""
 ROWS = types.int64[::1]
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def cholesky(A: np.ndarray) -> bool:
-    """A = L L^T in place: L below the diagonal, 1 / L_jj on it (the solves multiply, never
-    divide); False when A is not positive definite."""
-    m = A.shape[0]
-    for j in range(m):
-        d = A[j, j]
-        for k in range(j):
-            d -= A[j, k] * A[j, k]
-        if not d > 0.0:
-            return False
-        inverse = 1.0 / np.sqrt(d)
-        A[j, j] = inverse
-        for i in range(j + 1, m):
-            s = A[i, j]
-            for k in range(j):
-                s -= A[i, k] * A[j, k]
-            A[i, j] = s * inverse
-    return True
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def forward(L: np.ndarray, X: np.ndarray) -> None:
-    """X <- L^-1 X in place (L from ``cholesky``), X (m, k)."""
-    for i in range(L.shape[0]):
-        for c in range(X.shape[1]):
-            s = X[i, c]
-            for k in range(i):
-                s -= L[i, k] * X[k, c]
-            X[i, c] = s * L[i, i]
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def backward(L: np.ndarray, X: np.ndarray) -> None:
-    """X <- L^-T X in place (L from ``cholesky``), X (m, k)."""
-    for i in range(L.shape[0] - 1, -1, -1):
-        for c in range(X.shape[1]):
-            s = X[i, c]
-            for k in range(i + 1, L.shape[0]):
-                s -= L[k, i] * X[k, c]
-            X[i, c] = s * L[i, i]
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -88,7 +45,7 @@ def certified_regular(J: np.ndarray, limit: float, B: np.ndarray) -> bool:
                 s += J[i, j] * J[k, j]
             B[i, k] = s
         trace += B[i, i]
-    if not cholesky(B):
+    if cholesky(B) >= 0:
         return False
     ratio = 1.0  # trace^m / det = prod of trace / L_ii^2, a factor per row so that neither overflows
     for i in range(m):
@@ -101,25 +58,25 @@ def lambda_from(J: np.ndarray, M: np.ndarray, limit: float, Y: np.ndarray, B: np
     """Lambda = (J M^-1 J^T)^-1 as (Y^T Y)^-1 with Y = L^-1 J^T, M = L L^T (factored in M);
     False when J is not certified regular (or M is not positive definite)."""
     m, n = J.shape
-    if not certified_regular(J, limit, B) or not cholesky(M):
+    if not certified_regular(J, limit, B) or cholesky(M) >= 0:
         return False
     for r in range(m):
         for j in range(n):
             Y[j, r] = J[r, j]
-    forward(M, Y)
+    solve_lower(M, Y)
     for r in range(m):  # B = Y^T Y = J M^-1 J^T, lower triangle
         for c in range(r + 1):
             s = 0.0
             for j in range(n):
                 s += Y[j, r] * Y[j, c]
             B[r, c] = s
-    if not cholesky(B):
+    if cholesky(B) >= 0:
         return False
     for r in range(m):  # Lambda <- L_B^-1, lower triangular
         for c in range(m):
             Lambda[r, c] = 0.0
         Lambda[r, r] = 1.0
-    forward(B, Lambda)
+    solve_lower(B, Lambda)
     for r in range(m):  # Lambda = L_B^-T L_B^-1 (column r of L_B^-1 is zero above row r)
         for c in range(r + 1):
             s = 0.0
@@ -135,13 +92,13 @@ def lambda_from(J: np.ndarray, M: np.ndarray, limit: float, Y: np.ndarray, B: np
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def rows_status(model: np.ndarray, rows: np.ndarray) -> int:
-    """0, or 8 for rows that are not 1 to n indices among 0-5."""
+    """OK, or BAD_ROWS for rows that are not 1 to n indices among 0-5."""
     if not 0 < rows.shape[0] <= int(model[N_JOINTS]):
-        return 8
+        return BAD_ROWS
     for r in range(rows.shape[0]):
         if not 0 <= rows[r] <= 5:
-            return 8
-    return 0
+            return BAD_ROWS
+    return OK
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -157,12 +114,12 @@ def select_rows(full: np.ndarray, rows: np.ndarray, J: np.ndarray) -> None:
 def lambda_one(
     model: np.ndarray, q: np.ndarray, target: int, rows: np.ndarray, limit: float, Lambda: np.ndarray
 ) -> int:
-    """Lambda = (J M^-1 J^T)^-1 for one state; a status (SINGULAR: not certified regular)."""
+    """Lambda = (J M^-1 J^T)^-1 for one state; a status (TASK_SINGULAR: not certified regular)."""
     n, m = int(model[N_JOINTS]), rows.shape[0]
     status = rows_status(model, rows)
-    if status == 0 and (Lambda.shape[0] != m or Lambda.shape[1] != m):
-        status = 4
-    if status != 0:
+    if status == OK and (Lambda.shape[0] != m or Lambda.shape[1] != m):
+        status = WRONG_SHAPE
+    if status != OK:
         return status
     buffer = scratch(6 * n + 2 * m * n + n * n + m * m)
     full = buffer[: 6 * n].reshape(6, n)
@@ -172,12 +129,12 @@ def lambda_one(
     B = buffer[6 * n + 2 * m * n + n * n :].reshape(m, m)
     axes = WORLD
     status = jacobian_one(model, q, target, axes, full)
-    if status == 0:
+    if status == OK:
         status = crba_one(model, q, M)
-    if status != 0:
+    if status != OK:
         return status
     select_rows(full, rows, J)
-    return 0 if lambda_from(J, M, limit, Y, B, Lambda) else SINGULAR
+    return OK if lambda_from(J, M, limit, Y, B, Lambda) else TASK_SINGULAR
 
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR, types.int64, ROWS, types.float64, *(MATRIX,) * 3, *(VECTOR,) * 3, MATRIX))
@@ -196,16 +153,16 @@ def operational_one(
     friction: np.ndarray,
     Nproj: np.ndarray,
 ) -> int:
-    """J, Lambda, Jbar, mu, p, friction and Nproj for one state; a status (SINGULAR: not certified)."""
+    """J, Lambda, Jbar, mu, p, friction and Nproj for one state; a status (TASK_SINGULAR: not certified)."""
     n, m = int(model[N_JOINTS]), rows.shape[0]
     status = rows_status(model, rows)
-    if status == 0 and (
+    if status == OK and (
         J.shape[0] != m or J.shape[1] != n or Lambda.shape[0] != m or Lambda.shape[1] != m
         or Jbar.shape[0] != n or Jbar.shape[1] != m or mu.shape[0] != m or p.shape[0] != m
         or friction.shape[0] != m or Nproj.shape[0] != n or Nproj.shape[1] != n
     ):  # fmt: skip
-        status = 4
-    if status != 0:
+        status = WRONG_SHAPE
+    if status != OK:
         return status
     buffer = scratch(6 * n + n * n + m * m + n * m + 3 * n + m)
     full = buffer[: 6 * n].reshape(6, n)
@@ -217,26 +174,26 @@ def operational_one(
     force, bias = buffer[at + n * m + 2 * n : at + n * m + 3 * n], buffer[at + n * m + 3 * n :]
     axes = WORLD
     status = jacobian_one(model, q, target, axes, full)
-    if status == 0:
+    if status == OK:
         status = crba_one(model, q, M)
-    if status == 0:
+    if status == OK:
         status = coriolis_vector_one(model, q, qd, coriolis)
-    if status == 0:
+    if status == OK:
         status = gravity_one(model, q, gravity)
-    if status == 0:
+    if status == OK:
         status = friction_one(model, qd, force)
-    if status != 0:
+    if status != OK:
         return status
     select_rows(full, rows, J)
     if not lambda_from(J, M, limit, Y, B, Lambda):
-        return SINGULAR
+        return TASK_SINGULAR
     for r in range(n):  # Jbar = M^-1 J^T Lambda = L^-T (Y Lambda)
         for c in range(m):
             s = 0.0
             for k in range(m):
                 s += Y[r, k] * Lambda[k, c]
             Jbar[r, c] = s
-    backward(M, Jbar)
+    solve_lower_transpose(M, Jbar)
     jacobian_dot_one(model, q, qd, target, axes, full)
     for r in range(m):
         s = 0.0
@@ -258,7 +215,7 @@ def operational_one(
             for k in range(m):
                 s += Jbar[r, k] * J[k, c]
             Nproj[r, c] = (1.0 if r == c else 0.0) - s
-    return 0
+    return OK
 
 
 # ----- square outputs and the task-space forward dynamics, one kernel for each quantity's state --
@@ -266,64 +223,6 @@ LAMBDA, GRAVITY, FRICTION, FORCE, NONLINEAR, INVERSE, CORIOLIS, FORWARD = range(
 """What ``task_one`` computes: Lambda (m <= n, out (m, m)); for m = n, J^-T times G, F(qd), v,
 N - M J^-1 Jdot qd, or the inverse dynamics at qdd = J^-1 (v - Jdot qd) (out (1, n)); Vmbar
 (out (n, n)); or yddot = J ABA(q, qd, J^T v) + Jdot qd (m <= n, out (1, m))."""
-NOT_SQUARE = 9
-"""Status of a square quantity asked of an output with m != n: the general path says so."""
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def lu(A: np.ndarray, pivots: np.ndarray) -> bool:
-    """P A = L U in place with partial pivoting (row k swapped with pivots[k]); False when singular."""
-    n = A.shape[0]
-    for k in range(n):
-        p, big = k, abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > big:
-                p, big = i, abs(A[i, k])
-        if not big > 0.0:
-            return False
-        pivots[k] = p
-        if p != k:
-            for c in range(n):
-                A[k, c], A[p, c] = A[p, c], A[k, c]
-        inverse = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            factor = A[i, k] * inverse
-            A[i, k] = factor
-            for c in range(k + 1, n):
-                A[i, c] -= factor * A[k, c]
-    return True
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def lu_solve(A: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
-    """x <- J^-1 x for J factored by ``lu``."""
-    n = A.shape[0]
-    for k in range(n):
-        p = int(pivots[k])
-        x[k], x[p] = x[p], x[k]
-    for i in range(n):
-        for k in range(i):
-            x[i] -= A[i, k] * x[k]
-    for i in range(n - 1, -1, -1):
-        for k in range(i + 1, n):
-            x[i] -= A[i, k] * x[k]
-        x[i] /= A[i, i]
-
-
-@njit(inline="always", **NUMBA_OPTIONS)
-def lu_solve_transpose(A: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
-    """x <- J^-T x for J factored by ``lu``: J^T = U^T L^T P, solved in that order."""
-    n = A.shape[0]
-    for i in range(n):
-        for k in range(i):
-            x[i] -= A[k, i] * x[k]
-        x[i] /= A[i, i]
-    for i in range(n - 1, -1, -1):
-        for k in range(i + 1, n):
-            x[i] -= A[k, i] * x[k]
-    for k in range(n - 1, -1, -1):
-        p = int(pivots[k])
-        x[k], x[p] = x[p], x[k]
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -352,7 +251,7 @@ def task_core(
     """One state of ``kind`` (see LAMBDA...) into out; a status. ``buffer``: task_size(n) values."""
     n, m = int(model[N_JOINTS]), rows.shape[0]
     status = rows_status(model, rows)
-    if status != 0:
+    if status != OK:
         return status
     full = buffer[: 6 * n].reshape(6, n)
     J = buffer[6 * n : 6 * n + m * n].reshape(m, n)
@@ -365,12 +264,12 @@ def task_core(
     pivots, x, y = buffer[at : at + n], buffer[at + n : at + 2 * n], buffer[at + 2 * n : at + 3 * n]
     axes = WORLD
     status = jacobian_one(model, q, target, axes, full)
-    if status != 0:
+    if status != OK:
         return status
     select_rows(full, rows, J)
     if kind == LAMBDA:
         status = crba_one(model, q, M)
-        return status if status != 0 else 0 if lambda_from(J, M, limit, Y, B, out) else SINGULAR
+        return status if status != OK else OK if lambda_from(J, M, limit, Y, B, out) else TASK_SINGULAR
     if kind == FORWARD:  # yddot = J qdd + Jdot qd at qdd = ABA(q, qd, J^T f): no inverse of J
         for j in range(n):
             s = 0.0
@@ -378,9 +277,9 @@ def task_core(
                 s += J[r, j] * v[r]
             x[j] = s
         status = aba_one(model, q, qd, x, y)
-        if status == 0:
+        if status == OK:
             status = jacobian_dot_one(model, q, qd, target, axes, full)
-        if status == 0:
+        if status == OK:
             row_times(full, rows, qd, x)
             for r in range(m):
                 s = x[r]
@@ -391,12 +290,12 @@ def task_core(
     if m != n:
         return NOT_SQUARE
     if not certified_regular(J, limit, B):
-        return SINGULAR
+        return TASK_SINGULAR
     for r in range(n):
         for c in range(n):
             A[r, c] = J[r, c]
     if not lu(A, pivots):
-        return SINGULAR
+        return TASK_SINGULAR
     if kind == GRAVITY:
         status = gravity_one(model, q, x)
     elif kind == FRICTION:
@@ -404,15 +303,15 @@ def task_core(
     elif kind == FORCE:
         for i in range(n):
             if not abs(v[i]) < LARGEST_STATE:  # NaN, infinity or too large: the general path names it
-                return 12
+                return NOT_FINITE + 1
             x[i] = v[i]
     elif kind == NONLINEAR:  # N - M J^-1 (Jdot qd)
         status = nonlinear_one(model, q, qd, x)
-        if status == 0:
+        if status == OK:
             status = crba_one(model, q, M)
-        if status == 0:
+        if status == OK:
             status = jacobian_dot_one(model, q, qd, target, axes, full)
-        if status == 0:
+        if status == OK:
             row_times(full, rows, qd, y)
             lu_solve(A, pivots, y)
             for i in range(n):
@@ -422,7 +321,7 @@ def task_core(
                 x[i] = s
     elif kind == INVERSE:  # tau at qdd = J^-1 (v - Jdot qd)
         status = jacobian_dot_one(model, q, qd, target, axes, full)
-        if status == 0:
+        if status == OK:
             row_times(full, rows, qd, y)
             for r in range(n):
                 y[r] = v[r] - y[r]
@@ -430,11 +329,11 @@ def task_core(
             status = inverse_dynamics_one(model, q, qd, y, x)
     else:  # CORIOLIS: J^-T (Vm - M J^-1 Jdot) J^-1
         status = coriolis_one(model, q, qd, K)
-        if status == 0:
+        if status == OK:
             status = crba_one(model, q, M)
-        if status == 0:
+        if status == OK:
             status = jacobian_dot_one(model, q, qd, target, axes, full)
-        if status != 0:
+        if status != OK:
             return status
         for c in range(n):  # K -= M (J^-1 Jdot), a column at a time
             for r in range(n):
@@ -457,8 +356,8 @@ def task_core(
             lu_solve_transpose(A, pivots, y)
             for r in range(n):
                 out[r, c] = y[r]
-        return 0
-    if status == 0:
+        return OK
+    if status == OK:
         lu_solve_transpose(A, pivots, x)
         for i in range(n):
             out[0, i] = x[i]
@@ -482,11 +381,11 @@ def task_one(
     kind: int,
     out: np.ndarray,
 ) -> int:
-    """One state of ``kind`` (LAMBDA ... FORWARD) into out; a status (SINGULAR: the general path decides).
+    """One state of ``kind`` (LAMBDA ... FORWARD) into out; a status (TASK_SINGULAR: the general path decides).
     The caller gives out the kind's shape and v of n values (of which FORWARD reads m)."""
     n = int(model[N_JOINTS])
     if qd.shape[0] != n or v.shape[0] != n:
-        return 2
+        return WRONG_LENGTH + 1
     return task_core(model, q, qd, v, target, rows, limit, kind, out, scratch(task_size(n, rows.shape[0])))
 
 

@@ -36,16 +36,39 @@ LINK_ROTATION, LINK_POSITION = 28, 37  # the link frame (DH or URDF) in the body
 STRIDE = 40
 REVOLUTE_KIND, PRISMATIC_KIND = 0.0, 1.0
 
-# Workspace layouts, per joint and fixed (each kernel's docstring says what its record holds).
+
+def fields(*sizes: int) -> tuple[int, ...]:
+    """The start of each field of a workspace record whose fields have these sizes, then the
+    record's size: fields(12, 6, 6) = (0, 12, 18, 24)."""
+    starts = [0]
+    for size in sizes:
+        starts.append(starts[-1] + size)
+    return tuple(starts)
+
+
+# Workspace layouts (each kernel's docstring says what its fields hold). RNEA and G keep one record
+# per joint (field f of joint i at RECORD * i + f); the other kernels keep one block per field
+# (field f of joint i at f * n + size * i, size the field's size), then a fixed part.
 TRANSFORM = 12  # a joint's (R, p): 9 + 3
-RNEA_JOINT, RNEA_VELOCITY, RNEA_FORCE = 30, 12, 24  # R, p | v, a | f
-RNEA_FIXED = 18  # the tool wrench: its transform (12) and the wrench (6)
-GRAVITY_JOINT = 21  # R, p | a | f
 COMPOSITE = 10  # a composite inertia (m, h, I_O)
-CORIOLIS_JOINT, CORIOLIS_FIXED = 64, 10  # local and world transforms, S, Sdot, v, I^c, B^c | one inertia
-ABA_JOINT, ABA_FIXED = 98, 26  # transforms, S, v, c, I^A, p^A, U, a, (D, u) | one inertia, momentum
-ENERGY_JOINT, ENERGY_FIXED = 30, 6  # local and world transforms, v | I v
-DERIVATIVE_JOINT, DERIVATIVE_FIXED = 88, 28  # transforms, S, dV, dA, dAv, v, a, I^C, B^C, F^C | inertia, 3 vectors
+SPATIAL = 6  # a spatial vector [angular; linear]
+ARTICULATED = 36  # a 6 x 6 articulated-body inertia
+COMPOSITE_BIAS = 12  # B^c of Echeandia and Wensing (2021): a 3 x 3 block and a vector
+_, RNEA_VELOCITY, RNEA_ACCELERATION, RNEA_FORCE, RNEA_JOINT = fields(TRANSFORM, SPATIAL, SPATIAL, SPATIAL)
+RNEA_FIXED = 18  # the tool wrench: its transform (12) and the wrench (6)
+_, GRAVITY_ACCELERATION, GRAVITY_MOMENT, GRAVITY_FORCE, GRAVITY_JOINT = fields(TRANSFORM, 3, 3, 3)  # R, p | a | n, f
+(CORIOLIS_LOCAL, CORIOLIS_POSE, CORIOLIS_SUBSPACE, CORIOLIS_SUBSPACE_DOT, CORIOLIS_VELOCITY, CORIOLIS_COMPOSITE,
+ CORIOLIS_BIAS, CORIOLIS_JOINT) = fields(TRANSFORM, TRANSFORM, *(SPATIAL,) * 3, COMPOSITE, COMPOSITE_BIAS)  # fmt: skip
+CORIOLIS_FIXED = COMPOSITE  # one body inertia
+(ABA_LOCAL, ABA_POSE, ABA_SUBSPACE, ABA_VELOCITY, ABA_BIAS, ABA_INERTIA, ABA_MOMENTUM, ABA_U, ABA_ACCELERATION,
+ ABA_PIVOT, ABA_JOINT) = fields(TRANSFORM, TRANSFORM, *(SPATIAL,) * 3, ARTICULATED, *(SPATIAL,) * 3, 2)  # fmt: skip
+ABA_FIXED = 26  # S qd (6), the body inertia in world axes (10), the body inertia and then its momentum (10)
+ENERGY_LOCAL, ENERGY_POSE, ENERGY_VELOCITY, ENERGY_JOINT = fields(TRANSFORM, TRANSFORM, SPATIAL)
+ENERGY_FIXED = SPATIAL  # I v
+(DERIVATIVE_LOCAL, DERIVATIVE_POSE, DERIVATIVE_SUBSPACE, DERIVATIVE_DV, DERIVATIVE_DA, DERIVATIVE_DAV,
+ DERIVATIVE_VELOCITY, DERIVATIVE_ACCELERATION, DERIVATIVE_COMPOSITE, DERIVATIVE_BIAS, DERIVATIVE_FORCE,
+ DERIVATIVE_JOINT) = fields(TRANSFORM, TRANSFORM, *(SPATIAL,) * 6, COMPOSITE, COMPOSITE_BIAS, SPATIAL)  # fmt: skip
+DERIVATIVE_FIXED = COMPOSITE + 3 * SPATIAL  # one inertia, three 6-vectors
 WORK_PER_JOINT = max(RNEA_JOINT + COMPOSITE, TRANSFORM + COMPOSITE, GRAVITY_JOINT, CORIOLIS_JOINT, ABA_JOINT,
                      ENERGY_JOINT)  # fmt: skip
 WORK_FIXED = max(RNEA_FIXED, CORIOLIS_FIXED, ABA_FIXED, ENERGY_FIXED)

@@ -3,7 +3,7 @@ Rigid Body Dynamics Algorithms, 2008, 5.3): tau = M qdd + Vm qd + F + G (+ J^T f
 flags the Coriolis vector V = Vm qd, N = V + F + G, or G alone.
 
 A one-state entry (``*_one``) checks its inputs and returns a status (spatial.states_status;
-4 for an output of the wrong shape); a batch entry runs states in parallel chunks, each with
+status.WRONG_SHAPE for an output of the wrong shape); a batch entry runs states in parallel chunks, each with
 its own workspace (packed.workspace_size).
 """
 
@@ -17,7 +17,10 @@ from armdyn.dynamics.packed import (
     ARMATURE,
     FIRST_MOMENT,
     GRAVITY,
+    GRAVITY_ACCELERATION,
+    GRAVITY_FORCE,
     GRAVITY_JOINT,
+    GRAVITY_MOMENT,
     HEADER,
     INERTIA,
     KIND,
@@ -50,6 +53,7 @@ from armdyn.dynamics.spatial import (
     sin_cos,
     states_status,
 )
+from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION, WITH_WRENCH = 1, 2, 4, 8, 16
 INVERSE_DYNAMICS = WITH_QDD | WITH_GRAVITY | WITH_VELOCITY | WITH_FRICTION
@@ -141,7 +145,8 @@ def rnea_core(
     for i in range(n - 1, -1, -1):
         b = HEADER + STRIDE * i
         o = RNEA_JOINT * i
-        nx, ny, nz, fx, fy, fz = work[o + 24], work[o + 25], work[o + 26], work[o + 27], work[o + 28], work[o + 29]
+        f = o + RNEA_FORCE
+        nx, ny, nz, fx, fy, fz = work[f], work[f + 1], work[f + 2], work[f + 3], work[f + 4], work[f + 5]
         prism = model[b + KIND]
         value = prism * fz + (1.0 - prism) * nz + ascale * model[b + ARMATURE] * qdd[i]
         if (flags & WITH_FRICTION) != 0:
@@ -180,9 +185,9 @@ def rnea_checked(
     """One state: check the first ``count`` states and tau's length, then the parts of tau that
     ``flags`` selects; returns the status (0 when computed)."""
     status = states_status(model, q, qd, qdd, count)
-    if status == 0 and tau.shape[0] != int(model[N_JOINTS]):
-        status = 4
-    if status == 0:
+    if status == OK and tau.shape[0] != int(model[N_JOINTS]):
+        status = WRONG_SHAPE
+    if status == OK:
         rnea_core(model, scratch(RNEA_JOINT * int(model[N_JOINTS]) + RNEA_FIXED), q, qd, qdd, qd, flags, tau)
     return status
 
@@ -231,7 +236,7 @@ def gravity_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, G: np.ndarr
         o = GRAVITY_JOINT * i
         joint_transform(model, i, q[i], work, o)
         if parent >= 0:
-            op = GRAVITY_JOINT * parent + 12
+            op = GRAVITY_JOINT * parent + GRAVITY_ACCELERATION
             lx, ly, lz = work[op], work[op + 1], work[op + 2]
         else:
             lx, ly, lz = -model[GRAVITY], -model[GRAVITY + 1], -model[GRAVITY + 2]
@@ -244,24 +249,25 @@ def gravity_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, G: np.ndarr
             model[b + FIRST_MOMENT + 1],
             model[b + FIRST_MOMENT + 2],
         )
-        work[o + 12], work[o + 13], work[o + 14] = Lx, Ly, Lz
-        work[o + 15], work[o + 16], work[o + 17] = hy * Lz - hz * Ly, hz * Lx - hx * Lz, hx * Ly - hy * Lx
-        work[o + 18], work[o + 19], work[o + 20] = mass * Lx, mass * Ly, mass * Lz
+        a, f = o + GRAVITY_ACCELERATION, o + GRAVITY_MOMENT
+        work[a], work[a + 1], work[a + 2] = Lx, Ly, Lz
+        work[f], work[f + 1], work[f + 2] = hy * Lz - hz * Ly, hz * Lx - hx * Lz, hx * Ly - hy * Lx
+        work[f + 3], work[f + 4], work[f + 5] = mass * Lx, mass * Ly, mass * Lz
     for i in range(n - 1, -1, -1):
         b = HEADER + STRIDE * i
         o = GRAVITY_JOINT * i
-        G[i] = work[o + 20] if model[b + KIND] != 0.0 else work[o + 17]
+        G[i] = work[o + GRAVITY_FORCE + 2] if model[b + KIND] != 0.0 else work[o + GRAVITY_MOMENT + 2]
         parent = int(model[b + PARENT])
         if parent >= 0:
-            add_force_to_parent(work, o, work, o + 15, work, GRAVITY_JOINT * parent + 15)
+            add_force_to_parent(work, o, work, o + GRAVITY_MOMENT, work, GRAVITY_JOINT * parent + GRAVITY_MOMENT)
 
 
 @one_state(types.int64(MODEL, VECTOR, VECTOR))
 def gravity_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     """G(q) for one state, by its own lean recursion."""
     status = states_status(model, q, q, q, 1)
-    if status == 0 and out.shape[0] != int(model[N_JOINTS]):
-        status = 4
-    if status == 0:
+    if status == OK and out.shape[0] != int(model[N_JOINTS]):
+        status = WRONG_SHAPE
+    if status == OK:
         gravity_core(model, scratch(GRAVITY_JOINT * int(model[N_JOINTS])), q, out)
     return status

@@ -14,9 +14,7 @@ all are inlined into their callers.
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
-from types import MethodType
 
 import numpy as np
 from numba import njit, types
@@ -24,7 +22,9 @@ from numba.core import cgutils
 from numba.core.dispatcher import Dispatcher
 from numba.extending import intrinsic
 
+from armdyn.dynamics.numba_compat import one_state_dispatcher
 from armdyn.dynamics.packed import FIRST_MOMENT, HEADER, INERTIA, KIND, MASS, N_JOINTS, POSITION, ROTATION, STRIDE
+from armdyn.dynamics.status import NOT_FINITE, OK, WRONG_LENGTH
 from armdyn.inputs import LARGEST_STATE
 
 NUMBA_OPTIONS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
@@ -43,39 +43,12 @@ def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
     it calls.
 
     With the signature compiled, compilation is disabled, so a call with any other argument
-    types raises TypeError as with an explicit signature (the api's fast path relies on it).
-    Numba calls ``_compile_for_args`` only when no compiled version matches the arguments;
-    here it compiles the one signature and hands the call back to the dispatcher, which then
-    runs it or raises TypeError, at once: no conversion of other types is searched, and the
-    message does not type every argument (Numba's would cost about 60 us on a batch, which
-    every batch call would pay before its general path).
+    types raises TypeError as with an explicit signature (the api's fast path relies on it);
+    numba_compat.one_state_dispatcher says how.
     """
 
     def decorate(function: Callable) -> Dispatcher:
-        dispatcher = njit(**NUMBA_OPTIONS)(function)
-        first_call = threading.Lock()  # two threads' first calls: one compiles, the other waits and runs it
-
-        def compile_signature(self: Dispatcher, *args: object, **kwargs: object) -> Dispatcher:
-            with first_call:
-                if self._can_compile:
-                    self.compile(signature)
-                    self.disable_compile()
-            return self
-
-        def no_conversion(self: Dispatcher, *args: object, **kwargs: object) -> bool:
-            return False  # the signature's types exactly: Numba would otherwise convert a bool or a float to an int
-
-        message = f"{function.__name__} takes only the types of its signature {signature}"
-
-        def refuse(self: Dispatcher, *args: object, **kwargs: object) -> None:
-            # Numba's own message types every argument (about 60 us for a batch): the api's general path,
-            # which every refused call takes next, names what is wrong
-            raise TypeError(message)
-
-        dispatcher._compile_for_args = MethodType(compile_signature, dispatcher)
-        dispatcher._search_new_conversions = MethodType(no_conversion, dispatcher)
-        dispatcher._explain_matching_error = MethodType(refuse, dispatcher)
-        return dispatcher
+        return one_state_dispatcher(njit(**NUMBA_OPTIONS)(function), signature)
 
     return decorate
 
@@ -140,27 +113,29 @@ def sin_cos(x: float) -> tuple[float, float]:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def vector_status(x: np.ndarray, n: int, code: int) -> int:
-    """0, or ``code`` when x has the wrong length, or code + 10 when it holds NaN, infinity or a value
-    of LARGEST_STATE or more in magnitude (the general path then names the rule broken)."""
+def vector_status(x: np.ndarray, n: int, index: int) -> int:
+    """OK, or WRONG_LENGTH + index when x (state argument ``index``, from 0) has the wrong length, or
+    NOT_FINITE + index when it holds NaN, infinity or a value of LARGEST_STATE or more in magnitude
+    (the general path then names the rule broken)."""
     if x.shape[0] != n:
-        return code
+        return WRONG_LENGTH + index
     for k in range(n):
         if not abs(x[k]) < LARGEST_STATE:  # NaN fails every comparison
-            return code + 10
-    return 0
+            return NOT_FINITE + index
+    return OK
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def states_status(model: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, count: int) -> int:
-    """The status of the first ``count`` state arguments (a, b, c): 0 when each has n finite values,
-    else 1, 2, 3 for the argument of the wrong length, 11, 12, 13 for one with NaN or infinity."""
+    """The status of the first ``count`` state arguments (a, b, c): OK when each has n finite values,
+    else WRONG_LENGTH + k (1, 2, 3) for argument k of the wrong length, NOT_FINITE + k (11, 12, 13)
+    for one with NaN or infinity."""
     n = int(model[N_JOINTS])
-    status = vector_status(a, n, 1)
-    if status == 0 and count > 1:
-        status = vector_status(b, n, 2)
-    if status == 0 and count > 2:
-        status = vector_status(c, n, 3)
+    status = vector_status(a, n, 0)
+    if status == OK and count > 1:
+        status = vector_status(b, n, 1)
+    if status == OK and count > 2:
+        status = vector_status(c, n, 2)
     return status
 
 
