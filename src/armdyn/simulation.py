@@ -34,6 +34,7 @@ from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
+from armdyn.dynamics.linalg import cholesky, cholesky_solve
 from armdyn.dynamics.packed import (
     COULOMB_NEG,
     COULOMB_POS,
@@ -212,30 +213,12 @@ def _solve(
 
     Returns -1, or the first joint whose pivot is not above ``floor`` (M singular; qdd not
     computed)."""
-    n = qd.shape[0]
-    for j in range(n):
-        total = M[j, j]
-        for k in range(j):
-            total -= M[j, k] * M[j, k]
-        if not total > floor:
-            return j
-        pivot = math.sqrt(total)
-        M[j, j] = pivot
-        for i in range(j + 1, n):
-            total = M[i, j]
-            for k in range(j):
-                total -= M[i, k] * M[j, k]
-            M[i, j] = total / pivot
-    for i in range(n):
-        total = tau[i] - N[i] - smooth_coulomb(coulomb, eps, i, qd[i])
-        for k in range(i):
-            total -= M[i, k] * qdd[k]
-        qdd[i] = total / M[i, i]
-    for i in range(n - 1, -1, -1):
-        total = qdd[i]
-        for k in range(i + 1, n):
-            total -= M[k, i] * qdd[k]
-        qdd[i] = total / M[i, i]
+    singular = cholesky(M, floor)
+    if singular >= 0:
+        return singular
+    for i in range(qd.shape[0]):
+        qdd[i] = tau[i] - N[i] - smooth_coulomb(coulomb, eps, i, qd[i])
+    cholesky_solve(M, qdd.reshape((qd.shape[0], 1)))
     return -1
 
 

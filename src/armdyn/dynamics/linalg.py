@@ -2,8 +2,9 @@
 triangular solves (Golub and Van Loan, Matrix Computations, 4th ed., 2013, 4.2 and 3.4), inlined
 into the kernels that call them.
 
-A Cholesky factor A = L L^T is kept as ``cholesky`` leaves it: L below the diagonal and the
-reciprocals 1 / L_jj on it, so that the solves multiply and never divide. The solves run row by
+A Cholesky factor A = L L^T is kept as ``cholesky`` leaves it: L in A's lower triangle, its
+diagonal included; the solves divide by L_jj (correctly rounded, where multiplying by a stored
+reciprocal would round twice). The solves run row by
 row with every right-hand side at once (the inner loops run along X's rows, contiguous); each
 value is updated in the order k = 0, 1, ... whatever the loop order.
 """
@@ -19,24 +20,24 @@ from armdyn.dynamics.spatial import NUMBA_OPTIONS
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def cholesky(A: np.ndarray) -> int:
-    """A = L L^T in place (only A's lower triangle is read): L below the diagonal, 1 / L_jj on it.
-    Returns -1, or the first column j whose pivot is not positive (A is not positive definite;
-    the columns from j on are then not factored)."""
+def cholesky(A: np.ndarray, floor: float = 0.0) -> int:
+    """A = L L^T in place (only A's lower triangle is read and written).
+    Returns -1, or the first column j whose pivot L_jj^2 is not above ``floor`` (A is not positive
+    definite, or nearly singular; the columns from j on are then not factored)."""
     m = A.shape[0]
     for j in range(m):
         d = A[j, j]
         for k in range(j):
             d -= A[j, k] * A[j, k]
-        if not d > 0.0:
+        if not d > floor:
             return j
-        inverse = 1.0 / math.sqrt(d)
-        A[j, j] = inverse
+        pivot = math.sqrt(d)
+        A[j, j] = pivot
         for i in range(j + 1, m):
             s = A[i, j]
             for k in range(j):
                 s -= A[i, k] * A[j, k]
-            A[i, j] = s * inverse
+            A[i, j] = s / pivot
     return -1
 
 
@@ -49,9 +50,9 @@ def solve_lower(L: np.ndarray, X: np.ndarray) -> None:
             weight = L[r, k]
             for c in range(width):
                 X[r, c] -= weight * X[k, c]
-        inverse = L[r, r]
+        pivot = L[r, r]
         for c in range(width):
-            X[r, c] *= inverse
+            X[r, c] /= pivot
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -63,9 +64,9 @@ def solve_lower_transpose(L: np.ndarray, X: np.ndarray) -> None:
             weight = L[k, r]
             for c in range(width):
                 X[r, c] -= weight * X[k, c]
-        inverse = L[r, r]
+        pivot = L[r, r]
         for c in range(width):
-            X[r, c] *= inverse
+            X[r, c] /= pivot
 
 
 @njit(inline="always", **NUMBA_OPTIONS)

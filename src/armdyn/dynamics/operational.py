@@ -49,7 +49,7 @@ def certified_regular(J: np.ndarray, limit: float, B: np.ndarray) -> bool:
         return False
     ratio = 1.0  # trace^m / det = prod of trace / L_ii^2, a factor per row so that neither overflows
     for i in range(m):
-        ratio *= trace * B[i, i] * B[i, i]
+        ratio *= trace / (B[i, i] * B[i, i])
     return ratio <= limit * limit
 
 
