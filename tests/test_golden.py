@@ -10,11 +10,14 @@ from tests.golden.make_golden import GOLDEN, compact, scenarios
 
 SCENARIOS = scenarios()
 
-# scenario name -> tolerance relative to each array's largest entry, for a case whose rounding had to change.
+# scenario name -> tolerance relative to each array's largest entry, where a result may not repeat bit for bit.
 TOLERANCES: dict[str, float] = {
-    # Many runs at once (simulate with runs=, and the studies built on it) vary from one process to the next
-    # by an ulp or two (4e-16 relative seen), as they did before: one run is bit for bit.
-    **{name: 1e-14 for name in SCENARIOS if name.startswith(("many.", "study."))},
+    # A run's compiled loop freshly compiled in this process and the same loop loaded from Numba's cache differ
+    # in the last bits for some laws (PD plus gravity, the exact Coulomb law: 5e-15 relative seen through 0.5 s
+    # of closed loop, 3e-14 under an adaptive solver, whose steps those bits steer); so do many runs at once
+    # between processes (4e-16 seen). Which of the two a test gets depends on the order the tests ran in.
+    **{name: 1e-13 for name in SCENARIOS if name.startswith(("sim.", "drives.", "many.", "study."))},
+    **{name: 1e-11 for name in SCENARIOS if name.startswith("sim.") and "rk" in name.rsplit(".", 1)[1]},
     # One Cholesky factorization serves every kernel now (dynamics/linalg.py), dividing by the pivots as the
     # simulation always did; the derivative and operational-space kernels multiplied by stored reciprocals.
     # One-shot quantities moved by about one ulp (1e-15 relative seen).

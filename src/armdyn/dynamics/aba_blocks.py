@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from armdyn.dynamics.friction import coulomb_law
 from armdyn.dynamics.packed import (
     ARMATURE,
     COULOMB_NEG,
@@ -244,7 +245,7 @@ def _pivot_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
         u5 = a5 * s0 + a10 * s1 + a14 * s2 + a17 * s3 + a19 * s4 + a20 * s5
         D = s0 * u0 + s1 * u1 + s2 * u2 + s3 * u3 + s4 * u4 + s5 * u5 + armature
         rate = x[QD_ * BLOCK + s]
-        coulomb = positive if rate > 0.0 else (negative if rate < 0.0 else 0.0)  # friction.coulomb, as selects
+        coulomb = coulomb_law(positive, negative, rate)
         p0, p1, p2 = x[PA_ * BLOCK + s], x[(PA_ + 1) * BLOCK + s], x[(PA_ + 2) * BLOCK + s]
         p3, p4, p5 = x[(PA_ + 3) * BLOCK + s], x[(PA_ + 4) * BLOCK + s], x[(PA_ + 5) * BLOCK + s]
         spa = s0 * p0 + s1 * p1 + s2 * p2 + s3 * p3 + s4 * p4 + s5 * p5

@@ -40,6 +40,7 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.aba import aba_core
 from armdyn.dynamics.coriolis import body_coriolis
+from armdyn.dynamics.friction import smooth_sign
 from armdyn.dynamics.linalg import cholesky, cholesky_solve
 from armdyn.dynamics.packed import (
     ABA_FIXED,
@@ -115,8 +116,7 @@ def coulomb_smoothed_minus_exact(model: np.ndarray, j: int, rate: float, eps: fl
     if eps <= 0.0:
         return 0.0
     b = HEADER + STRIDE * j
-    x = rate / eps
-    smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)
+    smooth = smooth_sign(rate, eps)
     if rate > 0.0:
         return (smooth - 1.0) * model[b + COULOMB_POS]
     if rate < 0.0:

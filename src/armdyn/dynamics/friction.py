@@ -18,14 +18,23 @@ from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
+def coulomb_law(positive: float, negative: float, rate: float) -> float:
+    """Fd(qd) = Tc+ for qd > 0, Tc- for qd < 0, 0 at rest: the one compiled Coulomb law."""
+    return positive if rate > 0.0 else (negative if rate < 0.0 else 0.0)
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def smooth_sign(rate: float, eps: float) -> float:
+    """tanh(qd / eps), the smoothed sign of the Coulomb law (eps > 0); +-1 from |qd / eps| = 20 on."""
+    x = rate / eps
+    return math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)  # tanh(20) = 1 - 8e-18
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
 def coulomb(model: np.ndarray, j: int, rate: float) -> float:
-    """Fd_j(qd_j): Tc+ for qd > 0, Tc- for qd < 0, 0 at rest."""
+    """Fd_j(qd_j) of the packed model."""
     b = HEADER + STRIDE * j
-    if rate > 0.0:
-        return model[b + COULOMB_POS]
-    if rate < 0.0:
-        return model[b + COULOMB_NEG]
-    return 0.0
+    return coulomb_law(model[b + COULOMB_POS], model[b + COULOMB_NEG], rate)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -37,12 +46,11 @@ def joint_friction(model: np.ndarray, j: int, rate: float) -> float:
 @njit(inline="always", **NUMBA_OPTIONS)
 def smooth_coulomb(coulomb_table: np.ndarray, eps: np.ndarray, i: int, rate: float) -> float:
     """Fd_i smoothed: tanh(qd / eps_i) Tc+ for qd >= 0, -tanh(qd / eps_i) Tc- for qd < 0; the exact
-    step for eps_i = 0. ``coulomb_table`` is (n, 2): Tc+, Tc- per joint."""
+    law for eps_i = 0. ``coulomb_table`` is (n, 2): Tc+, Tc- per joint."""
     if eps[i] > 0.0:
-        x = rate / eps[i]
-        smooth = math.tanh(x) if abs(x) < 20.0 else (1.0 if x > 0.0 else -1.0)  # tanh(20) = 1 - 8e-18
+        smooth = smooth_sign(rate, eps[i])
         return smooth * coulomb_table[i, 0] if rate >= 0.0 else -smooth * coulomb_table[i, 1]
-    return coulomb_table[i, 0] if rate > 0.0 else coulomb_table[i, 1] if rate < 0.0 else 0.0
+    return coulomb_law(coulomb_table[i, 0], coulomb_table[i, 1], rate)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
