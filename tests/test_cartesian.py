@@ -15,8 +15,7 @@ import armdyn as ad
 from armdyn import cartesian as ct
 from armdyn.errors import ModelError
 from tests import strategies
-from tests import test_docstrings as docs
-from tests.conftest import URDFS, pinocchio_pair
+from tests.helpers import URDFS, has_section, module_items, pinocchio_pair, undocumented
 
 SEEDS = range(5)
 
@@ -403,15 +402,15 @@ def test_bad_arguments_are_named() -> None:
 
 def test_public_callables_are_documented() -> None:
     """The numpydoc rules of tests/test_docstrings.py, applied to armdyn.cartesian (not yet in its walk)."""
-    items = list(docs._module_items(ct))
+    items = list(module_items(ct))
     assert any(item.label.endswith("task_inertia") for item in items)
     for item in items:
         if item.signature is not None:
-            assert not docs.undocumented(item), item.label
+            assert not undocumented(item), item.label
         if item.needs_returns:
-            assert docs.has_section(item.docstring, "Returns"), item.label
+            assert has_section(item.docstring, "Returns"), item.label
         if not isinstance(item.target, type):  # every function and method says what it raises
-            assert docs.has_section(item.docstring, "Raises"), item.label
+            assert has_section(item.docstring, "Raises"), item.label
 
 
 # ----- the Panda (7 joints, 6-D pose): operational space against Pinocchio ----------------------------

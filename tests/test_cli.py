@@ -10,30 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 import armdyn as ad
-from armdyn.cli import app
-from tests.test_regressor import exciting
+from tests.helpers import assert_one_error_line, exciting, invoke
 
 ARMDYN = Path(sys.executable).parent / "armdyn"  # the script pip installed in the venv
 HEADER = "q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2"
-
-
-def assert_one_error_line(result: object, *fragments: str) -> str:
-    """A non-zero exit with exactly one line on stderr, 'error: ...', containing the fragments."""
-    assert result.exit_code != 0, result.output
-    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
-    assert "Traceback" not in result.output
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
-    return lines[0]
-
-
-def invoke(*args: str) -> object:
-    return CliRunner().invoke(app, [str(arg) for arg in args], prog_name="armdyn")
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.test_cli import assert_one_error_line, invoke
+from tests.helpers import assert_one_error_line, invoke
 
 
 def test_simulate_a_planar_arm_on_a_task_circle(tmp_path: Path) -> None:

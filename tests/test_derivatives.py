@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 import armdyn as ad
 from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 from tests.strategies import random_robot, random_state
 
 

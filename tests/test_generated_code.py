@@ -19,7 +19,7 @@ import armdyn as ad
 from armdyn.errors import ModelError
 from armdyn.symbolic import generate_code
 from armdyn.symbolic.newton_euler import python_source
-from tests.conftest import ROBOTS, URDFS
+from tests.helpers import ROBOTS, URDFS
 from tests.strategies import random_robot
 
 XARM7 = ROBOTS / "xarm_description" / "urdf" / "xarm7.urdf"

@@ -21,7 +21,7 @@ from armdyn.control import ComputedTorque, PDGravity
 from armdyn.model.joint import rot_x
 from armdyn.plotting import animate, plot_arm
 from armdyn.trajectories import Sinusoid
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 
 LINK_GREY = np.array([64, 64, 64])  # the links' colour, "0.25"
 

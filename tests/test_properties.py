@@ -103,7 +103,7 @@ def test_check_command() -> None:
 
 
 def test_identify_command(tmp_path: object) -> None:
-    from tests.test_regressor import exciting
+    from tests.helpers import exciting
 
     arm = ad.models.puma560()
     q, qd, qdd = exciting(6, 400)

@@ -20,7 +20,7 @@ import armdyn as ad
 from armdyn import cartesian as ct
 from armdyn.cli import app
 from armdyn.properties import DEFAULT_MAX_CONDITION, check, joint_ranges
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 
 SQUARE_ROWS = {
     "symmetry", "positive definite", "inertia bounds", "norm bounds", "quadratic", "Coriolis bound",

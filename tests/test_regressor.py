@@ -20,7 +20,7 @@ from armdyn.control import ComputedTorque
 from armdyn.dynamics import regressor as regressor_module
 from armdyn.dynamics.regressor import FrictionMisfitWarning, PoorExcitationWarning, parameter_names
 from armdyn.excitation import FourierTrajectory, excitation_trajectory, identification_data, joint_ranges
-from tests.conftest import pinocchio_pair
+from tests.helpers import exciting, pinocchio_pair
 from tests.strategies import random_robot, random_state
 
 
@@ -105,18 +105,6 @@ def test_base_parameters_at_rest_explain_a_joint_at_rest() -> None:
     tau = arm.inverse_dynamics(q, qd, qdd)
     assert_allclose(resting.regressor(q, qd, qdd) @ resting.phi, tau, atol=1e-9)
     assert np.abs(moving.regressor(q, qd, qdd) @ moving.phi - tau)[:, 2].min() > 1e-3
-
-
-def exciting(n: int, samples: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    rng = np.random.default_rng(seed)
-    t = np.linspace(0, 10, samples, endpoint=False)[:, None, None]
-    k = np.arange(1, 6)[None, None, :] * 2 * np.pi / 10
-    a, b = rng.normal(0, 0.1, (2, 1, n, 5))
-    return (
-        (a * np.sin(k * t) + b * np.cos(k * t)).sum(-1),
-        (k * (a * np.cos(k * t) - b * np.sin(k * t))).sum(-1),
-        (-(k**2) * (a * np.sin(k * t) + b * np.cos(k * t))).sum(-1),
-    )
 
 
 def test_identification_recovers_the_puma560_from_noise_free_data() -> None:

@@ -163,7 +163,7 @@ def test_specs_read_the_cli_form_and_joints() -> None:
 def test_the_study_command(tmp_path: Path) -> None:
     """armdyn study: the estimate with its interval and Hoeffding's sample size, a figure, blocks on disk read
     back by a rerun, and one error line for a spec it cannot read."""
-    from tests.test_cli import assert_one_error_line, invoke
+    from tests.helpers import assert_one_error_line, invoke
 
     line = ["study", "two_link_planar", "--runs", "120", "--block", "50", "--t-final", "0.3", "--payload", "0:2",
             "--mass-error", "10%", "--spec", "max-error-after-0.2s<3e-3", "--seed", "4"]  # fmt: skip
