@@ -494,6 +494,7 @@ def test_compiled_one_state_path_equals_the_batch_path(output: ct.TaskOutput) ->
 
 
 # ----- computed torque in task coordinates ---------------------------------------------------------------
+@pytest.mark.slow
 def test_rr_arm_tracks_the_circle_of_example_4_2_1_under_task_space_computed_torque() -> None:
     """The RR arm (a1 = a2 = 2 m) from 2 cm off the circle: path error below 1e-4 m after 1 s at a 1 ms step,
     and the law's torque equals J^T (Mbar (yddot_d + kv edot + kp e) + Nbar) formed from the task quantities."""
@@ -549,6 +550,7 @@ def test_task_space_control_arguments_are_checked(build: object, message: str) -
         build()
 
 
+@pytest.mark.slow
 def test_panda_operational_space_control_keeps_the_tool_on_its_line_while_the_posture_moves() -> None:
     """Khatib's controller on the 7-joint Panda: the tool follows a straight line while a posture task swings
     joint 3 in the null space; the task error is the same as with a still posture (dynamic consistency)."""
@@ -611,6 +613,7 @@ def test_line_and_pose_line_rates_are_the_derivatives_of_their_positions() -> No
         assert_allclose([W[2, 1], W[0, 2], W[1, 0]], pose(t)[1][3:], atol=1e-7)
 
 
+@pytest.mark.slow
 def test_ur5_tracks_a_pose_line_under_task_space_computed_torque() -> None:
     """ToolPose (m = n = 6): from 0.05 rad off in each joint, the tool pose converges onto a PoseLine (position
     and orientation, the orientation error the rotation vector of R_d R^T), and Result.task records it."""

@@ -187,6 +187,7 @@ def test_cli_identify_writes_its_estimates(tmp_path: Path) -> None:
 
 
 # ----- the installed script -----------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "fragment"),
     [
@@ -208,6 +209,7 @@ def test_cli_script_exit_codes_and_no_traceback(files: Path, args: list[str], fr
     assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], run.stderr
 
 
+@pytest.mark.slow
 def test_cli_script_debug_shows_the_traceback() -> None:
     run = subprocess.run(
         [str(ARMDYN), "--debug", "check", "puma560", "--samples", "2"], capture_output=True, text=True, timeout=600
@@ -325,6 +327,7 @@ def test_cli_reads_a_dh_table_in_yaml(tmp_path: Path, monkeypatch: pytest.Monkey
     assert_one_error_line(invoke("show", path), "reading YAML needs PyYAML", "JSON")
 
 
+@pytest.mark.slow
 def test_cli_check_limits_reproduce_example_3_3_1(tmp_path: Path) -> None:
     """Example 3.3-1 (BOOK.md section 4): the RR arm, unit masses and lengths, |theta_i| <= pi/2: the
     1-norm bounds m1 = 4 and m2 = 7 (both attained), beside the book's values in the table."""
@@ -424,6 +427,7 @@ def test_cli_writes_tables_by_suffix(tmp_path: Path) -> None:
     assert header == list(ad.properties.COLUMNS)
 
 
+@pytest.mark.slow
 def test_cli_demo_writes_its_figures(demo_run: tuple) -> None:
     demo, folder = demo_run
     assert demo.exit_code == 0, demo.output

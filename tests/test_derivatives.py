@@ -170,6 +170,7 @@ def _reference_rates(arm: ad.Robot, x: np.ndarray, tau: np.ndarray) -> np.ndarra
     return np.concatenate([qd, np.linalg.solve(M, tau - bias)])
 
 
+@pytest.mark.slow
 def test_the_rk4_step_derivatives_equal_complex_step_through_the_reference_step() -> None:
     """(A_d, B_d) of statespace.rk4_step equal complex-step derivatives of the same RK4 step taken with the
     Lagrange-Euler reference, to 1e-10 relative (and the step itself equals the compiled one, test above)."""

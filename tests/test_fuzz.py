@@ -76,6 +76,8 @@ from tests.fuzz_values import (
 )
 from tests.strategies import random_robot
 
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parent.parent
 CHILD_MEMORY = 3 * 2**30  # address space of a child interpreter: a huge allocation fails fast there
 CHILD_TIMEOUT = 110.0  # seconds for one child interpreter

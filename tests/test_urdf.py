@@ -995,6 +995,7 @@ def test_reduced_errors_name_the_joint_and_the_rule() -> None:
 
 
 # ----- 5. the file is read with lxml alone: no mesh or scene-graph library, the URDF specification's defaults -------
+@pytest.mark.slow
 def test_loading_a_urdf_imports_no_mesh_library() -> None:
     """load_urdf reads the XML itself: yourdfpy (and trimesh, which it imports, 0.75 s of start-up) stay out."""
     code = (
