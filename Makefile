@@ -1,10 +1,11 @@
-# make run: set up (first time) and run the main job; make test: set up and run every test.
+# make run: set up (first time) and run the main job; make test: set up and run every test (what CI runs);
+# make check: lint and the fast lane (the tests not marked slow), for use while editing.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench fuzz clean docs
+.PHONY: run test check lint typecheck bench fuzz clean docs
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -19,9 +20,16 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks examples
 	$(BIN)/ruff format --check src tests benchmarks examples
 
+typecheck: $(STAMP)
+	$(BIN)/mypy src/armdyn
+
 # two workers, each test file in one (the files' own fixtures then run once)
 test: lint
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile
+
+# the fast lane: every module's tests but those marked slow (under a minute once Numba's cache is warm)
+check: lint
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile -m "not slow"
 
 fuzz: $(STAMP)
 	ARMDYN_FUZZ_REPORT=fuzz-report.txt $(BIN)/python -m pytest -q tests/test_fuzz.py

@@ -1,42 +1,18 @@
-"""Shared fixtures: where example-robot-data keeps its URDFs, and random arms for hypothesis."""
+"""Shared fixtures: the example-robot-data URDFs and the demo run (shared functions are in helpers.py)."""
 
 from __future__ import annotations
 
-import sysconfig
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
-URDFS = {
-    "panda": ROBOTS / "panda_description" / "urdf" / "panda.urdf",
-    "ur5": ROBOTS / "ur_description" / "urdf" / "ur5_robot.urdf",
-}
+from tests.helpers import URDFS
 
 
 @pytest.fixture(params=sorted(URDFS))
 def urdf_path(request: pytest.FixtureRequest) -> Path:
     """The Panda and UR5 URDFs of example-robot-data."""
     return URDFS[request.param]
-
-
-def pinocchio_pair(path: Path):
-    """(armdyn arm, pinocchio model, pinocchio data, q index map, v index map), joints mapped by name."""
-    import warnings
-
-    import pinocchio as pin
-
-    import armdyn as ad
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        arm = ad.load_urdf(path)
-    model = pin.buildModelFromUrdf(str(path))
-    ids = [model.getJointId(name) for name in arm.joint_names]
-    q_index = np.array([model.joints[i].idx_q for i in ids])
-    v_index = np.array([model.joints[i].idx_v for i in ids])
-    return arm, model, model.createData(), q_index, v_index
 
 
 @pytest.fixture(scope="session")

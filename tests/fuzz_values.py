@@ -5,10 +5,11 @@ A ``Value`` is what one argument receives, with what the call must then do:
 - "same": a valid value, perhaps an unusual one (an int array, a list, a read-only or strided
   view, a batch): the call must return the result it returns for ``reference`` (a plain
   float64 array or the like);
-- "either": the call may refuse it (ModelError or TypeError naming the argument) or return a
-  finite result (equal to the result for ``reference`` when there is one);
-- "bad": the call must refuse it with a ModelError or a TypeError whose message names the
-  argument.
+- "either": the call may refuse it (ModelError or TypeError naming the argument, or a
+  SimulationError for a run that stops) or return a finite result (equal to the result for
+  ``reference`` when there is one);
+- "bad": the call must refuse it with a ModelError or a TypeError (or, for a run that stops, a
+  SimulationError) whose message names the argument.
 
 Any other exception, a RuntimeWarning or ComplexWarning (made errors), a NaN or infinity in
 a result, an input array changed by the call, or a message that does not name the argument
@@ -801,7 +802,7 @@ def evaluate(target: Target, arm_label: str, arm: object, corrupted: dict[str, V
         fail(f"{type(result).__name__} (made an error)", str(result))
     elif outcome == "raised":
         message = str(result)
-        if not isinstance(result, (ad.ModelError, TypeError)):
+        if not isinstance(result, (ad.ModelError, ad.SimulationError, TypeError)):
             fail(f"raised {type(result).__name__}", message or repr(result))
         elif verdict == "same" and not (expected is not None and expected[0] == "raised" and independent):
             fail("refused a valid value", f"{type(result).__name__}: {message}")

@@ -12,7 +12,7 @@ import pytest
 import armdyn as ad
 from armdyn.dynamics.aba import aba_batch
 from armdyn.dynamics.aba_blocks import BLOCK, aba_blocks
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 from tests.strategies import random_robot
 
 SAME = 1e-12  # batch against one state: the same equations, rounded apart only by the order of operations

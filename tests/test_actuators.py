@@ -256,6 +256,7 @@ def simulate(rate, y0: np.ndarray, T: float, method: str, rtol: float, atol: obj
     return solution
 
 
+@pytest.mark.slow
 def test_reduced_model_is_the_limit_of_the_full_one_as_L_goes_to_0(puma: ad.Robot) -> None:
     q0, T = puma.qn, 0.2
     reduced = puma_drives(puma, coulomb=False)
@@ -280,6 +281,7 @@ def test_reduced_model_is_the_limit_of_the_full_one_as_L_goes_to_0(puma: ad.Robo
     assert errors[2] < 1e-3
 
 
+@pytest.mark.slow
 def test_energy_balance_with_electrics_on_the_puma(puma: ad.Robot) -> None:
     """v^T i = d/dt (K + P + 1/2 L i^2) + R i^2 + B_M qd_M^2 along a run, to 1e-6 relative."""
     arm = puma_drives(puma, coulomb=False)
@@ -309,6 +311,7 @@ def test_energy_balance_with_electrics_on_the_puma(puma: ad.Robot) -> None:
     assert arm.stored_energy(end[:18]) - arm.stored_energy(y0[:18]) == pytest.approx(gained, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_energy_balance_of_flexible_and_hydraulic_drives() -> None:
     """sum v i + P_L Q_L = d/dt stored energy + the losses of every resistor, damper and leak."""
     arm = mixed_arm()
@@ -395,6 +398,7 @@ def test_transfer_function_with_a_gear_matches_the_linearization() -> None:
 
 
 # ----- a voltage step on a PUMA joint motor ----------------------------------------------------------------------
+@pytest.mark.slow
 def test_voltage_step_on_the_puma_waist_motor_has_the_motor_time_constants(puma: ad.Robot) -> None:
     """Joint 1 (vertical axis) with joints 2 to 6 locked: a constant inertia, so the motor and load
     are second order: (L s + R)(J s + B_M) + K_M K_b with J = J_M + r^2 M_11 at the rotor."""
@@ -429,6 +433,7 @@ def test_voltage_step_on_the_puma_waist_motor_has_the_motor_time_constants(puma:
 
 
 # ----- hydraulics ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_a_small_valve_step_follows_the_linearized_merritt_model() -> None:
     """The square-root orifice against the null linearization (K_q = C_d w sqrt(P_s / rho), K_c = 0): the
     departure, mostly the pressure coefficient C_d w |x_v| / (2 sqrt(rho P_s)) the null model lacks, is

@@ -24,6 +24,7 @@ def _puma() -> act.ActuatedArm:
     return act.with_actuators(bare, drives)
 
 
+@pytest.mark.slow
 def test_compiled_run_converges_to_the_numpy_full_model_integrated_tightly() -> None:
     """ad.simulate on an ActuatedArm (RK4, its step at most half of L/R) against solve_ivp (DOP853, 1e-11) on
     ActuatedArm.state_derivative with the same motor-side PD law: q, qd and the currents within 1e-2 of their
@@ -101,6 +102,7 @@ def _drive_pid(arm: act.ActuatedArm, kp: float, kv: float, ki: float, path: obje
     return rates
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("name", "kind", "gains"),
     [("two_link_planar", "flexible", (20.0, 0.5, 10.0)), ("polar_rp", "hydraulic", (0.1, 0.002, 0.05))],
@@ -193,6 +195,7 @@ def test_the_rk4_step_comes_from_the_drives_time_constants() -> None:
     assert act.rk4_step(bare, np.zeros(2)) == pytest.approx(min(0.5 * 5e-3, 0.15 / column.max()))
 
 
+@pytest.mark.slow
 def test_representative_drives_hold_every_built_in_arm() -> None:
     """Each kind of representative drive on each built-in arm holds its start under gravity (PID), and the
     reduced model exists for the rigid drives."""

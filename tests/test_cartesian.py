@@ -15,8 +15,7 @@ import armdyn as ad
 from armdyn import cartesian as ct
 from armdyn.errors import ModelError
 from tests import strategies
-from tests import test_docstrings as docs
-from tests.conftest import URDFS, pinocchio_pair
+from tests.helpers import URDFS, has_section, module_items, pinocchio_pair, undocumented
 
 SEEDS = range(5)
 
@@ -403,15 +402,15 @@ def test_bad_arguments_are_named() -> None:
 
 def test_public_callables_are_documented() -> None:
     """The numpydoc rules of tests/test_docstrings.py, applied to armdyn.cartesian (not yet in its walk)."""
-    items = list(docs._module_items(ct))
+    items = list(module_items(ct))
     assert any(item.label.endswith("task_inertia") for item in items)
     for item in items:
         if item.signature is not None:
-            assert not docs.undocumented(item), item.label
+            assert not undocumented(item), item.label
         if item.needs_returns:
-            assert docs.has_section(item.docstring, "Returns"), item.label
+            assert has_section(item.docstring, "Returns"), item.label
         if not isinstance(item.target, type):  # every function and method says what it raises
-            assert docs.has_section(item.docstring, "Raises"), item.label
+            assert has_section(item.docstring, "Raises"), item.label
 
 
 # ----- the Panda (7 joints, 6-D pose): operational space against Pinocchio ----------------------------
@@ -495,6 +494,7 @@ def test_compiled_one_state_path_equals_the_batch_path(output: ct.TaskOutput) ->
 
 
 # ----- computed torque in task coordinates ---------------------------------------------------------------
+@pytest.mark.slow
 def test_rr_arm_tracks_the_circle_of_example_4_2_1_under_task_space_computed_torque() -> None:
     """The RR arm (a1 = a2 = 2 m) from 2 cm off the circle: path error below 1e-4 m after 1 s at a 1 ms step,
     and the law's torque equals J^T (Mbar (yddot_d + kv edot + kp e) + Nbar) formed from the task quantities."""
@@ -550,6 +550,7 @@ def test_task_space_control_arguments_are_checked(build: object, message: str) -
         build()
 
 
+@pytest.mark.slow
 def test_panda_operational_space_control_keeps_the_tool_on_its_line_while_the_posture_moves() -> None:
     """Khatib's controller on the 7-joint Panda: the tool follows a straight line while a posture task swings
     joint 3 in the null space; the task error is the same as with a still posture (dynamic consistency)."""
@@ -612,6 +613,7 @@ def test_line_and_pose_line_rates_are_the_derivatives_of_their_positions() -> No
         assert_allclose([W[2, 1], W[0, 2], W[1, 0]], pose(t)[1][3:], atol=1e-7)
 
 
+@pytest.mark.slow
 def test_ur5_tracks_a_pose_line_under_task_space_computed_torque() -> None:
     """ToolPose (m = n = 6): from 0.05 rad off in each joint, the tool pose converges onto a PoseLine (position
     and orientation, the orientation error the rotation vector of R_d R^T), and Result.task records it."""

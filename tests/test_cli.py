@@ -10,30 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 import armdyn as ad
-from armdyn.cli import app
-from tests.test_regressor import exciting
+from tests.helpers import assert_one_error_line, exciting, invoke
 
 ARMDYN = Path(sys.executable).parent / "armdyn"  # the script pip installed in the venv
 HEADER = "q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2"
-
-
-def assert_one_error_line(result: object, *fragments: str) -> str:
-    """A non-zero exit with exactly one line on stderr, 'error: ...', containing the fragments."""
-    assert result.exit_code != 0, result.output
-    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
-    assert "Traceback" not in result.output
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
-    return lines[0]
-
-
-def invoke(*args: str) -> object:
-    return CliRunner().invoke(app, [str(arg) for arg in args], prog_name="armdyn")
 
 
 @pytest.fixture
@@ -205,6 +187,7 @@ def test_cli_identify_writes_its_estimates(tmp_path: Path) -> None:
 
 
 # ----- the installed script -----------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "fragment"),
     [
@@ -226,6 +209,7 @@ def test_cli_script_exit_codes_and_no_traceback(files: Path, args: list[str], fr
     assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], run.stderr
 
 
+@pytest.mark.slow
 def test_cli_script_debug_shows_the_traceback() -> None:
     run = subprocess.run(
         [str(ARMDYN), "--debug", "check", "puma560", "--samples", "2"], capture_output=True, text=True, timeout=600
@@ -343,6 +327,7 @@ def test_cli_reads_a_dh_table_in_yaml(tmp_path: Path, monkeypatch: pytest.Monkey
     assert_one_error_line(invoke("show", path), "reading YAML needs PyYAML", "JSON")
 
 
+@pytest.mark.slow
 def test_cli_check_limits_reproduce_example_3_3_1(tmp_path: Path) -> None:
     """Example 3.3-1 (BOOK.md section 4): the RR arm, unit masses and lengths, |theta_i| <= pi/2: the
     1-norm bounds m1 = 4 and m2 = 7 (both attained), beside the book's values in the table."""
@@ -442,6 +427,7 @@ def test_cli_writes_tables_by_suffix(tmp_path: Path) -> None:
     assert header == list(ad.properties.COLUMNS)
 
 
+@pytest.mark.slow
 def test_cli_demo_writes_its_figures(demo_run: tuple) -> None:
     demo, folder = demo_run
     assert demo.exit_code == 0, demo.output

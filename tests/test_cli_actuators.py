@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.test_cli import assert_one_error_line, invoke
+from tests.helpers import assert_one_error_line, invoke
 
 
 def test_show_the_puma_motors_and_representative_hydraulic_drives(tmp_path: Path) -> None:
@@ -27,6 +27,7 @@ def test_show_the_puma_motors_and_representative_hydraulic_drives(tmp_path: Path
     assert flexible.exit_code == 0 and "shaft K" in flexible.output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("arm", "kind", "extra"),
     [

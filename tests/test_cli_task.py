@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.test_cli import assert_one_error_line, invoke
+from tests.helpers import assert_one_error_line, invoke
 
 
+@pytest.mark.slow
 def test_simulate_a_planar_arm_on_a_task_circle(tmp_path: Path) -> None:
     """The RR arm's tool on a circle under task-space computed torque: the report's rows are the task coordinates,
     the CSV carries y, y_d and the task error, the figure is the task path, and the error is small after 1 s."""
@@ -26,6 +27,7 @@ def test_simulate_a_planar_arm_on_a_task_circle(tmp_path: Path) -> None:
     assert (tmp_path / "two_link_planar.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_simulate_a_pose_line_and_an_operational_space_task(tmp_path: Path) -> None:
     """The Stanford arm's tool pose on a line with a turn (computed torque, m = n = 6), and the PUMA's tool point
     on a line under operational-space control (m = 3 < n = 6, the start as the null-space posture)."""

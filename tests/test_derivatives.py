@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 import armdyn as ad
 from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 from tests.strategies import random_robot, random_state
 
 
@@ -170,6 +170,7 @@ def _reference_rates(arm: ad.Robot, x: np.ndarray, tau: np.ndarray) -> np.ndarra
     return np.concatenate([qd, np.linalg.solve(M, tau - bias)])
 
 
+@pytest.mark.slow
 def test_the_rk4_step_derivatives_equal_complex_step_through_the_reference_step() -> None:
     """(A_d, B_d) of statespace.rk4_step equal complex-step derivatives of the same RK4 step taken with the
     Lagrange-Euler reference, to 1e-10 relative (and the step itself equals the compiled one, test above)."""

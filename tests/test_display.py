@@ -14,7 +14,7 @@ from armdyn import cartesian
 from armdyn.model.joint import rot_x, trans
 from armdyn.properties import COLUMNS
 from armdyn.symbolic import derive, motor_symbols, notebook
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 
 RR_TEXT = """\
 Robot: two_link_planar, 2 joints (RR), standard DH parameters

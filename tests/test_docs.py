@@ -19,6 +19,8 @@ from markdown_it import MarkdownIt
 
 import armdyn as ad
 
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted((ROOT / "docs").rglob("*.md"))
 ARMDYN = Path(sys.executable).parent / "armdyn"

@@ -18,14 +18,12 @@ from __future__ import annotations
 
 import importlib
 import inspect
-import re
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from types import FunctionType, ModuleType
+from types import ModuleType
 
 import pytest
 
 import armdyn
+from tests.helpers import Item, documented_parameters, function_item, has_section, module_items, sections, undocumented
 
 # Modules walked in full besides those named in armdyn.__all__.
 MODULES = (
@@ -52,93 +50,11 @@ ENTRY_POINTS = (
     "armdyn.identify",
     "armdyn.symbolic.derive",
 )
-SKIPPED_KINDS = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
-_UNDERLINE = re.compile(r"^-{3,}\s*$")
-
-
-@dataclass
-class Item:
-    """One callable to check: how the test names it, the callable and what it must document."""
-
-    label: str
-    target: Callable
-    docstring: str
-    signature: inspect.Signature | None
-    needs_returns: bool
-    needs_raises: bool
 
 
 def _resolve(dotted: str) -> object:
     module_name, _, attribute = dotted.rpartition(".")
     return getattr(importlib.import_module(module_name), attribute)
-
-
-def _public_names(module: ModuleType) -> list[str]:
-    names = getattr(module, "__all__", None)
-    if names is None:
-        names = [name for name in vars(module) if not name.startswith("_")]
-    return [name for name in names if not name.startswith("_")]
-
-
-def _defined_in(obj: object, module: ModuleType) -> bool:
-    """Defined in this module or, for a package, in one of its submodules (what armdyn re-exports)."""
-    home = getattr(obj, "__module__", None) or ""
-    return home == module.__name__ or (hasattr(module, "__path__") and home.startswith(module.__name__ + "."))
-
-
-def _signature(target: Callable) -> inspect.Signature | None:
-    try:
-        return inspect.signature(target)
-    except (TypeError, ValueError):  # builtins without a signature
-        return None
-
-
-def _returns_something(signature: inspect.Signature | None) -> bool:
-    """False only for a return annotated None (a missing annotation counts as returning something)."""
-    if signature is None:
-        return False
-    annotation = signature.return_annotation
-    return annotation not in (None, "None", type(None))
-
-
-def _label(target: Callable) -> str:
-    return f"{target.__module__}.{target.__qualname__}"
-
-
-def _function_item(function: Callable, raises: bool) -> Item:
-    signature = _signature(function)
-    return Item(
-        _label(function), function, inspect.getdoc(function) or "", signature, _returns_something(signature), raises
-    )
-
-
-def _class_items(cls: type, raises_for_own_methods: bool) -> Iterator[Item]:
-    """The constructor (documented in the class docstring or __init__'s) and the public methods."""
-    home = next(klass for klass in cls.__mro__ if "__init__" in vars(klass))
-    if home.__module__.startswith("armdyn"):  # not an exception's or object's own constructor
-        texts = (inspect.getdoc(cls), vars(home)["__init__"].__doc__)
-        docstring = "\n\n".join(inspect.cleandoc(text) for text in texts if text)
-        yield Item(_label(cls), cls, docstring, _signature(cls), False, False)
-    for name in sorted(dir(cls)):
-        if name.startswith("_"):
-            continue
-        static = inspect.getattr_static(cls, name)
-        if isinstance(static, (classmethod, staticmethod)):
-            static = static.__func__
-        if not isinstance(static, FunctionType) or not static.__module__.startswith("armdyn"):
-            continue  # properties, data, and anything not written in armdyn
-        yield _function_item(getattr(cls, name), raises_for_own_methods and name in vars(cls))
-
-
-def _module_items(module: ModuleType) -> Iterator[Item]:
-    for name in _public_names(module):
-        obj = getattr(module, name)
-        if isinstance(obj, ModuleType) or not _defined_in(obj, module):
-            continue  # imported names belong to the module that defines them
-        if inspect.isclass(obj):
-            yield from _class_items(obj, raises_for_own_methods=obj is armdyn.Robot)
-        elif callable(obj):
-            yield _function_item(obj, raises=False)
 
 
 def collect() -> list[Item]:
@@ -147,9 +63,9 @@ def collect() -> list[Item]:
     modules += [importlib.import_module(name) for name in MODULES]
     sources: list[Item] = []
     for module in modules:
-        sources += list(_module_items(module))
+        sources += list(module_items(module))
     for dotted in ENTRY_POINTS:
-        sources.append(_function_item(_resolve(dotted), raises=True))
+        sources.append(function_item(_resolve(dotted), raises=True))
     merged: dict[int, Item] = {}
     for item in sources:
         key = id(getattr(item.target, "__func__", item.target))  # a classmethod bound to Robot or ArmModel
@@ -158,44 +74,6 @@ def collect() -> list[Item]:
         else:
             merged[key] = item
     return sorted(merged.values(), key=lambda item: item.label)
-
-
-# ----- the parser -------------------------------------------------------------------------
-def sections(docstring: str) -> dict[str, list[str]]:
-    """numpydoc sections: title -> the lines under its underline (the summary is not a section)."""
-    lines = docstring.expandtabs().splitlines()
-    found: dict[str, list[str]] = {}
-    current: list[str] | None = None
-    index = 0
-    while index < len(lines):
-        line = lines[index]
-        following = lines[index + 1] if index + 1 < len(lines) else ""
-        if line.strip() and not line.startswith(" ") and _UNDERLINE.match(following):
-            current = found.setdefault(line.strip(), [])
-            index += 2
-            continue
-        if current is not None:
-            current.append(line)
-        index += 1
-    return found
-
-
-def has_section(docstring: str, title: str) -> bool:
-    """True when the docstring has a section of that title with something in it."""
-    return any(line.strip() for line in sections(docstring).get(title, []))
-
-
-def documented_parameters(docstring: str) -> set[str]:
-    """The names in Parameters (and Other Parameters): unindented lines, before any ' : '."""
-    names: set[str] = set()
-    parts = sections(docstring)
-    for title in ("Parameters", "Other Parameters"):
-        for line in parts.get(title, []):
-            if not line.strip() or line.startswith(" "):
-                continue
-            head = line.split(" : ", 1)[0].rstrip(":").strip()
-            names |= {name.strip().lstrip("*") for name in head.split(",") if name.strip()}
-    return names
 
 
 def test_the_parser_reads_grouped_parameters_and_sections() -> None:
@@ -249,17 +127,6 @@ def test_the_walk_finds_the_public_surface() -> None:
     assert robot_methods and robot_methods[0].needs_raises
 
 
-def undocumented(item: Item) -> list[str]:
-    """The parameters of the signature (not self/cls, *args, **kwargs) missing from Parameters."""
-    assert item.signature is not None
-    wanted = [
-        name
-        for name, parameter in item.signature.parameters.items()
-        if name not in ("self", "cls") and parameter.kind not in SKIPPED_KINDS
-    ]
-    return [name for name in wanted if name not in documented_parameters(item.docstring)]
-
-
 def test_an_undocumented_parameter_is_caught() -> None:
     def example(arm: object, q: object, *args: object, out: object = None, **kwargs: object) -> None:
         """Summary.
@@ -270,7 +137,7 @@ def test_an_undocumented_parameter_is_caught() -> None:
             The arm.
         """
 
-    item = _function_item(example, raises=False)
+    item = function_item(example, raises=False)
     assert undocumented(item) == ["q", "out"]
     assert not item.needs_returns
 

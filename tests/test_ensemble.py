@@ -131,6 +131,7 @@ def test_bad_variants_are_model_errors(puma: ad.Robot) -> None:
             plant_variants(puma, 2, **arguments)
 
 
+@pytest.mark.slow
 def test_the_envelope_figure(puma: ad.Robot, tmp_path) -> None:
     q0 = puma.configuration("qn")
     payloads = np.linspace(0.0, 2.0, 12)

@@ -19,7 +19,7 @@ import armdyn as ad
 from armdyn.errors import ModelError
 from armdyn.symbolic import generate_code
 from armdyn.symbolic.newton_euler import python_source
-from tests.conftest import ROBOTS, URDFS
+from tests.helpers import ROBOTS, URDFS
 from tests.strategies import random_robot
 
 XARM7 = ROBOTS / "xarm_description" / "urdf" / "xarm7.urdf"
@@ -54,6 +54,7 @@ def states(arm: ad.Robot, count: int = 3) -> np.ndarray:
     return np.random.default_rng(arm.n).uniform(-1.5, 1.5, (count, 3, arm.n))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(ARMS))
 def test_python_and_c_equal_the_kernels(name: str, tmp_path: Path) -> None:
     """Every built-in arm and three example-robot-data arms (UR5, Panda, the 7-joint xArm7): the generated
@@ -91,6 +92,7 @@ def _compiled_c(source: str, folder: Path) -> ctypes.CDLL | None:
     return ctypes.CDLL(str(folder / "arm.so"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["puma560", "xarm7"])
 def test_numba_one_state_and_batch_equal_the_kernels(name: str) -> None:
     arm = ARMS[name]()
@@ -116,6 +118,7 @@ def _generated_python(code: object) -> dict:
     return namespace
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["puma560", "stanford", "scara", "polar_rp", "ur5", "panda"])
 def test_the_base_regressor_where_asked(name: str, tmp_path: Path) -> None:
     """generate_code(arm, ["Wb"]) gives the base regressor: W_b equals the kept columns of the regressor, and
@@ -142,6 +145,7 @@ def test_the_base_regressor_where_asked(name: str, tmp_path: Path) -> None:
         assert close(c_out.reshape(arm.n, -1) @ np.array(phi_in_c), tau)
 
 
+@pytest.mark.slow
 def test_the_compiled_base_regressor_for_one_state_and_a_batch() -> None:
     arm = ad.models.scara()
     code = generate_code(arm, ["Wb", "tau"])
@@ -176,6 +180,7 @@ def test_operation_counts_are_lean() -> None:
     assert twelve < 2.6 * six
 
 
+@pytest.mark.slow
 def test_a_twelve_joint_arm_compiles_and_every_line_is_one_operation() -> None:
     """No expression is deep: each line of the generated Python holds one operation."""
     arm = random_robot(11, 12, chain=True)
@@ -246,6 +251,7 @@ def test_the_command_line_generates_code_for_larger_arms(tmp_path: Path) -> None
     assert alone.exit_code == 2 and "give it with --code" in alone.output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["puma560", "stanford", "polar_rp", "xarm7"])
 def test_the_coriolis_matrix_where_asked(name: str, tmp_path: Path) -> None:
     """generate_code(arm, ["Vm"]) gives the Christoffel-consistent Vm of the kernels (Python and C, 1e-12)."""

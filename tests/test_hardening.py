@@ -24,6 +24,7 @@ def run_isolated(code: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_closed_form_with_a_too_small_out_does_not_crash() -> None:
     done = run_isolated(
         """
@@ -44,6 +45,7 @@ def test_closed_form_with_a_too_small_out_does_not_crash() -> None:
     assert "out must be" in done.stdout and "q must have shape (2,)" in done.stdout and "qd must" in done.stdout
 
 
+@pytest.mark.slow
 def test_closed_form_refuses_nan_and_complex_one_states() -> None:
     f = ad.symbolic.derive(ad.models.two_link_planar()).compile()
     with pytest.raises(ad.ModelError, match="q must be finite"):

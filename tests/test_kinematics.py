@@ -17,7 +17,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 import armdyn as ad
 from armdyn import ModelError, Robot
 from armdyn.model.joint import rot_x, rot_z, trans
-from tests.conftest import URDFS, pinocchio_pair
+from tests.helpers import URDFS, pinocchio_pair
 from tests.strategies import random_robot, random_transform
 
 STEP = 1e-6

@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 
 import armdyn as ad
 from armdyn.dynamics import lagrange
-from tests.conftest import pinocchio_pair
+from tests.helpers import pinocchio_pair
 from tests.strategies import random_robot, random_state
 
 RNG = np.random.default_rng(7)

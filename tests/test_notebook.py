@@ -7,7 +7,10 @@ import sys
 from pathlib import Path
 
 import nbformat
+import pytest
 from nbclient import NotebookClient
+
+pytestmark = pytest.mark.slow
 
 CELLS = {
     "kernel": "import sys\n\nimport armdyn as ad\n\nprint(sys.executable)\nprint(sys.prefix)",

@@ -21,7 +21,7 @@ from armdyn.control import ComputedTorque, PDGravity
 from armdyn.model.joint import rot_x
 from armdyn.plotting import animate, plot_arm
 from armdyn.trajectories import Sinusoid
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 
 LINK_GREY = np.array([64, 64, 64])  # the links' colour, "0.25"
 
@@ -165,6 +165,7 @@ def test_a_result_shows_in_jupyter_as_its_figure(rr_run: object) -> None:
     assert png.startswith(b"\x89PNG\r\n\x1a\n") and plt.get_fignums() == before
 
 
+@pytest.mark.slow
 def test_cli_simulate_animate_and_show_draw(tmp_path: Path) -> None:
     gif, picture = tmp_path / "run.gif", tmp_path / "arm.svg"
     args = ["simulate", "two_link_planar", "--t-final", "0.3", "--animate", str(gif)]
@@ -193,6 +194,7 @@ def test_cli_picture_errors_are_one_line(args: list[str], fragment: str, tmp_pat
     assert not list(tmp_path.iterdir())  # refused before anything was written
 
 
+@pytest.mark.slow
 def test_demo_writes_the_animation_of_example_4_4_1(demo_run: tuple) -> None:
     result, folder = demo_run
     assert result.exit_code == 0, result.output

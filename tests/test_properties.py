@@ -16,6 +16,7 @@ from tests.strategies import random_robot
 BOOK_RANGE = [(-np.pi / 2, np.pi / 2)] * 2  # Example 3.3-1: |theta_i| <= pi/2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ad.models.names())
 def test_every_built_in_arm_has_the_properties(name: str) -> None:
     report = check(ad.models.load(name), samples=100)
@@ -102,8 +103,9 @@ def test_check_command() -> None:
     assert result.exit_code == 0 and "all properties hold" in result.output and "mu1" in result.output
 
 
+@pytest.mark.slow
 def test_identify_command(tmp_path: object) -> None:
-    from tests.test_regressor import exciting
+    from tests.helpers import exciting
 
     arm = ad.models.puma560()
     q, qd, qdd = exciting(6, 400)

@@ -20,7 +20,7 @@ import armdyn as ad
 from armdyn import cartesian as ct
 from armdyn.cli import app
 from armdyn.properties import DEFAULT_MAX_CONDITION, check, joint_ranges
-from tests.conftest import URDFS
+from tests.helpers import URDFS
 
 SQUARE_ROWS = {
     "symmetry", "positive definite", "inertia bounds", "norm bounds", "quadratic", "Coriolis bound",
@@ -194,6 +194,7 @@ def _panda() -> ad.Robot:
         return ad.load_urdf(URDFS["panda"], locked=locked).without_friction()
 
 
+@pytest.mark.slow
 def test_panda_tool_position_lambda_rows_hold_and_square_only_rows_are_skipped_with_a_note() -> None:
     arm, output = _panda(), ct.ToolPosition()
     report = check(arm, samples=16, task=output)
@@ -265,6 +266,7 @@ def test_task_errors_are_model_errors_that_say_why(options: dict, message: str) 
 
 
 # ----- the command line ------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_check_command_in_task_coordinates(tmp_path: object) -> None:
     runner = CliRunner()
     table = tmp_path / "task.md"

@@ -20,7 +20,7 @@ from armdyn.control import ComputedTorque
 from armdyn.dynamics import regressor as regressor_module
 from armdyn.dynamics.regressor import FrictionMisfitWarning, PoorExcitationWarning, parameter_names
 from armdyn.excitation import FourierTrajectory, excitation_trajectory, identification_data, joint_ranges
-from tests.conftest import pinocchio_pair
+from tests.helpers import exciting, pinocchio_pair
 from tests.strategies import random_robot, random_state
 
 
@@ -107,18 +107,6 @@ def test_base_parameters_at_rest_explain_a_joint_at_rest() -> None:
     assert np.abs(moving.regressor(q, qd, qdd) @ moving.phi - tau)[:, 2].min() > 1e-3
 
 
-def exciting(n: int, samples: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    rng = np.random.default_rng(seed)
-    t = np.linspace(0, 10, samples, endpoint=False)[:, None, None]
-    k = np.arange(1, 6)[None, None, :] * 2 * np.pi / 10
-    a, b = rng.normal(0, 0.1, (2, 1, n, 5))
-    return (
-        (a * np.sin(k * t) + b * np.cos(k * t)).sum(-1),
-        (k * (a * np.cos(k * t) - b * np.sin(k * t))).sum(-1),
-        (-(k**2) * (a * np.sin(k * t) + b * np.cos(k * t))).sum(-1),
-    )
-
-
 def test_identification_recovers_the_puma560_from_noise_free_data() -> None:
     arm = ad.models.puma560()
     q, qd, qdd = exciting(6, 1500)
@@ -149,6 +137,7 @@ def test_identification_checks_its_input() -> None:
 
 
 # ----- excitation, memory and arguments ---------------------------------------------------
+@pytest.mark.slow
 def test_identify_refuses_data_that_do_not_excite_the_parameters() -> None:
     warning = regressor_module.PoorExcitationWarning
     poor, limit = regressor_module.POOR_CONDITION, regressor_module.MAX_CONDITION
@@ -171,6 +160,7 @@ def test_identify_refuses_data_that_do_not_excite_the_parameters() -> None:
     assert np.all(result.standard_errors >= 0) and np.all(np.isfinite(result.standard_errors))
 
 
+@pytest.mark.slow
 def test_regressor_is_computed_in_chunks_with_bounded_memory() -> None:
     arm = ad.models.puma560()
     q, qd, qdd = np.random.default_rng(3).uniform(-1, 1, (3, 20_000, 6))
@@ -252,6 +242,7 @@ def puma_excitation() -> FourierTrajectory:
     return excitation_trajectory(ad.models.puma560(), samples=50, iterations=20, seed=0)
 
 
+@pytest.mark.slow
 def test_identification_round_trip_recovers_the_puma560_base_parameters() -> None:
     start = time.perf_counter()
     arm = ad.models.puma560()
@@ -276,6 +267,7 @@ def test_identification_round_trip_recovers_the_puma560_base_parameters() -> Non
     assert time.perf_counter() - start < 60  # about 5 s on one free core
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::armdyn.simulation.PythonLoopWarning")
 def test_simulated_smoothed_friction_is_warned_of_and_left_out_by_a_velocity_band() -> None:
     arm = ad.models.puma560()
@@ -295,6 +287,7 @@ def test_simulated_smoothed_friction_is_warned_of_and_left_out_by_a_velocity_ban
     assert np.abs(banded.normalized_errors).max() < 4.5
 
 
+@pytest.mark.slow
 def test_excitation_trajectory_keeps_the_limits_and_is_a_trajectory() -> None:
     arm = ad.models.puma560()
     trajectory = puma_excitation()
@@ -324,6 +317,7 @@ def test_excitation_trajectory_keeps_the_limits_and_is_a_trajectory() -> None:
     assert better.condition_number <= rough.condition_number
 
 
+@pytest.mark.slow
 def test_identify_standard_errors_follow_each_joints_noise() -> None:
     """Noise of 1 N m on the base joint and 5 mN m on the wrist: each joint's own residual variance
     keeps every parameter's standardized error near unit variance; the pooled variance made the
@@ -418,6 +412,7 @@ def puma_like() -> FourierTrajectory:
     return FourierTrajectory(1.0, [0.0] * 6, [[0.1]] * 6, [[0.0]] * 6)
 
 
+@pytest.mark.slow
 def test_cli_identify_generates_its_samples(tmp_path: Path) -> None:
     from typer.testing import CliRunner
 

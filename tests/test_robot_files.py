@@ -6,7 +6,7 @@ Each file is one test (parametrized by its path under the robots folder), loadin
 - (a) it loads with ``strict=False`` (warnings allowed: mimic joints, triangle inequality, non-unit axes) and its
   M(q), G(q), inverse dynamics (``without_friction()``) and forward dynamics equal Pinocchio's
   (``pin.buildModelFromUrdf``, fixed base) at 3 random states to 1e-9 relative. Joints are matched by name;
-  Pinocchio's continuous joints take (cos, sin) (``tests.test_urdf._pin_q``).
+  Pinocchio's continuous joints take (cos, sin) (``tests.helpers.pin_q``).
 - (b) it is refused with a ModelError whose message names the reason: ``REFUSED``.
 - (c) it loads with a UserWarning naming the joints that move no mass (``SINGULAR``); M, G and inverse dynamics
   still equal Pinocchio's, and forward dynamics raises a ModelError or returns finite values, never NaN.
@@ -26,8 +26,7 @@ import pinocchio as pin
 import pytest
 
 from armdyn import ModelError, load_urdf
-from tests.conftest import ROBOTS
-from tests.test_urdf import _pin_q
+from tests.helpers import ROBOTS, pin_q
 
 ROBOT_FILES = sorted(path.relative_to(ROBOTS).as_posix() for path in ROBOTS.rglob("*.urdf"))
 STATES = 3
@@ -73,7 +72,7 @@ class _Pinocchio:
         assert self.model.nv == len(joint_names), "every Pinocchio joint is an armdyn joint"
 
     def _q(self, q: np.ndarray) -> np.ndarray:
-        return _pin_q(self.model, self.ids, q)
+        return pin_q(self.model, self.ids, q)
 
     def _v(self, values: np.ndarray) -> np.ndarray:
         full = np.zeros(self.model.nv)

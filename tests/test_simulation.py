@@ -189,6 +189,7 @@ def test_simulate_command(tmp_path: Path) -> None:
     assert CliRunner().invoke(app, ["simulate", "puma560", "--controller", "magic"]).exit_code == 2
 
 
+@pytest.mark.slow
 def test_demo_is_the_main_job(demo_run: tuple) -> None:
     result, folder = demo_run
     assert result.exit_code == 0, result.output

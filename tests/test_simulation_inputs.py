@@ -16,7 +16,7 @@ from numpy.testing import assert_array_equal
 import armdyn as ad
 from armdyn import control, memory, simulation, trajectories
 from armdyn.simulation import PythonLoopWarning, simulate
-from tests.test_cli import assert_one_error_line, invoke
+from tests.helpers import assert_one_error_line, invoke
 
 ARM = ad.models.two_link_planar()
 

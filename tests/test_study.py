@@ -98,6 +98,7 @@ def test_an_interrupted_study_resumes_without_redoing_a_block(tmp_path: Path) ->
         study.run(100, seed=4, out=out)
 
 
+@pytest.mark.slow
 def test_a_study_on_a_dask_cluster_that_loses_a_worker_gives_the_local_result() -> None:
     """Two worker processes; one is killed as soon as the first block arrives; Dask recomputes what it held
     and the table equals the local run's, bit for bit."""
@@ -119,6 +120,7 @@ def test_a_study_on_a_dask_cluster_that_loses_a_worker_gives_the_local_result() 
     pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
 
 
+@pytest.mark.slow
 def test_the_local_cluster_scheduler_and_an_unreachable_one() -> None:
     pytest.importorskip("distributed")
     study = rr_study(block=50)
@@ -163,7 +165,7 @@ def test_specs_read_the_cli_form_and_joints() -> None:
 def test_the_study_command(tmp_path: Path) -> None:
     """armdyn study: the estimate with its interval and Hoeffding's sample size, a figure, blocks on disk read
     back by a rerun, and one error line for a spec it cannot read."""
-    from tests.test_cli import assert_one_error_line, invoke
+    from tests.helpers import assert_one_error_line, invoke
 
     line = ["study", "two_link_planar", "--runs", "120", "--block", "50", "--t-final", "0.3", "--payload", "0:2",
             "--mass-error", "10%", "--spec", "max-error-after-0.2s<3e-3", "--seed", "4"]  # fmt: skip

@@ -107,6 +107,7 @@ def evaluate_python(form: ad.symbolic.ClosedForm, name: str, *states: np.ndarray
     return namespace[name](*states, out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [x for x in ad.models.names() if x not in ("two_link_planar", "polar_rp")])
 def test_closed_form_of_every_built_in_arm_equals_the_kernels(name: str) -> None:
     arm = ad.models.load(name)
@@ -121,6 +122,7 @@ def test_closed_form_of_every_built_in_arm_equals_the_kernels(name: str) -> None
         assert_allclose(evaluate_python(form, "tau", q, qd, qdd), arm.inverse_dynamics(q, qd, qdd), atol=scale)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("factory", [ad.models.two_link_planar, ad.models.polar_rp, ad.models.cylindrical])
 def test_book_arms_with_values_equal_the_kernels(factory: object) -> None:
     form = derive(factory(symbolic=True))
@@ -181,6 +183,7 @@ def test_a_closed_form_too_deep_to_compile_points_to_generated_code(monkeypatch:
         derive(ad.models.two_link_planar()).compile()
 
 
+@pytest.mark.slow
 def test_compiled_puma560_takes_one_state_or_a_batch() -> None:
     arm = ad.models.puma560()
     compiled = derive(arm).compile()
@@ -194,6 +197,7 @@ def test_compiled_puma560_takes_one_state_or_a_batch() -> None:
     assert all(reduced[k] < counts[k] for k in counts)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler on this machine")
 def test_generated_c_equals_the_kernels(tmp_path: Path) -> None:
     arm = ad.models.stanford()
@@ -400,6 +404,7 @@ def test_the_latex_checker_finds_what_stops_latex() -> None:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["two_link_planar", "puma560"])
 def test_latex_export_compiles(name: str, tmp_path: Path) -> None:
     arm = ad.models.two_link_planar(symbolic=True) if name == "two_link_planar" else ad.models.load(name)
@@ -455,6 +460,7 @@ def test_asymmetric_coulomb_law_prints_as_written() -> None:
 
 
 # ----- large outputs ----------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_pretty_summarises_long_entries_and_save_writes_them_in_full(tmp_path: Path) -> None:
     form = derive(ad.models.puma560())
     text = form.pretty()

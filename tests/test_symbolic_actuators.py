@@ -141,6 +141,7 @@ def assert_matches(compiled: object, actuated: ActuatedArm, seed: int) -> None:
         assert_allclose(value, expected, rtol=1e-10, atol=1e-10 * np.abs(expected).max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make", [puma_like_rr, lambda: random_chain(1), lambda: random_chain(2)])
 def test_numeric_drives_equal_actuated_arm(make: object) -> None:
     actuated = make()

@@ -110,6 +110,7 @@ def tilted_camera() -> ct.Camera:
     return ct.Camera(800.0, pose)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("output", [ct.PlanarPosition(), tilted_camera()], ids=["planar", "camera"])
 def test_two_link_arm_in_task_coordinates_equals_numeric(output: ct.TaskOutput) -> None:
     values = {"m1": 1.3, "m2": 0.7, "a1": 0.9, "a2": 0.6, "g": 9.81}
@@ -117,6 +118,7 @@ def test_two_link_arm_in_task_coordinates_equals_numeric(output: ct.TaskOutput) 
     assert_matches_numeric(form, ad.models.two_link_planar(**values), output, values)
 
 
+@pytest.mark.slow
 def test_random_spatial_arm_with_a_tool_equals_numeric() -> None:
     """A general 3-joint spatial chain with friction, motors, a base and a tool offset."""
     tool, base = np.eye(4), np.eye(4)

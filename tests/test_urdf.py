@@ -15,7 +15,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 import armdyn as ad
 from armdyn import ModelError, load_urdf
-from tests.conftest import ROBOTS, URDFS, pinocchio_pair
+from tests.helpers import ROBOTS, URDFS, pin_q, pinocchio_pair
 
 ALLEGRO = ROBOTS / "allegro_hand_description" / "urdf"
 EXPECTED_N = {"panda.urdf": 9, "ur5_robot.urdf": 6}
@@ -63,25 +63,13 @@ def _pinocchio(path: Path, arm: ad.Robot) -> tuple[pin.Model, list[int]]:
     return model, [model.getJointId(name) for name in arm.joint_names]
 
 
-def _pin_q(model: pin.Model, ids: list[int], q: np.ndarray) -> np.ndarray:
-    """Pinocchio's configuration for armdyn's q (continuous joints are (cos, sin) there)."""
-    config = pin.neutral(model)
-    for value, joint_id in zip(q, ids, strict=True):
-        joint = model.joints[joint_id]
-        if joint.nq == 2:
-            config[joint.idx_q : joint.idx_q + 2] = np.cos(value), np.sin(value)
-        else:
-            config[joint.idx_q] = value
-    return config
-
-
 def _assert_fk_matches_pinocchio(path: Path, arm: ad.Robot, count: int = 3, seed: int = 0) -> None:
     model, ids = _pinocchio(path, arm)
     data = model.createData()
     rng = np.random.default_rng(seed)
     for _ in range(count):
         q = rng.uniform(-1.5, 1.5, arm.n)
-        pin.forwardKinematics(model, data, _pin_q(model, ids, q))
+        pin.forwardKinematics(model, data, pin_q(model, ids, q))
         transforms = arm.link_transforms(q)
         for i, joint_id in enumerate(ids):
             assert_allclose(transforms[i], data.oMi[joint_id].homogeneous, rtol=0, atol=1e-12)
@@ -825,7 +813,7 @@ def _assert_reduced_matches_pinocchio(path: Path, arm: ad.Robot, locked: dict[st
     lower, upper = np.maximum(arm.qlim[0], -3.0), np.minimum(arm.qlim[1], 3.0)
     for _ in range(10):
         q, qd, qdd = rng.uniform(lower, upper), rng.uniform(-2, 2, arm.n), rng.uniform(-3, 3, arm.n)
-        tau, config = rng.uniform(-20, 20, arm.n), _pin_q(model, ids, q)
+        tau, config = rng.uniform(-20, 20, arm.n), pin_q(model, ids, q)
         _assert_relative(bare.inertia_matrix(q), pin.crba(model, data, config), 1e-12, "M")
         _assert_relative(bare.gravity_vector(q), pin.computeGeneralizedGravity(model, data, config), 1e-12, "G")
         _assert_relative(bare.inverse_dynamics(q, qd, qdd), pin.rnea(model, data, config, qd, qdd), 1e-12, "tau")
@@ -1007,6 +995,7 @@ def test_reduced_errors_name_the_joint_and_the_rule() -> None:
 
 
 # ----- 5. the file is read with lxml alone: no mesh or scene-graph library, the URDF specification's defaults -------
+@pytest.mark.slow
 def test_loading_a_urdf_imports_no_mesh_library() -> None:
     """load_urdf reads the XML itself: yourdfpy (and trimesh, which it imports, 0.75 s of start-up) stay out."""
     code = (

@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow
+
 ARMDYN = Path(sys.executable).parent / "armdyn"  # the script pip installed in the venv
 UR5 = (
     Path(sys.executable).parent.parent

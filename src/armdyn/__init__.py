@@ -5,7 +5,7 @@ from armdyn import models as models
 from armdyn.dynamics import lagrange
 from armdyn.dynamics.regressor import base_parameters, identify
 from armdyn.dynamics.threads import set_threads, threads
-from armdyn.errors import ModelError
+from armdyn.errors import MissingDependencyError, ModelError, SimulationError, SingularError
 from armdyn.model import ArmModel, Inertial, Joint, Link
 from armdyn.robot import Robot
 from armdyn.urdf import load_urdf
@@ -46,8 +46,11 @@ __all__ = [
     "Inertial",
     "Joint",
     "Link",
+    "MissingDependencyError",
     "ModelError",
     "Robot",
+    "SimulationError",
+    "SingularError",
     "base_parameters",
     "identify",
     "kinematics",

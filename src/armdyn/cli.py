@@ -37,7 +37,7 @@ from rich.table import Table
 from typer.core import TyperGroup
 
 from armdyn import models as catalog
-from armdyn.errors import ModelError
+from armdyn.errors import MissingDependencyError, ModelError, SimulationError
 from armdyn.robot import Robot
 
 INPUT_ERROR = 2
@@ -170,7 +170,7 @@ def _describe(error: BaseException) -> tuple[str, int]:
     """The message and exit code for an exception a command raised."""
     if isinstance(error, OSError) and error.filename is not None:
         return f"{error.filename}: {error.strerror or error}", INPUT_ERROR
-    if isinstance(error, (ModelError, ValueError, OSError)):
+    if isinstance(error, (ModelError, SimulationError, MissingDependencyError, ValueError, OSError)):
         return str(error) or type(error).__name__, INPUT_ERROR
     return (
         f"internal error ({type(error).__name__}: {error}); run 'armdyn --debug ...' for the traceback",

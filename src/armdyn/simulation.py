@@ -51,7 +51,7 @@ from armdyn.dynamics.packed import (
     workspace_size,
 )
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
-from armdyn.errors import ModelError
+from armdyn.errors import ModelError, SimulationError
 from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
@@ -66,15 +66,6 @@ system has available is refused too (``_available_memory``), before anything is 
 
 
 SINGULAR, DIVERGED = 1, 2  # why a compiled run stopped
-
-
-class SimulationError(ModelError):
-    """A run that could not go on: M(q) became singular or the state non-finite (a diverging
-    closed loop). ``result`` holds the run up to the last good sample."""
-
-    def __init__(self, message: str, result: Result) -> None:
-        super().__init__(message)
-        self.result = result
 
 
 class PythonLoopWarning(UserWarning):
