@@ -61,7 +61,10 @@ def test_simulate_with_drives_refuses_what_it_does_not_run() -> None:
     arm = _puma()
     law = DrivePID(20.0, 0.5)
     cases = [
-        (lambda: ad.simulate(arm, lambda t, q, qd: q, None, t_final=0.01), "controller must be an armdyn.actuators"),
+        (
+            lambda: ad.simulate(arm, lambda t, q, qd: q, None, t_final=0.01),
+            "controller must be an armdyn.control.DrivePID",
+        ),
         (lambda: ad.simulate(arm, law, lambda t: t, t_final=0.01), "trajectory must be None"),
         (lambda: ad.simulate(arm, law, None, t_final=0.01, method="rk45"), "does not take method"),
         (lambda: ad.simulate(arm, law, None, t_final=-1.0), "t_final"),
