@@ -8,7 +8,7 @@ Drives:
 - ``Hydraulic``: a servo valve and a piston (or rotary motor) after Merritt (1967), with the
   linearized or the square-root orifice flow.
 
-``with_actuators(robot, drives)`` joins them to an arm as an ``ActuatedArm``:
+``with_actuators(arm, drives)`` joins them to an arm as an ``ActuatedArm``:
 
 - the reduced model (inductance, valve dynamics and oil compressibility neglected), written
   in the link coordinates q as joint torques (each row multiplied by r_i^-2 from the book's
@@ -887,7 +887,7 @@ def motor_drives(
     Each link's Link motor becomes a DCMotor with J_M = Jm, r = 1/G, B_M = B and the Coulomb
     friction Tc (motor side, the pair swapped with its signs when G < 0, so that the friction at
     the joint is unchanged); the arm keeps its links without motor or friction. So
-    ``with_actuators(*motor_drives(robot, ...))`` has M' = robot's M, and F' = robot's F plus the
+    ``with_actuators(*motor_drives(arm, ...))`` has M' = arm's M, and F' = arm's F plus the
     back-emf damping G^2 K_b K_M / R_a.
 
     Parameters
