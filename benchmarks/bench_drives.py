@@ -15,6 +15,7 @@ from scipy.integrate import solve_ivp
 import armdyn as ad
 from armdyn import actuators as act
 from armdyn import trajectories as tr
+from armdyn.control import CurrentComputedTorque, DrivePID
 
 T_FINAL = 10.0
 
@@ -43,7 +44,7 @@ def numpy_rates(arm: act.ActuatedArm, path: tr.Sinusoid, kp: float, kv: float):
 def main() -> None:
     arm = puma()
     q0 = np.array(ad.models.puma560().configurations["qn"])
-    path, law = tr.Sinusoid(0.1, 0.5, 0.0, q0), act.DrivePID(20.0, 0.5)
+    path, law = tr.Sinusoid(0.1, 0.5, 0.0, q0), DrivePID(20.0, 0.5)
     ad.simulate(arm, law, path, t_final=0.01, q0=q0)  # compile (or load the cache)
     walls = []
     for _ in range(3):
@@ -66,11 +67,12 @@ def main() -> None:
     print(f"  q differs by {difference:.1e} rad at {span:g} s")
     print("Other drives and laws, 10 s each (compiled RK4, step from the drives' time constants):")
     others = [
-        ("PUMA 560, built-in drives, current computed torque", act.puma560(), act.CurrentComputedTorque(100.0, 20.0)),
+        ("PUMA 560, built-in drives, current computed torque", act.puma560_with_drives(),
+         CurrentComputedTorque(100.0, 20.0)),
         ("PUMA 560, flexible shafts, PID", act.representative_drives(ad.models.puma560(), "flexible"),
-         act.DrivePID(20.0, 0.5, 20.0)),
+         DrivePID(20.0, 0.5, 20.0)),
         ("PUMA 560, hydraulic, PID", act.representative_drives(ad.models.puma560(), "hydraulic"),
-         act.DrivePID(0.1, 0.0, 0.1)),
+         DrivePID(0.1, 0.0, 0.1)),
     ]  # fmt: skip
     for label, driven, other in others:
         ad.simulate(driven, other, path, t_final=0.01, q0=q0)

@@ -57,7 +57,7 @@ from harness import (
     wall,
 )
 
-from armdyn import cartesian as ct
+from armdyn import task_space as ts
 
 try:
     import roboticstoolbox as rtb
@@ -100,7 +100,7 @@ QUICK = {  # --quick: the same parts, small
 ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
 PANDA = ROBOTS / "panda_description" / "urdf" / "panda.urdf"
 PANDA_LOCKED = {"panda_finger_joint1": 0.02, "panda_finger_joint2": 0.02}  # the fingers, locked (7 joints)
-POSE = ct.ToolPose()
+POSE = ts.ToolPose()
 OPERATIONAL = "armdyn operational_space(arm, ToolPose(), q, qd)"
 LAMBDA_ONLY = "armdyn operational_inertia(arm, ToolPose(), q)"
 DENSE = "Pinocchio dense: crba + computeFrameJacobian (LWA) + NumPy solve, inv"
@@ -123,7 +123,7 @@ class States:
         q = np.empty((0, arm.n))
         while len(q) < count:
             x = rng.uniform(-1.0, 1.0, (2 * count, arm.n))
-            keep = ct.condition_number(arm, POSE, x) < MAX_CONDITION
+            keep = ts.condition_number(arm, POSE, x) < MAX_CONDITION
             if rpy:
                 pitch = np.array([tr2rpy(pose, order="xyz")[1] for pose in arm.tool_pose(x)])
                 keep &= np.cos(pitch) > MIN_COS_PITCH
@@ -151,25 +151,25 @@ PAIRS = [
     Pair(
         "task_inertia",
         "inertia_x",
-        lambda arm, s: ct.task_inertia(arm, POSE, s["q"]),
+        lambda arm, s: ts.task_inertia(arm, POSE, s["q"]),
         lambda robot, s, rep: robot.inertia_x(s["q"], representation=rep),
     ),
     Pair(
         "task_coriolis",
         "coriolis_x",
-        lambda arm, s: ct.task_coriolis(arm, POSE, s["q"], s["qd"]),
+        lambda arm, s: ts.task_coriolis(arm, POSE, s["q"], s["qd"]),
         lambda robot, s, rep: robot.coriolis_x(s["q"], s["qd"], representation=rep),
     ),
     Pair(
         "task_gravity",
         "gravload_x",
-        lambda arm, s: ct.task_gravity(arm, POSE, s["q"]),
+        lambda arm, s: ts.task_gravity(arm, POSE, s["q"]),
         lambda robot, s, rep: robot.gravload_x(s["q"], representation=rep),
     ),
     Pair(
         "task_forward_dynamics",
         "accel_x",
-        lambda arm, s: ct.task_forward_dynamics(arm, POSE, s["q"], s["qd"], s["f"]),
+        lambda arm, s: ts.task_forward_dynamics(arm, POSE, s["q"], s["qd"], s["f"]),
         lambda robot, s, rep: robot.accel_x(s["q"], s["ydot"], s["f"], representation=rep),
     ),
 ]
@@ -198,16 +198,16 @@ def in_rpy_rates(arm: ad.Robot, s: dict) -> dict[str, Callable[[], np.ndarray]]:
     T = rpy_rates(arm, q)
     Ti = np.linalg.inv(T)
     Tdot = rpy_rates_dot(arm, q, qd)
-    Mbar = ct.task_inertia(arm, POSE, q)
+    Mbar = ts.task_inertia(arm, POSE, q)
 
     def accel() -> np.ndarray:
-        yddot = ct.task_forward_dynamics(arm, POSE, q, qd, T.T @ s["f"])
+        yddot = ts.task_forward_dynamics(arm, POSE, q, qd, T.T @ s["f"])
         return T @ yddot + Tdot @ s["ydot"]
 
     return {
         "task_inertia": lambda: Ti.T @ Mbar @ Ti,
-        "task_coriolis": lambda: Ti.T @ (ct.task_coriolis(arm, POSE, q, qd) - Mbar @ Ti @ Tdot) @ Ti,
-        "task_gravity": lambda: Ti.T @ ct.task_gravity(arm, POSE, q),
+        "task_coriolis": lambda: Ti.T @ (ts.task_coriolis(arm, POSE, q, qd) - Mbar @ Ti @ Tdot) @ Ti,
+        "task_gravity": lambda: Ti.T @ ts.task_gravity(arm, POSE, q),
         "task_forward_dynamics": accel,
     }
 
@@ -392,8 +392,8 @@ def local_axes(arm: ad.Robot, q: np.ndarray, Lambda: np.ndarray) -> np.ndarray:
     return X @ Lambda @ X.T
 
 
-def operational_lambda(arm: ad.Robot, s: dict) -> ct.OperationalSpace:
-    return ct.operational_space(arm, POSE, s["q"], s["qd"])
+def operational_lambda(arm: ad.Robot, s: dict) -> ts.OperationalSpace:
+    return ts.operational_space(arm, POSE, s["q"], s["qd"])
 
 
 @dataclass(frozen=True)
@@ -411,7 +411,7 @@ class Route:
 def reference(arm: ad.Robot, route: Route, s: dict) -> np.ndarray:
     """armdyn's Lambda in the route's axes, damped as the route is."""
     if route.damped:  # (J M^-1 J^T + mu I)^-1 at every state
-        space = ct.operational_space(arm, POSE, s["q"], s["qd"], damping=DELASSUS_MU**0.5, max_condition=1.0)
+        space = ts.operational_space(arm, POSE, s["q"], s["qd"], damping=DELASSUS_MU**0.5, max_condition=1.0)
     else:
         space = operational_lambda(arm, s)
     return local_axes(arm, s["q"], space.Lambda) if route.local else space.Lambda
@@ -427,15 +427,15 @@ def lambda_rows(
     routes = {
         ours: Route(lambda s: partial(operational_lambda, arm, s), lambda s: operational_lambda(arm, s).Lambda, CALLS),
     }
-    if hasattr(ct, "operational_inertia"):  # Lambda alone
+    if hasattr(ts, "operational_inertia"):  # Lambda alone
         routes[LAMBDA_ONLY] = Route(
-            lambda s: partial(ct.operational_inertia, arm, POSE, s["q"]),
-            lambda s: ct.operational_inertia(arm, POSE, s["q"]),
+            lambda s: partial(ts.operational_inertia, arm, POSE, s["q"]),
+            lambda s: ts.operational_inertia(arm, POSE, s["q"]),
             CALLS,
         )
     if arm.n == 6:
         routes["armdyn task_inertia(arm, ToolPose(), q)"] = Route(
-            lambda s: partial(ct.task_inertia, arm, POSE, s["q"]), lambda s: ct.task_inertia(arm, POSE, s["q"]), CALLS
+            lambda s: partial(ts.task_inertia, arm, POSE, s["q"]), lambda s: ts.task_inertia(arm, POSE, s["q"]), CALLS
         )
     dense = partial(dense_lambda, model, data, frame)
     routes[DENSE] = Route(lambda s: partial(dense, s["q"]), lambda s: dense(s["q"]), PIN_CALLS)
@@ -467,7 +467,7 @@ def lambda_rows(
     times = dict(zip(labels, measure(*candidates), strict=True))
     batch = States.draw(arm, rng, BATCH)
     batch_time = measure(
-        Candidate(partial(ct.operational_space, arm, POSE, batch.q, batch.qd), 1, BATCH_REPEATS, BATCH)
+        Candidate(partial(ts.operational_space, arm, POSE, batch.q, batch.qd), 1, BATCH_REPEATS, BATCH)
     )[0]
     rows = []
     for label in labels:
@@ -611,9 +611,9 @@ def main() -> None:
     lambdas.notes += [
         "armdyn operational_space/this > 1: this is faster than armdyn's one-state operational_space, which "
         "computes all of Khatib's quantities (its OperationalSpace: "
-        + ", ".join(field.name for field in dataclasses.fields(ct.OperationalSpace))
+        + ", ".join(field.name for field in dataclasses.fields(ts.OperationalSpace))
         + "), not Lambda alone"
-        + ("; operational_inertia computes Lambda alone." if hasattr(ct, "operational_inertia") else "."),
+        + ("; operational_inertia computes Lambda alone." if hasattr(ts, "operational_inertia") else "."),
         "Difference: the largest relative difference from armdyn's Lambda over the checked states (in the tool's "
         "own axes, X Lambda X^T with X = diag(R^T, R^T), for Pinocchio's LOCAL constraint; for the damped "
         "inverse, from armdyn's damped Lambda = (J M^-1 J^T + mu I)^-1: operational_space with damping = "

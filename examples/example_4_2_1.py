@@ -12,20 +12,20 @@ from pathlib import Path
 import numpy as np
 
 import armdyn as ad
-from armdyn import cartesian, trajectories
+from armdyn import task_space, trajectories
 from armdyn.simulation import Result, simulate
 
 ARM = ad.models.two_link_planar(1.0, 1.0, 2.0, 2.0, g=9.8)
 CENTRE, RADIUS, PERIOD = (2.0, 1.0), 0.5, 2.0
-CIRCLE = cartesian.Circle(CENTRE, RADIUS, PERIOD)
-OUTPUT = cartesian.PlanarPosition()
+CIRCLE = ad.trajectories.Circle(CENTRE, RADIUS, PERIOD)
+OUTPUT = task_space.PlanarPosition()
 
 
 def run(t_final: float = 2.0, dt: float = 1e-3, offset: float = 0.02) -> Result:
     """The closed loop from a start ``offset`` (rad) off the circle in each joint."""
     joint_path = trajectories.CartesianCircle(2.0, 2.0, CENTRE, RADIUS, PERIOD)  # the same circle, in joints
     q0, qd0, _ = joint_path(0.0)
-    law = cartesian.ComputedTorque(OUTPUT, CIRCLE, 400.0, 40.0)
+    law = ad.control.TaskComputedTorque(OUTPUT, CIRCLE, 400.0, 40.0)
     return simulate(ARM, law, joint_path, t_final=t_final, dt=dt, q0=q0 + offset * np.array([1.0, -1.0]), qd0=qd0)
 
 

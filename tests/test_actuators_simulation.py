@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 import armdyn as ad
 from armdyn import actuators as act
 from armdyn import trajectories as tr
+from armdyn.control import CurrentComputedTorque, DrivePID
 from armdyn.errors import ModelError
 
 
@@ -31,7 +32,7 @@ def test_compiled_run_converges_to_the_numpy_full_model_integrated_tightly() -> 
     range at the default 1 ms samples (3 RK4 steps each), and fourth order as the step shrinks."""
     arm = _puma()
     q0 = np.array(ad.models.puma560().configurations["qn"])
-    path, law = tr.Sinusoid(0.1, 0.5, 0.0, q0), act.DrivePID(20.0, 0.5)
+    path, law = tr.Sinusoid(0.1, 0.5, 0.0, q0), DrivePID(20.0, 0.5)
     r = arm._r
 
     def rates(t: float, x: np.ndarray) -> np.ndarray:
@@ -59,13 +60,16 @@ def test_compiled_run_converges_to_the_numpy_full_model_integrated_tightly() -> 
 
 def test_simulate_with_drives_refuses_what_it_does_not_run() -> None:
     arm = _puma()
-    law = act.DrivePID(20.0, 0.5)
+    law = DrivePID(20.0, 0.5)
     cases = [
-        (lambda: ad.simulate(arm, lambda t, q, qd: q, None, t_final=0.01), "controller must be an armdyn.actuators"),
+        (
+            lambda: ad.simulate(arm, lambda t, q, qd: q, None, t_final=0.01),
+            "controller must be an armdyn.control.DrivePID",
+        ),
         (lambda: ad.simulate(arm, law, lambda t: t, t_final=0.01), "trajectory must be None"),
         (lambda: ad.simulate(arm, law, None, t_final=0.01, method="rk45"), "does not take method"),
         (lambda: ad.simulate(arm, law, None, t_final=-1.0), "t_final"),
-        (lambda: ad.simulate(arm, act.DrivePID(-1.0, 0.5), None, t_final=0.01), "kp"),
+        (lambda: ad.simulate(arm, DrivePID(-1.0, 0.5), None, t_final=0.01), "kp"),
         (lambda: ad.simulate(arm, law, None, t_final=0.01, q0=np.zeros(5)), "q0"),
     ]
     for call, message in cases:
@@ -115,7 +119,7 @@ def test_flexible_and_hydraulic_runs_converge_to_the_numpy_full_model(name: str,
     arm = act.representative_drives(ad.models.load(name), kind)
     q0 = np.full(arm.n, 0.2)
     path = tr.Sinusoid(0.1, 0.5, 0.0, q0)
-    law = act.DrivePID(*gains)
+    law = DrivePID(*gains)
     times = np.linspace(0.0, 0.5, 11)
     y0 = np.concatenate([arm.initial_state(q0), np.zeros(arm.n)])
     reference = solve_ivp(_drive_pid(arm, *gains, path), (0, 0.5), y0, method="DOP853", rtol=1e-11, atol=1e-13,
@@ -146,8 +150,8 @@ def test_integral_action_removes_the_gravity_offset_that_pd_leaves() -> None:
     which would hold an offset of its own.)"""
     arm = _puma()
     q0 = np.array(ad.models.puma560().configurations["qn"])
-    pd = ad.simulate(arm, act.DrivePID(20.0, 0.5), None, t_final=3.0, q0=q0)
-    pid = ad.simulate(arm, act.DrivePID(20.0, 0.5, 40.0), None, t_final=3.0, q0=q0)
+    pd = ad.simulate(arm, DrivePID(20.0, 0.5), None, t_final=3.0, q0=q0)
+    pid = ad.simulate(arm, DrivePID(20.0, 0.5, 40.0), None, t_final=3.0, q0=q0)
     offset = np.abs(pd.q[-1] - q0)
     gravity = np.abs(arm.robot.gravity_vector(pd.q[-1]))
     r, R_a, K_M = (np.array([getattr(d, key) for d in arm.drives]) for key in ("gear_ratio", "resistance",
@@ -168,7 +172,7 @@ def test_current_computed_torque_becomes_computed_torque_as_the_current_loop_spe
                         dt=1e-4, q0=q0)  # fmt: skip
     differences = []
     for bandwidth in (1e3, 1e4):
-        run = ad.simulate(arm, act.CurrentComputedTorque(100.0, 20.0, bandwidth=bandwidth), path, t_final=1.0,
+        run = ad.simulate(arm, CurrentComputedTorque(100.0, 20.0, bandwidth=bandwidth), path, t_final=1.0,
                           dt=1e-4, q0=q0)  # fmt: skip
         differences.append(np.abs(run.q - ideal.q).max())
         assert np.abs(run.drives.i).max() < 8.0  # no current limit reached
@@ -178,21 +182,21 @@ def test_current_computed_torque_becomes_computed_torque_as_the_current_loop_spe
 
 
 def test_the_rk4_step_comes_from_the_drives_time_constants() -> None:
-    arm = act.puma560()
+    arm = act.puma560_with_drives()
     q0 = np.zeros(6)
-    step = act.rk4_step(arm, q0)
+    step = act.stable_step(arm, q0)
     assert step == pytest.approx(0.5 * 1e-3 / 6.7)  # half the wrist armatures' L / R_a
-    result = ad.simulate(arm, act.DrivePID(20.0, 0.5), None, t_final=0.01, q0=q0)
+    result = ad.simulate(arm, DrivePID(20.0, 0.5), None, t_final=0.01, q0=q0)
     assert result.info["step"] <= step and result.info["substeps"] == int(np.ceil(1e-3 / step))
-    assert act.rk4_step(arm, q0, bandwidth=np.full(6, 2e4)) == pytest.approx(0.5 / 2e4)
+    assert act.stable_step(arm, q0, bandwidth=np.full(6, 2e4)) == pytest.approx(0.5 / 2e4)
     flexible = act.representative_drives(ad.models.two_link_planar(), "flexible")
-    shafts = act.rk4_step(flexible, np.zeros(2))
+    shafts = act.stable_step(flexible, np.zeros(2))
     assert shafts <= 0.5 * np.min([d.inductance / d.resistance for d in flexible.drives])
     bare = act.with_actuators(ad.models.two_link_planar(), [act.Hydraulic(5e-3, 0.1, 1.0, 1e-12, 1e-4, 1e-12, 1e-4,
                                                                           1e9, 1e7, rotary=True)] * 2)  # fmt: skip
     column = np.sqrt(1e-8 / (1e-4 / 4e9) / np.diag(np.linalg.inv(bare.mechanical_robot().inertia_matrix(np.zeros(2))))
                      ** -1)  # fmt: skip
-    assert act.rk4_step(bare, np.zeros(2)) == pytest.approx(min(0.5 * 5e-3, 0.15 / column.max()))
+    assert act.stable_step(bare, np.zeros(2)) == pytest.approx(min(0.5 * 5e-3, 0.15 / column.max()))
 
 
 @pytest.mark.slow
@@ -202,8 +206,8 @@ def test_representative_drives_hold_every_built_in_arm() -> None:
     for name in ad.models.names():
         robot = ad.models.load(name)
         q0 = np.asarray(robot.configurations.get("qn", robot.configurations.get("qz", np.zeros(robot.n))), float)
-        for kind, law in (("dc", act.DrivePID(20.0, 0.5, 20.0)), ("flexible", act.DrivePID(20.0, 0.5, 20.0)),
-                          ("hydraulic", act.DrivePID(0.1, 0.0, 0.1))):  # fmt: skip
+        for kind, law in (("dc", DrivePID(20.0, 0.5, 20.0)), ("flexible", DrivePID(20.0, 0.5, 20.0)),
+                          ("hydraulic", DrivePID(0.1, 0.0, 0.1))):  # fmt: skip
             arm = act.representative_drives(robot, kind)
             kinds = {"hydraulic" if isinstance(d, act.Hydraulic) else "flexible" if d.flexible else "dc"
                      for d in arm.drives}  # fmt: skip
@@ -218,18 +222,21 @@ def test_bad_laws_and_steps_are_refused() -> None:
     arm = _puma()
     flexible = act.representative_drives(ad.models.two_link_planar(), "flexible")
     cases = [
-        (lambda: ad.simulate(flexible, act.CurrentComputedTorque(100.0, 20.0), None, t_final=0.01), "rigid DC"),
+        (lambda: ad.simulate(flexible, CurrentComputedTorque(100.0, 20.0), None, t_final=0.01), "rigid DC"),
         (
-            lambda: ad.simulate(arm, act.CurrentComputedTorque(100.0, 20.0, bandwidth=0.0), None, t_final=0.01),
+            lambda: ad.simulate(arm, CurrentComputedTorque(100.0, 20.0, bandwidth=0.0), None, t_final=0.01),
             "bandwidth",
         ),
-        (lambda: act.simulate(arm, act.DrivePID(1.0, 0.1), None, t_final=0.01, step=-1e-4), "step"),
-        (lambda: act.simulate(arm, act.DrivePID(1.0, 0.1), None, 0.01, 1e-3, None, None, float("nan")), "step"),
+        (lambda: act.simulate(arm, DrivePID(1.0, 0.1), None, t_final=0.01, step=-1e-4), "step"),
+        (lambda: act.simulate(arm, DrivePID(1.0, 0.1), None, 0.01, 1e-3, None, None, float("nan")), "step"),
         (lambda: act.representative_drives(ad.models.two_link_planar(), "pneumatic"), "kind must be one of"),
-        (lambda: act.rk4_step(arm, np.zeros((2, 6))), "one configuration"),
+        (lambda: act.stable_step(arm, np.zeros((2, 6))), "one configuration"),
         (
             lambda: ad.simulate(
-                act.representative_drives(ad.models.polar_rp(), "hydraulic"), act.DrivePID(0.1, 0.0), None, t_final=0.1
+                act.representative_drives(ad.models.polar_rp(), "hydraulic"),
+                DrivePID(0.1, 0.0),
+                None,
+                t_final=0.1,
             ),
             "M\\(q\\) is singular at q = \\[0. 0.\\]",
         ),
@@ -242,7 +249,7 @@ def test_bad_laws_and_steps_are_refused() -> None:
 
 
 def test_the_built_in_puma_drives() -> None:
-    arm = act.puma560()
+    arm = act.puma560_with_drives()
     assert arm.n == 6 and arm.drives[0].name == "motor q1"
     assert np.allclose(arm.reduced_robot().inertia_matrix(np.zeros(6)), ad.models.puma560().inertia_matrix(np.zeros(6)))
     assert [d.torque_constant for d in arm.drives] == list(act.PUMA560_ELECTRICS["torque_constant"])

@@ -481,15 +481,15 @@ def test_cli_progress_shows_on_stderr_when_asked(monkeypatch: pytest.MonkeyPatch
 
 # ----- task coordinates ------------------------------------------------------------------------------
 def test_cli_task_prints_the_task_space_equation(tmp_path: Path) -> None:
-    from armdyn import cartesian
+    from armdyn import task_space
 
     result = invoke("task", "two_link_planar", "-c", "planar", "--q", "0.3,1.2", "--qd", "0.5,-0.2",
                     "-o", tmp_path / "task.csv")  # fmt: skip
     assert result.exit_code == 0, result.output
     assert "cond J = 3.728" in result.stdout
-    arm, output = ad.models.two_link_planar(), cartesian.PlanarPosition()
+    arm, output = ad.models.two_link_planar(), task_space.PlanarPosition()
     q, qd = np.array([0.3, 1.2]), np.array([0.5, -0.2])
-    Mbar, Nbar = cartesian.task_inertia(arm, output, q), cartesian.task_nonlinear(arm, output, q, qd)
+    Mbar, Nbar = task_space.task_inertia(arm, output, q), task_space.task_nonlinear(arm, output, q, qd)
     text = (tmp_path / "task.csv").read_text()
     assert f"{Mbar[1, 1]:.6g}" in text and f"{Nbar[1]:.6g}" in text
     damped = invoke("task", "two_link_planar", "-c", "planar", "--q", "0.3,0", "--damping", "0.01")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import armdyn as ad
-from armdyn import cartesian
+from armdyn import task_space
 from armdyn.model.joint import rot_x, trans
 from armdyn.properties import COLUMNS
 from armdyn.symbolic import derive, motor_symbols, notebook
@@ -274,7 +274,7 @@ def test_a_long_closed_form_is_cut_and_says_what_it_left_out(rr_form: object, mo
 
 
 def test_the_task_and_actuated_closed_forms_have_latex_too() -> None:
-    task = derive(ad.models.cylindrical(symbolic=True), output=cartesian.ToolPosition())._repr_latex_()
+    task = derive(ad.models.cylindrical(symbolic=True), output=task_space.ToolPosition())._repr_latex_()
     assert task.startswith("$$\\begin{aligned}") and task.endswith("\\end{aligned}$$")
     assert "\\bar{M}(q) &=" in task and "\\bar{N}(q, \\dot{q}) &=" in task and "m_{2}" in task
     actuated = derive(ad.models.two_link_planar(symbolic=True), drives=motor_symbols(2))._repr_latex_()

@@ -36,7 +36,10 @@ MODULES = (
     "armdyn.dynamics.regressor",
     "armdyn.model",
     "armdyn.excitation",
-    "armdyn.cartesian",
+    "armdyn.task_space",
+    "armdyn.control.task",
+    "armdyn.control.drives",
+    "armdyn.trajectories.task",
     "armdyn.actuators",
     "armdyn.study",
 )

@@ -1056,7 +1056,7 @@ def module_targets() -> list[Target]:
     ):
         function = getattr(kinematics, name)
         targets.append(
-            Target(f"kinematics.{name}", lambda arm, f=function, **kw: f(**kw), {"robot": robot, **args}, ARMS)
+            Target(f"kinematics.{name}", lambda arm, f=function, **kw: f(**kw), {"arm": robot, **args}, ARMS)
         )
     three = np.array([0.1, 0.2, 0.3])
     targets += [
@@ -1302,7 +1302,7 @@ def properties_targets() -> list[Target]:
     )
     limits = Arg(lambda arm: None, _limits_values, names=("limits",), sample=25)
     check_args = {
-        "robot": robot,
+        "arm": robot,
         "samples": Arg(lambda arm: 6, lambda arm: scalar_values([6, 4], _count(4, 50), integer=True)),
         "seed": Arg(lambda arm: 0, lambda arm: scalar_values([0, 3], _count(0, 10**6), integer=True)),
         "limits": limits,
@@ -1314,7 +1314,7 @@ def properties_targets() -> list[Target]:
         Target(
             "properties.joint_ranges",
             lambda arm, **kw: properties.joint_ranges(**kw),
-            {"robot": _robot_arg(True, symbolic_ok=True), "limits": limits, "prismatic_span": span},
+            {"arm": _robot_arg(True, symbolic_ok=True), "limits": limits, "prismatic_span": span},
             ARMS,
         ),
     ]

@@ -191,8 +191,8 @@ READ_ONLY_CALLS = {
     "gravity_vector": lambda arm, q: arm.gravity_vector(q),
     "jacobian": lambda arm, q: arm.jacobian(q, "tool", 3),
     "inverse_dynamics_derivatives": lambda arm, q: arm.inverse_dynamics_derivatives(q, q, q),
-    "task_inertia": lambda arm, q: ad.cartesian.task_inertia(arm, ad.cartesian.ToolPose(), q),
-    "operational_space": lambda arm, q: ad.cartesian.operational_space(arm, ad.cartesian.ToolPose(), q, q).Lambda,
+    "task_inertia": lambda arm, q: ad.task_space.task_inertia(arm, ad.task_space.ToolPose(), q),
+    "operational_space": lambda arm, q: ad.task_space.operational_space(arm, ad.task_space.ToolPose(), q, q).Lambda,
 }
 
 

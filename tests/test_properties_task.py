@@ -17,9 +17,9 @@ from scipy.optimize import brentq
 from typer.testing import CliRunner
 
 import armdyn as ad
-from armdyn import cartesian as ct
+from armdyn import task_space as ts
 from armdyn.cli import app
-from armdyn.properties import DEFAULT_MAX_CONDITION, check, joint_ranges
+from armdyn.properties import REGION_MAX_CONDITION, check, joint_ranges
 from tests.helpers import URDFS
 
 SQUARE_ROWS = {
@@ -33,11 +33,11 @@ def _failing(report: ad.properties.Report) -> list:
     return [row for row in report.rows if not row.holds]
 
 
-def _fresh(arm: ad.Robot, output: ct.TaskOutput, limit: float, count: int = 300, seed: int = 99) -> np.ndarray:
+def _fresh(arm: ad.Robot, output: ts.TaskOutput, limit: float, count: int = 300, seed: int = 99) -> np.ndarray:
     """Random configurations of the arm's sampled ranges with cond J below ``limit``, drawn afresh."""
     low, high = np.array(joint_ranges(arm)).T
     q = np.random.default_rng(seed).uniform(low, high, (count, arm.n))
-    return q[ct.condition_number(arm, output, q) < limit]
+    return q[ts.condition_number(arm, output, q) < limit]
 
 
 def _counts(report: ad.properties.Report) -> tuple[int, int]:
@@ -45,11 +45,11 @@ def _counts(report: ad.properties.Report) -> tuple[int, int]:
     return int(kept), int(rejected)
 
 
-def _assert_covers(report: ad.properties.Report, arm: ad.Robot, output: ct.TaskOutput, q: np.ndarray) -> None:
+def _assert_covers(report: ad.properties.Report, arm: ad.Robot, output: ts.TaskOutput, q: np.ndarray) -> None:
     """Mbar (Lambda), ||Vmbar||, ||Gbar|| (p) at the states q lie within the report's bounds."""
     b, slack = report.bounds, 1e-9
     square = output.jacobian(arm, q[0]).shape[0] == arm.n
-    inertia = ct.task_inertia(arm, output, q) if square else ct.operational_inertia(arm, output, q)
+    inertia = ts.task_inertia(arm, output, q) if square else ts.operational_inertia(arm, output, q)
     eig = np.linalg.eigvalsh(inertia)
     assert eig.min() >= b["mu1"] * (1 - slack) and eig.max() <= b["mu2"] * (1 + slack)
     ones = np.abs(inertia).sum(axis=-2).max(axis=-1)
@@ -58,11 +58,11 @@ def _assert_covers(report: ad.properties.Report, arm: ad.Robot, output: ct.TaskO
         ydot = np.random.default_rng(7).normal(size=(len(q), arm.n))
         ydot /= np.linalg.norm(ydot, axis=-1, keepdims=True)
         qd = np.linalg.solve(output.jacobian(arm, q), ydot[..., None])[..., 0]
-        Vmbar = ct.task_coriolis(arm, output, q, qd)
+        Vmbar = ts.task_coriolis(arm, output, q, qd)
         assert np.linalg.norm(Vmbar, ord=2, axis=(-2, -1)).max() <= b["vb"] * (1 + slack)
-        gravity = ct.task_gravity(arm, output, q)
+        gravity = ts.task_gravity(arm, output, q)
     else:
-        gravity = ct.operational_space(arm, output, q, np.zeros_like(q)).p
+        gravity = ts.operational_space(arm, output, q, np.zeros_like(q)).p
     assert np.linalg.norm(gravity, axis=-1).max() <= b["gb"] * (1 + slack)
 
 
@@ -71,7 +71,7 @@ def test_rr_arm_rows_hold_and_the_bounds_are_the_closed_form_extremes_over_the_r
     """Mbar = m2 I + m1 A^T A with A = J_elbow J^-1 of rank 1 (K = 1/2 m1 |v_elbow|^2 + 1/2 m2 |ydot|^2), so
     mu1 = m2 exactly; the largest eigenvalue and cond J depend on theta2 alone, and mu2 is the largest
     eigenvalue where cond J reaches max_condition (det J = a1 a2 sin theta2: singular at 0 and pi)."""
-    arm, output, limit = ad.models.two_link_planar(2.0, 0.7, 1.0, 0.6), ct.PlanarPosition(), 50.0
+    arm, output, limit = ad.models.two_link_planar(2.0, 0.7, 1.0, 0.6), ts.PlanarPosition(), 50.0
     report = check(arm, samples=40, task=output, max_condition=limit)
     assert report.all_hold, _failing(report)
     assert {row.name for row in report.rows} == SQUARE_ROWS
@@ -79,10 +79,10 @@ def test_rr_arm_rows_hold_and_the_bounds_are_the_closed_form_extremes_over_the_r
     assert_allclose(report.bounds["mu1"], 0.7, rtol=1e-9)
 
     def cond(theta2: float) -> float:
-        return float(ct.condition_number(arm, output, [0.3, theta2]))
+        return float(ts.condition_number(arm, output, [0.3, theta2]))
 
     def largest(theta2: float) -> float:
-        return float(np.linalg.eigvalsh(ct.task_inertia(arm, output, [0.3, theta2]))[-1])
+        return float(np.linalg.eigvalsh(ts.task_inertia(arm, output, [0.3, theta2]))[-1])
 
     grid = np.linspace(1e-3, np.pi - 1e-3, 4001)
     best = grid[np.argmin([cond(t) for t in grid])]
@@ -110,7 +110,7 @@ def _example_3_5_1(q: np.ndarray) -> np.ndarray:
 
 def test_cylindrical_arm_bounds_are_example_3_5_1_eigenvalues() -> None:
     """The eigenvalues of Example 3.5-1's Mbar are m2, m2 + J/r^2 and m1 + m2; cond J = max(r, 1) / min(r, 1)."""
-    arm, output = ad.models.cylindrical(J_BASE, M1, M2), ct.ToolPosition()
+    arm, output = ad.models.cylindrical(J_BASE, M1, M2), ts.ToolPosition()
     limits = [(-np.pi, np.pi), (-0.5, 0.5), (0.5, 1.5)]  # cond J <= 2: every sample is regular
     report = check(arm, samples=30, limits=limits, task=output)
     assert report.all_hold, _failing(report)
@@ -120,7 +120,7 @@ def test_cylindrical_arm_bounds_are_example_3_5_1_eigenvalues() -> None:
     assert_allclose(report.bounds["mu2"], M2 + J_BASE / 0.5**2, rtol=1e-6)  # at r = 0.5
     assert_allclose(report.bounds["gb"], (M1 + M2) * 9.8, rtol=1e-9)  # Gbar = J^-T G = [0, 0, (m1 + m2) g]
     q = np.random.default_rng(5).uniform(*np.array(limits).T, (50, 3))
-    assert_allclose(ct.task_inertia(arm, output, q), _example_3_5_1(q), rtol=1e-9, atol=1e-12)
+    assert_allclose(ts.task_inertia(arm, output, q), _example_3_5_1(q), rtol=1e-9, atol=1e-12)
     eig = np.linalg.eigvalsh(_example_3_5_1(q))
     assert eig.min() >= report.bounds["mu1"] * (1 - 1e-9) and eig.max() <= report.bounds["mu2"] * (1 + 1e-9)
     _assert_covers(report, arm, output, q)
@@ -129,7 +129,7 @@ def test_cylindrical_arm_bounds_are_example_3_5_1_eigenvalues() -> None:
 def test_cylindrical_arm_region_stops_at_the_condition_limit() -> None:
     """Over r in [0, 1], cond J = 1/r: the region is r > 1/max_condition, so mu2 = m2 + J max_condition^2, and
     the samples with r <= 1/max_condition are rejected (and counted in the notes)."""
-    arm, output, limit = ad.models.cylindrical(J_BASE, M1, M2), ct.ToolPosition(), 20.0
+    arm, output, limit = ad.models.cylindrical(J_BASE, M1, M2), ts.ToolPosition(), 20.0
     report = check(arm, samples=60, task=output, max_condition=limit)
     assert report.all_hold, _failing(report)
     assert report.max_condition == limit and report.task == "ToolPosition()"
@@ -145,7 +145,7 @@ def test_cylindrical_arm_region_stops_at_the_condition_limit() -> None:
 
 # ----- a square pose output with friction, a redundant output ----------------------------------------
 def test_puma_tool_pose_rows_hold_with_friction_in_output_units() -> None:
-    arm, output = ad.models.puma560(), ct.ToolPose()
+    arm, output = ad.models.puma560(), ts.ToolPose()
     report = check(arm, samples=12, task=output)
     assert report.all_hold, _failing(report)
     assert {row.name for row in report.rows} == (SQUARE_ROWS - {"Christoffel symmetry"}) | {"friction bound",
@@ -154,10 +154,10 @@ def test_puma_tool_pose_rows_hold_with_friction_in_output_units() -> None:
     assert "not a Christoffel form" in notes and "mixes units" in notes
     assert set(report.units.values()) == {"output units"}
     assert report.bounds["v"] > 0 and report.bounds["k"] > 0
-    q = _fresh(arm, output, DEFAULT_MAX_CONDITION, count=40)
+    q = _fresh(arm, output, REGION_MAX_CONDITION, count=40)
     rng = np.random.default_rng(3)
     ydot = rng.normal(size=(len(q), 6)) * rng.uniform(0, 5, (len(q), 1))
-    F = ct.task_friction(arm, output, q, np.linalg.solve(output.jacobian(arm, q), ydot[..., None])[..., 0])
+    F = ts.task_friction(arm, output, q, np.linalg.solve(output.jacobian(arm, q), ydot[..., None])[..., 0])
     rhs = report.bounds["v"] * np.linalg.norm(ydot, axis=-1) + report.bounds["k"]
     assert np.all(np.linalg.norm(F, axis=-1) <= rhs)
 
@@ -167,7 +167,7 @@ def test_a_non_christoffel_task_coriolis_matrix_fails_the_skew_row(monkeypatch: 
     likewise for mu_x of a redundant output)."""
 
     def perturbed(function: object, square: bool) -> object:
-        def call(arm: ad.Robot, output: ct.TaskOutput, q: np.ndarray, qd: np.ndarray, **options: object) -> object:
+        def call(arm: ad.Robot, output: ts.TaskOutput, q: np.ndarray, qd: np.ndarray, **options: object) -> object:
             result = function(arm, output, q, qd, **options)
             matrix = result if square else result[0]
             ydot = np.einsum("...ij,...j->...i", output.jacobian(arm, q), qd)
@@ -179,12 +179,12 @@ def test_a_non_christoffel_task_coriolis_matrix_fails_the_skew_row(monkeypatch: 
         return call
 
     arm = ad.models.puma560()
-    assert check(arm, samples=8, task=ct.ToolPose(), only="skew").all_hold
-    assert check(arm, samples=8, task=ct.ToolPosition(), only="skew").all_hold
-    monkeypatch.setattr(ct, "task_coriolis", perturbed(ct.task_coriolis, True))
-    monkeypatch.setattr(ct, "operational_coriolis", perturbed(ct.operational_coriolis, False))
-    assert not check(arm, samples=8, task=ct.ToolPose(), only="skew").row("skew symmetry").holds
-    assert not check(arm, samples=8, task=ct.ToolPosition(), only="skew").row("skew symmetry").holds
+    assert check(arm, samples=8, task=ts.ToolPose(), only="skew").all_hold
+    assert check(arm, samples=8, task=ts.ToolPosition(), only="skew").all_hold
+    monkeypatch.setattr(ts, "task_coriolis", perturbed(ts.task_coriolis, True))
+    monkeypatch.setattr(ts, "operational_coriolis", perturbed(ts.operational_coriolis, False))
+    assert not check(arm, samples=8, task=ts.ToolPose(), only="skew").row("skew symmetry").holds
+    assert not check(arm, samples=8, task=ts.ToolPosition(), only="skew").row("skew symmetry").holds
 
 
 def _panda() -> ad.Robot:
@@ -196,7 +196,7 @@ def _panda() -> ad.Robot:
 
 @pytest.mark.slow
 def test_panda_tool_position_lambda_rows_hold_and_square_only_rows_are_skipped_with_a_note() -> None:
-    arm, output = _panda(), ct.ToolPosition()
+    arm, output = _panda(), ts.ToolPosition()
     report = check(arm, samples=16, task=output)
     assert report.all_hold, _failing(report)
     assert {row.name for row in report.rows} == REDUNDANT_ROWS
@@ -205,7 +205,7 @@ def test_panda_tool_position_lambda_rows_hold_and_square_only_rows_are_skipped_w
     notes = " ".join(report.notes)
     assert "redundant" in notes and "defined for square outputs (m = n) only" in notes
     assert "the Coriolis, friction and linearity rows are skipped" in notes
-    _assert_covers(report, arm, output, _fresh(arm, output, DEFAULT_MAX_CONDITION, count=30))
+    _assert_covers(report, arm, output, _fresh(arm, output, REGION_MAX_CONDITION, count=30))
     inertia_only = check(arm, samples=8, task=output, only="inertia")
     assert "skipped" not in " ".join(inertia_only.notes)
     two = check(arm, samples=8, task=output, only=("inertia", "linearity", "friction"))
@@ -215,7 +215,7 @@ def test_panda_tool_position_lambda_rows_hold_and_square_only_rows_are_skipped_w
 def test_camera_output_is_labelled_in_image_units() -> None:
     """Example A.3-3: the RR arm seen from overhead, y = image coordinates (m = n = 2)."""
     pose = np.array([[1.0, 0, 0, 0], [0, -1, 0, 0], [0, 0, -1, 5], [0, 0, 0, 1]])
-    arm, output = ad.models.two_link_planar(), ct.Camera(800.0, pose)
+    arm, output = ad.models.two_link_planar(), ts.Camera(800.0, pose)
     report = check(arm, samples=16, task=output, only=("inertia", "gravity"))
     assert report.all_hold, _failing(report)
     assert report.units["mu1"] == "J s^2/u^2" and report.units["gb"] == "J/u"
@@ -227,10 +227,10 @@ def test_the_report_names_the_output_and_region_and_joint_space_is_unchanged() -
     from rich.console import Console
 
     arm = ad.models.two_link_planar()
-    task = check(arm, samples=10, task=ct.PlanarPosition())
+    task = check(arm, samples=10, task=ts.PlanarPosition())
     title = task.title()
     assert "in task coordinates PlanarPosition(axes=(0, 1))" in title and "cond J < 1000" in title
-    assert task.max_condition == DEFAULT_MAX_CONDITION
+    assert task.max_condition == REGION_MAX_CONDITION
     console = Console(width=200, record=True)
     console.print(task.table())
     assert "task coordinates" in console.export_text()
@@ -246,18 +246,18 @@ def test_the_report_names_the_output_and_region_and_joint_space_is_unchanged() -
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"task": "position"}, "task must be a task output of armdyn.cartesian .*got str"),
+        ({"task": "position"}, "task must be a task output of armdyn.task_space .*got str"),
         ({"task": ad.models.scara()}, "task must be a task output .*got Robot"),
-        ({"task": ct.PlanarPosition(), "max_condition": 1.0}, "max_condition must be greater than 1"),
-        ({"task": ct.PlanarPosition(), "max_condition": 0.5}, "max_condition must be greater than 1"),
-        ({"task": ct.PlanarPosition(), "max_condition": 1e9}, "at most 1e\\+08"),
-        ({"task": ct.PlanarPosition(), "max_condition": np.nan}, "max_condition must be finite"),
-        ({"task": ct.PlanarPosition(), "max_condition": "big"}, "max_condition must be a number"),
-        ({"task": ct.PlanarPosition(), "max_condition": True}, "max_condition must be a number"),
+        ({"task": ts.PlanarPosition(), "max_condition": 1.0}, "max_condition must be greater than 1"),
+        ({"task": ts.PlanarPosition(), "max_condition": 0.5}, "max_condition must be greater than 1"),
+        ({"task": ts.PlanarPosition(), "max_condition": 1e9}, "at most 1e\\+08"),
+        ({"task": ts.PlanarPosition(), "max_condition": np.nan}, "max_condition must be finite"),
+        ({"task": ts.PlanarPosition(), "max_condition": "big"}, "max_condition must be a number"),
+        ({"task": ts.PlanarPosition(), "max_condition": True}, "max_condition must be a number"),
         ({"max_condition": 100.0}, "max_condition applies to task coordinates only"),
-        ({"task": ct.ToolPose()}, "6 rows, more than the 2 joints"),
-        ({"task": ct.PlanarPosition(), "limits": [(-1, 1), (0, 0)]}, r"only 0 of 20 sampled .* singular"),
-        ({"task": ct.PlanarPosition(), "limits": [(-1, 1), (0, 1e-4)]}, r"only 0 of 20 .*max_condition = 1000"),
+        ({"task": ts.ToolPose()}, "6 rows, more than the 2 joints"),
+        ({"task": ts.PlanarPosition(), "limits": [(-1, 1), (0, 0)]}, r"only 0 of 20 sampled .* singular"),
+        ({"task": ts.PlanarPosition(), "limits": [(-1, 1), (0, 1e-4)]}, r"only 0 of 20 .*max_condition = 1000"),
     ],
 )
 def test_task_errors_are_model_errors_that_say_why(options: dict, message: str) -> None:

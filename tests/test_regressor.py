@@ -19,7 +19,7 @@ from armdyn.cli import app
 from armdyn.control import ComputedTorque
 from armdyn.dynamics import regressor as regressor_module
 from armdyn.dynamics.regressor import FrictionMisfitWarning, PoorExcitationWarning, parameter_names
-from armdyn.excitation import FourierTrajectory, excitation_trajectory, identification_data, joint_ranges
+from armdyn.excitation import FourierTrajectory, excitation_ranges, excitation_trajectory, identification_data
 from tests.helpers import exciting, pinocchio_pair
 from tests.strategies import random_robot, random_state
 
@@ -291,7 +291,7 @@ def test_simulated_smoothed_friction_is_warned_of_and_left_out_by_a_velocity_ban
 def test_excitation_trajectory_keeps_the_limits_and_is_a_trajectory() -> None:
     arm = ad.models.puma560()
     trajectory = puma_excitation()
-    lower, upper = joint_ranges(arm)
+    lower, upper = excitation_ranges(arm)
     t = np.linspace(0.0, trajectory.period, 20_001)
     q, qd, qdd = trajectory(t)
     assert q.shape == qd.shape == qdd.shape == (20_001, 6)

@@ -15,7 +15,7 @@ import armdyn as ad
 from armdyn import control
 from armdyn import trajectories as tr
 from armdyn.errors import ModelError
-from armdyn.study import Normal, Spec, Study, Uniform, clopper_pearson, run_block, runs_needed
+from armdyn.study import Normal, Requirement, Study, Uniform, clopper_pearson, run_block, runs_needed
 
 
 def rr_study(spec: str = "max_error_after < 2e-3", **options: object) -> Study:
@@ -140,8 +140,8 @@ def test_the_local_cluster_scheduler_and_an_unreachable_one() -> None:
         (lambda: Uniform(2.0, 1.0), "low <= high"),
         (lambda: Normal(0.0, -1.0), "std >= 0"),
         (lambda: Normal(0.0, 1.0, low=5.0, high=1.0), "low < high"),
-        (lambda: Spec("max_torque < 3"), "unknown quantity 'max_torque'"),
-        (lambda: Spec("the error is small"), "cannot read the spec clause"),
+        (lambda: Requirement("max_torque < 3"), "unknown quantity 'max_torque'"),
+        (lambda: Requirement("the error is small"), "cannot read the spec clause"),
         (lambda: rr_study("max_error_after q7 < 1").run(10), "no column"),
         (lambda: rr_study(payload=Normal(-5.0, 0.1)).run(10), "negative"),
         (lambda: rr_study().run(0), "runs must be at least 1"),
@@ -155,7 +155,7 @@ def test_bad_input_is_a_model_error(make: object, message: str) -> None:
 
 
 def test_specs_read_the_cli_form_and_joints() -> None:
-    spec = Spec("max-error-after-0.5s<1e-3 and max_tau <= 200 and rms_error q2 < 1")
+    spec = Requirement("max-error-after-0.5s<1e-3 and max_tau <= 200 and rms_error q2 < 1")
     assert spec.after == 0.5
     assert spec.clauses == (("max_error_after", "<", 1e-3), ("max_tau", "<=", 200.0), ("rms_error q2", "<", 1.0))
     result = rr_study("max-error-after-0.1s < 1").run(20)

@@ -237,5 +237,5 @@ def test_arms_with_motors_and_other_combinations_are_refused() -> None:
     with pytest.raises(ad.ModelError, match="carries its drives"):
         derive(actuated, drives=list(actuated.drives))
     with pytest.raises(ad.ModelError, match=r"output=.* not supported"):
-        derive(actuated, output=ad.cartesian.ToolPosition())
+        derive(actuated, output=ad.task_space.ToolPosition())
     assert isinstance(derive(ad.models.two_link_planar(symbolic=True)), ClosedForm)  # no drives: the arm alone

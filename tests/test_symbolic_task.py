@@ -11,7 +11,7 @@ import sympy
 from numpy.testing import assert_allclose
 
 import armdyn as ad
-from armdyn import cartesian as ct
+from armdyn import task_space as ts
 from armdyn.symbolic import TaskClosedForm, derive
 from tests.strategies import random_robot
 
@@ -25,17 +25,17 @@ def same(actual: sympy.Matrix, expected: sympy.Matrix) -> None:
     assert sympy.simplify(actual - expected) == sympy.zeros(*expected.shape), actual
 
 
-def overhead_camera(f: float, H: float) -> ct.Camera:
+def overhead_camera(f: float, H: float) -> ts.Camera:
     """The camera of Example A.3-3, on the axis normal to the arm's plane at depth H: x_c = -y, y_c = x."""
     pose = np.eye(4)
     pose[:3, :3] = [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
     pose[:3, 3] = [0.0, 0.0, -H]
-    return ct.Camera(f, pose)
+    return ts.Camera(f, pose)
 
 
 @pytest.fixture(scope="module")
 def cylindrical() -> TaskClosedForm:
-    return derive(ad.models.cylindrical(symbolic=True), output=ct.ToolPosition())
+    return derive(ad.models.cylindrical(symbolic=True), output=ts.ToolPosition())
 
 
 def test_cylindrical_arm_is_example_3_5_1(cylindrical: TaskClosedForm) -> None:
@@ -74,26 +74,26 @@ def test_polar_arm_seen_from_overhead_is_a_point_mass(f: float, H: float) -> Non
 
 
 # ----- symbolic equals numeric ----------------------------------------------------------------------
-def states(arm: ad.Robot, output: ct.TaskOutput, seed: int, count: int = 4) -> list[tuple[np.ndarray, np.ndarray]]:
+def states(arm: ad.Robot, output: ts.TaskOutput, seed: int, count: int = 4) -> list[tuple[np.ndarray, np.ndarray]]:
     """Random states, (q, qd), where J is well conditioned."""
     rng = np.random.default_rng(seed)
     chosen = []
     while len(chosen) < count:
         q, qd = rng.uniform(-2, 2, arm.n), rng.uniform(-2, 2, arm.n)
-        if np.all(np.isfinite(q)) and ct.condition_number(arm, output, q) < 1e4:
+        if np.all(np.isfinite(q)) and ts.condition_number(arm, output, q) < 1e4:
             chosen.append((q, qd))
     return chosen
 
 
-def assert_matches_numeric(form: TaskClosedForm, arm: ad.Robot, output: ct.TaskOutput, values: dict) -> None:
+def assert_matches_numeric(form: TaskClosedForm, arm: ad.Robot, output: ts.TaskOutput, values: dict) -> None:
     compiled = form.compile(values)
     for q, qd in states(arm, output, seed=7):
         pairs = [
-            (compiled.Mbar(q), ct.task_inertia(arm, output, q)),
-            (compiled.Vmbar(q, qd), ct.task_coriolis(arm, output, q, qd)),
-            (compiled.Gbar(q), ct.task_gravity(arm, output, q)),
-            (compiled.Fbar(q, qd), ct.task_friction(arm, output, q, qd)),
-            (compiled.Nbar(q, qd), ct.task_nonlinear(arm, output, q, qd)),
+            (compiled.Mbar(q), ts.task_inertia(arm, output, q)),
+            (compiled.Vmbar(q, qd), ts.task_coriolis(arm, output, q, qd)),
+            (compiled.Gbar(q), ts.task_gravity(arm, output, q)),
+            (compiled.Fbar(q, qd), ts.task_friction(arm, output, q, qd)),
+            (compiled.Nbar(q, qd), ts.task_nonlinear(arm, output, q, qd)),
             (compiled.h(q), output.value(arm, q)),
             (compiled.J(q), output.jacobian(arm, q)),
         ]
@@ -101,18 +101,18 @@ def assert_matches_numeric(form: TaskClosedForm, arm: ad.Robot, output: ct.TaskO
             assert_allclose(symbolic, numeric, rtol=1e-10, atol=1e-10 * (1 + np.abs(numeric).max()))
 
 
-def tilted_camera() -> ct.Camera:
+def tilted_camera() -> ts.Camera:
     """A camera 4 m below the plane, turned 0.3 rad about its x axis and 0.2 rad about z."""
     c, s, cz, sz = np.cos(0.3), np.sin(0.3), np.cos(0.2), np.sin(0.2)
     pose = np.eye(4)
     pose[:3, :3] = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]]) @ [[1, 0, 0], [0, c, -s], [0, s, c]]
     pose[:3, 3] = [0.2, 0.1, -4.0]
-    return ct.Camera(800.0, pose)
+    return ts.Camera(800.0, pose)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("output", [ct.PlanarPosition(), tilted_camera()], ids=["planar", "camera"])
-def test_two_link_arm_in_task_coordinates_equals_numeric(output: ct.TaskOutput) -> None:
+@pytest.mark.parametrize("output", [ts.PlanarPosition(), tilted_camera()], ids=["planar", "camera"])
+def test_two_link_arm_in_task_coordinates_equals_numeric(output: ts.TaskOutput) -> None:
     values = {"m1": 1.3, "m2": 0.7, "a1": 0.9, "a2": 0.6, "g": 9.81}
     form = derive(ad.models.two_link_planar(symbolic=True), output=output)
     assert_matches_numeric(form, ad.models.two_link_planar(**values), output, values)
@@ -126,14 +126,14 @@ def test_random_spatial_arm_with_a_tool_equals_numeric() -> None:
     tool[:3, 3] = [0.1, -0.05, 0.2]
     base[:3, 3] = [0.3, 0.2, -0.1]
     arm = random_robot(2, 3, chain=True).replace(tool=tool, base=base)
-    output = ct.ToolPosition()
+    output = ts.ToolPosition()
     form = derive(arm, output=output)
     assert not form.expanded  # a general arm: exact products, not expanded
     assert_matches_numeric(form, arm, output, {})
-    link = derive(arm, output=ct.LinkPoint(2)).compile()
+    link = derive(arm, output=ts.LinkPoint(2)).compile()
     q, _ = states(arm, output, seed=3, count=1)[0]
-    assert_allclose(link.h(q), ct.LinkPoint(2).value(arm, q), atol=1e-12)
-    assert_allclose(link.J(q), ct.LinkPoint(2).jacobian(arm, q), atol=1e-12)
+    assert_allclose(link.h(q), ts.LinkPoint(2).value(arm, q), atol=1e-12)
+    assert_allclose(link.J(q), ts.LinkPoint(2).jacobian(arm, q), atol=1e-12)
     assert not np.allclose(link.h(q), output.value(arm, q))  # the link frame's origin, not the tool point
 
 
@@ -158,7 +158,7 @@ def test_printing_and_progress(cylindrical: TaskClosedForm) -> None:
     latex = cylindrical.latex()
     assert r"\bar{M}(q) &=" in latex and "s_{1}" in latex and latex.count(r"\begin{align*}") == 1
     calls = []
-    derive(ad.models.polar_rp(), output=ct.PlanarPosition(), progress=lambda f, s: calls.append((f, s)))
+    derive(ad.models.polar_rp(), output=ts.PlanarPosition(), progress=lambda f, s: calls.append((f, s)))
     assert calls[-1] == (1.0, "done") and sum(s == "done" for _, s in calls) == 1
     assert "task space" in [s for _, s in calls]
     assert all(a[0] <= b[0] for a, b in itertools.pairwise(calls))
@@ -168,13 +168,13 @@ def test_printing_and_progress(cylindrical: TaskClosedForm) -> None:
 @pytest.mark.parametrize(
     ("arm", "output", "message"),
     [
-        (ad.models.cylindrical(), ct.ToolPose(), "ToolPose is not supported"),
-        (ad.models.cylindrical(), ct.PlanarPosition(), "has 2 rows but arm 'cylindrical' has 3 joints"),
-        (ad.models.two_link_planar(), ct.ToolPosition(), "square J"),
-        (ad.models.two_link_planar(), ct.Output(lambda q: q, lambda q: np.eye(2)), "support the outputs"),
+        (ad.models.cylindrical(), ts.ToolPose(), "ToolPose is not supported"),
+        (ad.models.cylindrical(), ts.PlanarPosition(), "has 2 rows but arm 'cylindrical' has 3 joints"),
+        (ad.models.two_link_planar(), ts.ToolPosition(), "square J"),
+        (ad.models.two_link_planar(), ts.Output(lambda q: q, lambda q: np.eye(2)), "support the outputs"),
         (ad.models.two_link_planar(), "tool", "got str"),
-        (ad.models.two_link_planar(), ct.LinkPoint(5), "out of range"),
-        (ad.models.two_link_planar(), ct.PlanarPosition((0, 2)), "singular J at every q"),
+        (ad.models.two_link_planar(), ts.LinkPoint(5), "out of range"),
+        (ad.models.two_link_planar(), ts.PlanarPosition((0, 2)), "singular J at every q"),
     ],
 )
 def test_unsupported_outputs_are_refused(arm: ad.Robot, output: object, message: str) -> None:

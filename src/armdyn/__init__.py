@@ -15,7 +15,7 @@ __version__ = "0.1.0"
 
 _LAZY_MODULES = (
     "actuators",
-    "cartesian",
+    "task_space",
     "symbolic",
     "properties",
     "statespace",

@@ -597,7 +597,7 @@ def _actuated(arm: Robot, name: str, kind: str) -> object:
     if kind not in kinds:
         _fail(f"--actuators must be one of {', '.join(kinds)}, got '{kind}'")
     if kind == "dc" and name.lower() == "puma560":
-        return actuators.puma560()
+        return actuators.puma560_with_drives()
     return actuators.representative_drives(arm, kind)
 
 
@@ -887,9 +887,9 @@ def check(
 
 def _task_output(coordinates: str, option: str = "--task") -> object:
     """The task output that ``check --task``, ``simulate --task`` and ``task --coordinates`` name (TASK_OUTPUTS)."""
-    from armdyn import cartesian
+    from armdyn import task_space
 
-    outputs = {"position": cartesian.ToolPosition, "pose": cartesian.ToolPose, "planar": cartesian.PlanarPosition}
+    outputs = {"position": task_space.ToolPosition, "pose": task_space.ToolPose, "planar": task_space.PlanarPosition}
     if coordinates not in outputs:
         _fail(f"{option} must be one of {', '.join(TASK_OUTPUTS)}, got {coordinates!r}")
     return outputs[coordinates]()
@@ -1186,7 +1186,7 @@ def _task_controller(
     start: np.ndarray, move: str, turn: str,
 ) -> object:  # fmt: skip
     """The task-space law of ``simulate --task``: the output, a path from the tool's start, and the law."""
-    from armdyn import cartesian
+    from armdyn import control, trajectories
 
     output = _task_output(task)
     gains = [_one_number(value, option) for value, option in ((kp, "--kp"), (kv, "--kv"))]
@@ -1202,23 +1202,27 @@ def _task_controller(
             end = begin.copy()
             end[:3, 3] += shift
             end[:3, :3] = Rotation.from_rotvec(_three(turn, "--turn")).as_matrix() @ begin[:3, :3]
-            path = cartesian.PoseLine(begin, end, 1.0 / frequency)
+            path = trajectories.PoseLine(begin, end, 1.0 / frequency)
         else:
-            path = cartesian.Line(y0, y0 + shift[: len(y0)], 1.0 / frequency)
+            path = trajectories.Line(y0, y0 + shift[: len(y0)], 1.0 / frequency)
     elif trajectory == "circle":
         if task == "pose":
             _fail("--trajectory circle takes --task position or planar (a pose follows a line)")
         centre = y0.copy()
         centre[0] -= amplitude
-        path = cartesian.Circle(tuple(centre), amplitude, 1.0 / frequency)
+        path = trajectories.Circle(tuple(centre), amplitude, 1.0 / frequency)
     elif trajectory == "none":
-        path = cartesian.Line(y0, y0, 1.0) if task != "pose" else cartesian.PoseLine(*[arm.tool_pose(start)] * 2, 1.0)
+        path = (
+            trajectories.Line(y0, y0, 1.0)
+            if task != "pose"
+            else trajectories.PoseLine(*[arm.tool_pose(start)] * 2, 1.0)
+        )
     else:
         _fail(f"--trajectory with --task must be line, circle or none, got {trajectory!r}")
     if controller == "computed-torque":
-        return cartesian.ComputedTorque(output, path, *gains)
+        return control.TaskComputedTorque(output, path, *gains)
     if controller == "operational-space":
-        return cartesian.OperationalSpaceControl(output, path, *gains, start, gains[0] / 4, gains[1] / 2)
+        return control.OperationalSpaceControl(output, path, *gains, start, gains[0] / 4, gains[1] / 2)
     _fail(f"--controller with --task must be computed-torque or operational-space, got {controller!r}")
 
 
@@ -1352,21 +1356,21 @@ def simulate(
 
 def _drive_controller(driven: object, kind: str, controller: str, kp: str | None, kv: str | None, ki: str) -> object:
     """The drive-level law of ``simulate --actuators``."""
-    from armdyn import actuators
+    from armdyn import control
 
     n = driven.n
     if controller == "pid":
         defaults = ("0.1", "0") if kind == "hydraulic" else ("20", "0.5")
         named = ((kp, defaults[0], "--kp"), (kv, defaults[1], "--kv"), (ki, "0", "--ki"))
         gains = (_per_joint(default if value is None else value, option, n) for value, default, option in named)
-        return actuators.DrivePID(*gains)
+        return control.DrivePID(*gains)
     if controller == "computed-torque":
         if kind != "dc":
             _fail(f"--controller computed-torque with --actuators runs through current commands: it needs dc drives, "
                   f"not {kind} (use --controller pid)")  # fmt: skip
         named = ((kp, "100", "--kp"), (kv, "20", "--kv"), (ki, "0", "--ki"))
         gains = (_per_joint(default if value is None else value, option, n) for value, default, option in named)
-        return actuators.CurrentComputedTorque(*gains)
+        return control.CurrentComputedTorque(*gains)
     _fail(f"--controller with --actuators must be pid or computed-torque, got '{controller}'")
 
 
@@ -1579,20 +1583,20 @@ def demo(
 
 def _demo_task_space(arm: Robot) -> None:
     """The demo's Section 3.5: the tool's dynamics in Cartesian coordinates at one configuration."""
-    from armdyn import cartesian
+    from armdyn import task_space
 
     console.rule("[bold]Section 3.5: the tool point's dynamics in Cartesian coordinates, at q = (0.3, 1.2) rad")
-    q, tool = np.array([0.3, 1.2]), cartesian.PlanarPosition()
+    q, tool = np.array([0.3, 1.2]), task_space.PlanarPosition()
     for label, value, unit in (
-        ("Mbar = J^-T M J^-1", cartesian.task_inertia(arm, tool, q), "kg"),
-        ("Gbar = J^-T G", cartesian.task_gravity(arm, tool, q), "N"),
+        ("Mbar = J^-T M J^-1", task_space.task_inertia(arm, tool, q), "kg"),
+        ("Gbar = J^-T G", task_space.task_gravity(arm, tool, q), "N"),
     ):
         console.print(f"{label} ({unit}):\n{np.array2string(np.asarray(value), precision=4)}", highlight=False)
 
 
 def _demo_actuators(arm: Robot, desired: object, folder: Path) -> None:
     """The demo's Section 3.6: Example 3.6-1's poles and the arm driven through DC motors with their electrics."""
-    from armdyn import actuators
+    from armdyn import actuators, control
     from armdyn.simulation import simulate as run
 
     console.rule("[bold]Section 3.6: Example 3.6-1 and the arm through its DC motors' electrics")
@@ -1602,7 +1606,7 @@ def _demo_actuators(arm: Robot, desired: object, folder: Path) -> None:
     console.print(f"Example 3.6-1: {formula}, poles {poles} (the book: -2.3, -8.7)")
     driven = actuators.representative_drives(arm, "dc")
     _activity.status("simulating the arm through its motors (compiled RK4 with the electrics)")
-    result = run(driven, actuators.DrivePID(20.0, 0.5, 20.0), desired, t_final=5.0, dt=1e-3)
+    result = run(driven, control.DrivePID(20.0, 0.5, 20.0), desired, t_final=5.0, dt=1e-3)
     _report(result)
     _drive_report(result, driven)
     result.plot(folder / "demo-drives.png", title="The two-link arm through DC motors: independent joint PID on "
@@ -1641,7 +1645,7 @@ def task(
     ),
 ) -> None:
     """The robot equation in task coordinates (Section 3.5): Mbar, Nbar and Gbar at a state, and cond J."""
-    from armdyn import cartesian
+    from armdyn import task_space
 
     target = _table_file(output, "--output") if output else None
     arm = _arm(name, strict)
@@ -1651,7 +1655,7 @@ def task(
     options = {} if damping is None else {"damping": damping}
     labels = {"position": ["x", "y", "z"], "pose": ["x", "y", "z", "wx", "wy", "wz"], "planar": ["x", "y"]}[coordinates]
     if len(labels) < arm.n:  # a redundant arm: Khatib's operational space
-        space = cartesian.operational_space(arm, chosen, start, rates, **options)
+        space = task_space.operational_space(arm, chosen, start, rates, **options)
         inertia, names = (
             space.Lambda,
             (
@@ -1661,15 +1665,15 @@ def task(
         )
         bias, gravity, heads = space.mu, space.p, ["coordinate", "mu", "p"]
     else:
-        inertia = cartesian.task_inertia(arm, chosen, start, **options)
-        bias = cartesian.task_nonlinear(arm, chosen, start, rates, **options)
-        gravity = cartesian.task_gravity(arm, chosen, start, **options)
+        inertia = task_space.task_inertia(arm, chosen, start, **options)
+        bias = task_space.task_nonlinear(arm, chosen, start, rates, **options)
+        gravity = task_space.task_gravity(arm, chosen, start, **options)
         names = (
             f"Mbar = J^-T M J^-1 ({arm.name}, {coordinates})",
             "Nbar = J^-T (N - M J^-1 Jdot qd) and Gbar = J^-T G",
         )
         heads = ["coordinate", "Nbar", "Gbar"]
-    condition = float(cartesian.condition_number(arm, chosen, start))
+    condition = float(task_space.condition_number(arm, chosen, start))
     sheets = [
         _Sheet(names[0], ["", *labels],
                [[label, *(_number(v, 6) for v in row)] for label, row in zip(labels, inertia, strict=True)]),

@@ -249,7 +249,7 @@ def _numeric_arm(arm: object, name: str = "arm") -> ArmModel:
     return arm
 
 
-def joint_ranges(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
+def excitation_ranges(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
     """The position range an excitation trajectory keeps each joint in: its limits, where finite.
 
     Parameters
@@ -387,7 +387,7 @@ class _Conditioning:
 
 
 def _limits_of(arm: ArmModel, velocity_limits: object) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    lower, upper = joint_ranges(arm)
+    lower, upper = excitation_ranges(arm)
     speed = None if velocity_limits is None else _per_joint(velocity_limits, "velocity_limits", arm.n, True)
     return lower, upper, speed
 
@@ -456,7 +456,7 @@ def excitation_trajectory(
     Automation 13(5), 1997; see FourierTrajectory) minimize the condition number of the base
     regressor stacked at ``samples`` equally spaced times over one period (the log of it, by
     scipy.optimize's SLSQP with its exact gradient), subject to each joint staying within its
-    position limits (``joint_ranges``) and, when given, |qd_i| <= velocity_limits_i, at
+    position limits (``excitation_ranges``) and, when given, |qd_i| <= velocity_limits_i, at
     CONSTRAINT_POINTS times per harmonic; the result is then checked at CHECK_POINTS times per
     harmonic and shrunk about q0 where needed, so the limits hold at all times. The search
     starts from random coefficients (``seed``) or from ``start``; the result is the better of

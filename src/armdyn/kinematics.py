@@ -17,13 +17,13 @@ from armdyn.model import ArmModel
 FRAMES = ("base", "tool")
 
 
-def check_arm(robot: object, numeric: bool = True, hint: str = "") -> None:
+def check_arm(arm: object, numeric: bool = True, hint: str = "") -> None:
     """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot), with numbers
     for parameters when ``numeric``.
 
     Parameters
     ----------
-    robot : object
+    arm : object
         What the caller was given as the arm.
     numeric : bool, optional
         Whether the arm's parameters must be numbers (default True): symbolic ones are refused.
@@ -35,10 +35,10 @@ def check_arm(robot: object, numeric: bool = True, hint: str = "") -> None:
     TypeError
         When ``robot`` is not an ArmModel, or is symbolic where numbers are needed.
     """
-    if not isinstance(robot, ArmModel):
-        raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(robot).__name__}")
-    if numeric and robot.is_symbolic:
-        raise TypeError(f"robot '{robot.name}' has symbolic (SymPy) parameters; numbers are needed here{hint}")
+    if not isinstance(arm, ArmModel):
+        raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(arm).__name__}")
+    if numeric and arm.is_symbolic:
+        raise TypeError(f"robot '{arm.name}' has symbolic (SymPy) parameters; numbers are needed here{hint}")
 
 
 def _numbers(value: object, name: str) -> np.ndarray:
@@ -54,12 +54,12 @@ def _numbers(value: object, name: str) -> np.ndarray:
     return array
 
 
-def link_index(robot: ArmModel, link: object) -> int:
+def link_index(arm: ArmModel, link: object) -> int:
     """The tool link for None, else ``link`` checked as an integer index of a link of the arm.
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     link : int or None
         A link index (an int or NumPy integer, not a bool or a float), or None for the tool link.
@@ -75,13 +75,13 @@ def link_index(robot: ArmModel, link: object) -> int:
         When ``link`` is not an integer or is out of range.
     """
     if link is None:
-        return robot.tool_link
+        return arm.tool_link
     if isinstance(link, (bool, np.bool_)) or not isinstance(link, (int, np.integer)):
         raise ModelError(
-            f"link must be an integer link index (0..{robot.n - 1}) or None, got {link!r} ({type(link).__name__})"
+            f"link must be an integer link index (0..{arm.n - 1}) or None, got {link!r} ({type(link).__name__})"
         )
-    if not 0 <= link < robot.n:
-        raise ModelError(f"link index {link} is out of range for '{robot.name}' (0..{robot.n - 1})")
+    if not 0 <= link < arm.n:
+        raise ModelError(f"link index {link} is out of range for '{arm.name}' (0..{arm.n - 1})")
     return int(link)
 
 
@@ -102,14 +102,14 @@ def check_frame(frame: object) -> None:
         raise ModelError(f"frame must be 'base' or 'tool', got {frame!r}")
 
 
-def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
+def as_state(arm: ArmModel, value: object, name: str = "q") -> np.ndarray:
     """A finite array of shape (..., n), or a ModelError naming the argument.
 
     Complex arrays stay complex: the Lagrange reference then takes complex-step derivatives.
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm, for n and its name in the message.
     value : array_like
         The state, (n,) or a batch (..., n).
@@ -128,17 +128,17 @@ def as_state(robot: ArmModel, value: object, name: str = "q") -> np.ndarray:
     TypeError
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
-    check_arm(robot)
-    return inputs.state(value, robot.n, name, f" for '{robot.name}'", complex_ok=True)
+    check_arm(arm)
+    return inputs.state(value, arm.n, name, f" for '{arm.name}'", complex_ok=True)
 
 
-def as_states(robot: ArmModel, q: object, **rates: object) -> tuple[np.ndarray, ...]:
+def as_states(arm: ArmModel, q: object, **rates: object) -> tuple[np.ndarray, ...]:
     """q and the named rates (qd, qdd) checked as by ``as_state``, and their batch shapes
     checked to broadcast together.
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -156,7 +156,7 @@ def as_states(robot: ArmModel, q: object, **rates: object) -> tuple[np.ndarray, 
         When a state is not numbers of shape (..., n), holds NaN or infinity, or when the batch
         shapes do not broadcast together (the message names each argument's shape).
     """
-    arrays = (as_state(robot, q), *(as_state(robot, value, name) for name, value in rates.items()))
+    arrays = (as_state(arm, q), *(as_state(arm, value, name) for name, value in rates.items()))
     try:
         np.broadcast_shapes(*(array.shape[:-1] for array in arrays))
     except ValueError:
@@ -243,7 +243,7 @@ def _joint_motion(revolute: bool, axis: np.ndarray, q: np.ndarray) -> np.ndarray
     return motion
 
 
-def joint_frames(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def joint_frames(arm: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(link frames T_i, joint frames) in the world, both (..., n, 4, 4).
 
     The joint frame of joint i is T_parent @ placement @ motion(q_i): its origin lies on
@@ -251,7 +251,7 @@ def joint_frames(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -271,23 +271,23 @@ def joint_frames(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    q = as_state(robot, q)
-    shape = q.shape[:-1] + (robot.n, 4, 4)
+    q = as_state(arm, q)
+    shape = q.shape[:-1] + (arm.n, 4, 4)
     links, joints = np.empty(shape, dtype=q.dtype), np.empty(shape, dtype=q.dtype)
-    for i, link in enumerate(robot.links):
-        parent = robot.base if link.parent < 0 else links[..., link.parent, :, :]
+    for i, link in enumerate(arm.links):
+        parent = arm.base if link.parent < 0 else links[..., link.parent, :, :]
         joint = link.joint
         joints[..., i, :, :] = parent @ joint.placement @ _joint_motion(joint.is_revolute, joint.axis, q[..., i])
         links[..., i, :, :] = joints[..., i, :, :] @ joint.frame_offset
     return links, joints
 
 
-def link_transforms(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def link_transforms(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """T_i(q), the pose of every link frame in the world, shape (..., n, 4, 4) (Appendix A).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -305,15 +305,15 @@ def link_transforms(robot: ArmModel, q: np.ndarray) -> np.ndarray:
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    return joint_frames(robot, q)[0]
+    return joint_frames(arm, q)[0]
 
 
-def tool_pose(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def tool_pose(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """The tool pose T_tool_link(q) @ tool, shape (..., 4, 4).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -331,15 +331,15 @@ def tool_pose(robot: ArmModel, q: np.ndarray) -> np.ndarray:
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    return link_transforms(robot, q)[..., robot.tool_link, :, :] @ robot.tool
+    return link_transforms(arm, q)[..., arm.tool_link, :, :] @ arm.tool
 
 
-def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def joint_axes(arm: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World axis z_j and origin o_j of every joint, each (..., n, 3).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     joints : numpy.ndarray
         The joint frames of ``joint_frames``, (..., n, 4, 4).
@@ -358,30 +358,30 @@ def joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndar
     TypeError
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
-    check_arm(robot)
+    check_arm(arm)
     joints = _numbers(joints, "joints")
-    if joints.ndim < 3 or joints.shape[-3:] != (robot.n, 4, 4):
-        raise ModelError(f"joints must have shape (..., {robot.n}, 4, 4) for '{robot.name}', got {joints.shape}")
-    return _joint_axes(robot, joints)
+    if joints.ndim < 3 or joints.shape[-3:] != (arm.n, 4, 4):
+        raise ModelError(f"joints must have shape (..., {arm.n}, 4, 4) for '{arm.name}', got {joints.shape}")
+    return _joint_axes(arm, joints)
 
 
-def _joint_axes(robot: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    axes = np.stack([link.joint.axis for link in robot.links])
+def _joint_axes(arm: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    axes = np.stack([link.joint.axis for link in arm.links])
     return np.einsum("...jab,jb->...ja", joints[..., :3, :3], axes), joints[..., :3, 3]
 
 
-def _target(robot: ArmModel, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+def _target(arm: ArmModel, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Which link, its pose (tool applied for the tool link), and the joint axes/origins."""
-    links, joints = joint_frames(robot, q)
-    index = link_index(robot, link)
-    pose = links[..., index, :, :] @ robot.tool if link is None else links[..., index, :, :]
-    z, o = _joint_axes(robot, joints)
+    links, joints = joint_frames(arm, q)
+    index = link_index(arm, link)
+    pose = links[..., index, :, :] @ arm.tool if link is None else links[..., index, :, :]
+    z, o = _joint_axes(arm, joints)
     return index, pose, z, o
 
 
-def _columns(robot: ArmModel, z: np.ndarray, o: np.ndarray, point: np.ndarray, moves: np.ndarray) -> np.ndarray:
+def _columns(arm: ArmModel, z: np.ndarray, o: np.ndarray, point: np.ndarray, moves: np.ndarray) -> np.ndarray:
     """Geometric Jacobian columns for a point: [z x (p - o); z] (revolute), [z; 0] (prismatic)."""
-    revolute = np.array([kind == "revolute" for kind in robot.kinds])
+    revolute = np.array([kind == "revolute" for kind in arm.kinds])
     linear = np.where(revolute[:, None], np.cross(z, point[..., None, :] - o), z)
     angular = np.where(revolute[:, None], z, 0.0)
     columns = np.concatenate([linear, angular], axis=-1) * moves[:, None]
@@ -394,7 +394,7 @@ def _in_frame(jac: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     return np.concatenate([rt @ jac[..., :3, :], rt @ jac[..., 3:, :]], axis=-2)
 
 
-def jacobian(robot: ArmModel, q: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
+def jacobian(arm: ArmModel, q: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
     """The geometric Jacobian J(q), (..., 6, n): [v; w] = J qd, linear rows first.
 
     Column j is [z_j x (p - o_j); z_j] for a revolute joint and [z_j; 0] for a prismatic
@@ -402,7 +402,7 @@ def jacobian(robot: ArmModel, q: np.ndarray, frame: str = "base", link: int | No
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -427,8 +427,8 @@ def jacobian(robot: ArmModel, q: np.ndarray, frame: str = "base", link: int | No
         numeric kinematics need numbers.
     """
     check_frame(frame)
-    index, pose, z, o = _target(robot, q, link)
-    jac = _columns(robot, z, o, pose[..., :3, 3], robot.ancestors[index])
+    index, pose, z, o = _target(arm, q, link)
+    jac = _columns(arm, z, o, pose[..., :3, 3], arm.ancestors[index])
     return _expressed(jac, pose, frame)
 
 
@@ -437,7 +437,7 @@ def _expressed(jac: np.ndarray, pose: np.ndarray, frame: str) -> np.ndarray:
 
 
 def jacobian_dot(
-    robot: ArmModel, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | None = None
+    arm: ArmModel, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | None = None
 ) -> np.ndarray:
     """dJ/dt for the Jacobian of ``jacobian`` (same point and frame), (..., 6, n).
 
@@ -447,7 +447,7 @@ def jacobian_dot(
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q, qd : array_like
         Joint positions and velocities, (n,) or a batch (..., n).
@@ -473,10 +473,10 @@ def jacobian_dot(
         numeric kinematics need numbers.
     """
     check_frame(frame)
-    q, qd = as_states(robot, q, qd=qd)
-    index, pose, z, o = _target(robot, q, link)
-    revolute = np.array([kind == "revolute" for kind in robot.kinds])
-    strict = robot.ancestors & ~np.eye(robot.n, dtype=bool)
+    q, qd = as_states(arm, q, qd=qd)
+    index, pose, z, o = _target(arm, q, link)
+    revolute = np.array([kind == "revolute" for kind in arm.kinds])
+    strict = arm.ancestors & ~np.eye(arm.n, dtype=bool)
     rates = z * (qd[..., :, None] * revolute[:, None])  # each joint's angular velocity contribution
     omega_parent = np.einsum("jk,...ka->...ja", strict.astype(float), rates)
     zdot = np.cross(omega_parent, z)
@@ -484,9 +484,9 @@ def jacobian_dot(
     lever = o[..., None, :, :] - o[..., :, None, :]  # [..., k, j] = o_j - o_k
     contrib = np.where(revolute[:, None, None], np.cross(z[..., :, None, :], lever), z[..., :, None, :])
     odot = np.einsum("jk,...kja,...k->...ja", strict.astype(float), contrib, qd)
-    moves = robot.ancestors[index]
+    moves = arm.ancestors[index]
     point = pose[..., :3, 3]
-    jac = _columns(robot, z, o, point, moves)
+    jac = _columns(arm, z, o, point, moves)
     pdot = np.einsum("...an,...n->...a", jac[..., :3, :], qd)
     lin = np.where(
         revolute[:, None],
@@ -503,14 +503,14 @@ def jacobian_dot(
     return _in_frame(corrected, pose[..., :3, :3])
 
 
-def twist_generators(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def twist_generators(arm: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(S_j, T_i): S_j the 4x4 world-frame generator of joint j, so that dT_i/dq_j = S_j T_i.
 
     S_j = [[z^, -z^ o], [0, 0]] for a revolute joint, [[0, z], [0, 0]] for a prismatic one.
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -530,9 +530,9 @@ def twist_generators(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.nda
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    links, joints = joint_frames(robot, q)
-    z, o = _joint_axes(robot, joints)
-    revolute = np.array([kind == "revolute" for kind in robot.kinds])
+    links, joints = joint_frames(arm, q)
+    z, o = _joint_axes(arm, joints)
+    revolute = np.array([kind == "revolute" for kind in arm.kinds])
     generators = np.zeros((*z.shape[:-1], 4, 4), dtype=z.dtype)
     zhat = _skew(z)
     generators[..., :3, :3] = np.where(revolute[:, None, None], zhat, 0.0)
@@ -540,7 +540,7 @@ def twist_generators(robot: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.nda
     return generators, links
 
 
-def link_transform_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def link_transform_derivatives(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """dT_i/dq_j as the book uses it (3.2.18), shape (..., n, n, 4, 4) indexed [i, j].
 
     dT_i/dq_j = S_j T_i when joint j moves link i, and 0 otherwise (see
@@ -548,7 +548,7 @@ def link_transform_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q : array_like
         Joint positions, (n,) or a batch (..., n).
@@ -566,6 +566,6 @@ def link_transform_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
         When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
-    generators, links = twist_generators(robot, q)
+    generators, links = twist_generators(arm, q)
     derivative = generators[..., None, :, :, :] @ links[..., :, None, :, :]
-    return derivative * robot.ancestors[:, :, None, None]
+    return derivative * arm.ancestors[:, :, None, None]

@@ -7,12 +7,12 @@ extremes are then refined by a bounded local optimizer (scipy.optimize, L-BFGS-B
 from the best samples. The report says for each bound how it was found.
 
 With ``check(..., task=output)`` the properties are evaluated in the coordinates y = h(q) of
-a task output of ``armdyn.cartesian`` (BOOK.md section 6): Mbar = J^-T M J^-1, Vmbar, Fbar,
+a task output of ``armdyn.task_space`` (BOOK.md section 6): Mbar = J^-T M J^-1, Vmbar, Fbar,
 Gbar and Wbar for a square output (m = n), Khatib's Lambda = (J M^-1 J^T)^-1 and mu_x for a
 redundant one (m < n). These grow without bound as J(q) approaches a singularity, so the
 bounds are computed over the regular part of the joint ranges only: the sampled
 configurations whose condition number of J is below ``max_condition`` (default
-DEFAULT_MAX_CONDITION = 1e3); the extremes are refined by SLSQP under the same constraint.
+REGION_MAX_CONDITION = 1e3); the extremes are refined by SLSQP under the same constraint.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from armdyn import actuators, cartesian, inputs
+from armdyn import actuators, inputs, task_space
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 
@@ -34,9 +34,9 @@ GROUPS = ("inertia", "coriolis", "skew", "friction", "gravity", "linearity", "pa
 """The groups of properties ``check`` evaluates; ``only`` picks some of them by name."""
 
 
-def _check_robot(robot: object) -> None:
-    if not isinstance(robot, Robot):
-        raise TypeError(f"robot must be an armdyn Robot, got {type(robot).__name__}")
+def _check_robot(arm: object) -> None:
+    if not isinstance(arm, Robot):
+        raise TypeError(f"robot must be an armdyn Robot, got {type(arm).__name__}")
 
 
 def _groups(only: object) -> set[str]:
@@ -302,9 +302,9 @@ class Report:
         )
 
 
-def _si(robot: Robot, revolute: str, prismatic: str) -> str:
+def _si(arm: Robot, revolute: str, prismatic: str) -> str:
     """The unit of a quantity of the arm: ``revolute`` for revolute joints, ``prismatic`` for prismatic ones."""
-    kinds = set(robot.kinds)
+    kinds = set(arm.kinds)
     if kinds == {"revolute"}:
         return revolute
     if kinds == {"prismatic"}:
@@ -313,7 +313,7 @@ def _si(robot: Robot, revolute: str, prismatic: str) -> str:
 
 
 def joint_ranges(
-    robot: Robot, limits: Sequence[tuple[float, float]] | None = None, prismatic_span: float = 1.0
+    arm: Robot, limits: Sequence[tuple[float, float]] | None = None, prismatic_span: float = 1.0
 ) -> list[tuple[float, float]]:
     """The range sampled for each joint (see the module docstring).
 
@@ -323,7 +323,7 @@ def joint_ranges(
 
     Parameters
     ----------
-    robot : Robot
+    arm : Robot
         The arm.
     limits : sequence of (float, float), optional
         (lower, upper) per joint, to use instead of the arm's own.
@@ -343,20 +343,20 @@ def joint_ranges(
     TypeError
         When ``robot`` is not a Robot.
     """
-    _check_robot(robot)
+    _check_robot(arm)
     span = inputs.vector(prismatic_span, "prismatic_span")
     if span.shape != (1,) or span[0] <= 0:
         raise ModelError(f"prismatic_span must be one positive finite number, got {prismatic_span!r}")
     prismatic_span = float(span[0])
     if limits is not None:
         pairs = inputs.state(limits, 2, "limits")
-        if pairs.shape != (robot.n, 2) or np.any(pairs[:, 0] > pairs[:, 1]):
+        if pairs.shape != (arm.n, 2) or np.any(pairs[:, 0] > pairs[:, 1]):
             raise ModelError(
-                f"limits must be {robot.n} finite (lower, upper) pairs with lower <= upper, got {pairs.tolist()}"
+                f"limits must be {arm.n} finite (lower, upper) pairs with lower <= upper, got {pairs.tolist()}"
             )
         return [(float(lo), float(hi)) for lo, hi in pairs]
     ranges = []
-    for (lower, upper), kind in zip(robot.qlim.T, robot.kinds, strict=True):
+    for (lower, upper), kind in zip(arm.qlim.T, arm.kinds, strict=True):
         if np.isfinite(lower) and np.isfinite(upper):
             ranges.append((float(lower), float(upper)))
         elif kind == "revolute":
@@ -391,7 +391,7 @@ def _unit(x: np.ndarray) -> np.ndarray:
     return x / norm if norm > 0 else x
 
 
-def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequence | None = None) -> tuple:
+def inertia_bounds(arm: Robot, samples: int = 400, seed: int = 0, limits: Sequence | None = None) -> tuple:
     """(mu1, mu2) with mu1 I <= M(q) <= mu2 I over the joint range (3.3.6).
 
     The smallest and largest eigenvalues of M(q) over random samples of the joint range,
@@ -399,7 +399,7 @@ def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequ
 
     Parameters
     ----------
-    robot : Robot
+    arm : Robot
         The arm.
     samples : int, optional
         Number of random joint configurations (default 400, at least 4).
@@ -421,7 +421,7 @@ def inertia_bounds(robot: Robot, samples: int = 400, seed: int = 0, limits: Sequ
     TypeError
         When ``robot`` is not a Robot, or ``samples`` or ``seed`` is not an integer.
     """
-    report = check(robot, samples=samples, seed=seed, limits=limits, only=("inertia",))
+    report = check(arm, samples=samples, seed=seed, limits=limits, only=("inertia",))
     return report.bounds["mu1"], report.bounds["mu2"]
 
 
@@ -429,7 +429,7 @@ MAX_SAMPLES = 1_000_000
 """The most random configurations ``check`` samples: beyond it a check takes minutes and the
 sampled extremes no longer change."""
 
-DEFAULT_MAX_CONDITION = 1e3
+REGION_MAX_CONDITION = 1e3
 """The condition number of J(q) below which ``check(..., task=...)`` keeps a sampled configuration
 by default: the task-space bounds hold over that regular region of the joint ranges."""
 
@@ -440,17 +440,17 @@ bounds from."""
 FD_TOLERANCE = 1e-6
 """The relative tolerance of the task-space skew-symmetry row, whose Mbar_dot (Lambda_dot) is a
 4th-order central difference along the motion (rounding-limited rows use TOLERANCE); both scale
-with cond J / DEFAULT_MAX_CONDITION where the region is worse conditioned than the default."""
+with cond J / REGION_MAX_CONDITION where the region is worse conditioned than the default."""
 
 
 def check(
-    robot: Robot,
+    arm: Robot,
     samples: int = 300,
     seed: int = 0,
     limits: Sequence[tuple[float, float]] | None = None,
     only: Sequence[str] | None = None,
     *,
-    task: cartesian.TaskOutput | None = None,
+    task: task_space.TaskOutput | None = None,
     max_condition: float | None = None,
 ) -> Report:
     """Evaluate the properties of Table 3.3.1 on ``robot`` (see the module docstring).
@@ -471,7 +471,7 @@ def check(
     friction ||Fbar|| <= v ||ydot|| + k and ydot^T Fbar >= 0; ||Gbar|| <= gb; and
     Mbar yddot + Nbar = Wbar phi with phi = robot.parameters(). For a redundant output
     (m < n), Khatib's Lambda = (J M^-1 J^T)^-1 takes the place of Mbar, Lambda_dot - 2 mu_x
-    (``cartesian.operational_coriolis``) that of Mbar_dot - 2 Vmbar and p = Jbar^T G that of
+    (``task_space.operational_coriolis``) that of Mbar_dot - 2 Vmbar and p = Jbar^T G that of
     Gbar; Vmbar, Fbar and Wbar are defined for square outputs only, so the Coriolis, friction
     and linearity rows are skipped with the reason in the notes. Passivity is not checked in
     task coordinates (the power ydot^T f equals qd^T tau). The units are the output's: kg and
@@ -483,7 +483,7 @@ def check(
 
     Parameters
     ----------
-    robot : Robot or armdyn.actuators.ActuatedArm
+    arm : Robot or armdyn.actuators.ActuatedArm
         The arm, or an arm with its drives.
     samples : int, optional
         Number of random joint configurations (default 300, from 4 to MAX_SAMPLES = 1,000,000).
@@ -494,14 +494,14 @@ def check(
     only : str or sequence of str, optional
         Restrict to some groups, for speed: one name or several of "inertia", "coriolis",
         "skew", "friction", "gravity", "linearity", "passivity" (GROUPS); default None, all.
-    task : armdyn.cartesian.TaskOutput, optional
+    task : armdyn.task_space.TaskOutput, optional
         Evaluate the properties in the coordinates of this output (ToolPosition, ToolPose,
         LinkPoint, PlanarPosition, Camera or Output, with m <= n rows); default None: in joint
         coordinates.
     max_condition : float, optional
         With ``task``: the condition number of J(q) below which a sampled configuration is
         kept (the region the bounds hold over); greater than 1, default
-        DEFAULT_MAX_CONDITION = 1e3. Only with ``task``.
+        REGION_MAX_CONDITION = 1e3. Only with ``task``.
 
     Returns
     -------
@@ -514,7 +514,7 @@ def check(
         When ``samples`` is below 4 or above MAX_SAMPLES, ``seed`` is negative, ``limits`` is not
         n finite (lower, upper) pairs with lower <= upper, ``only`` is empty or names a group not in
         GROUPS (the message lists them), or when the arm has symbolic parameters. With ``task``:
-        when it is not a task output of armdyn.cartesian or has more rows than the arm has
+        when it is not a task output of armdyn.task_space or has more rows than the arm has
         joints, when ``max_condition`` is not a finite number greater than 1 (or is given
         without ``task``), when fewer than MIN_REGULAR samples have cond J(q) below it (the
         ranges are singular or nearly so almost everywhere), or when the output cannot give what
@@ -525,20 +525,20 @@ def check(
         is neither a string nor a sequence of them.
     """
     notes = []
-    if isinstance(robot, actuators.ActuatedArm):
+    if isinstance(arm, actuators.ActuatedArm):
         notes.append(
             "evaluated on the reduced arm-plus-actuator model (BOOK.md section 7, inductance neglected) in joint "
             "torques: M' = M + R^-2 J_M, V' = Vm, F' = F + R^-1 F_M + R^-2 B qd, G' = G, input K' v"
         )
-        robot = robot.reduced_robot()
-    _check_robot(robot)
+        arm = arm.reduced_robot()
+    _check_robot(arm)
     samples = inputs.integer(samples, "samples", 4, MAX_SAMPLES, " (each sample is evaluated and refined)")
     seed = inputs.integer(seed, "seed", 0)
     groups = _groups(only)
-    n = robot.n
-    ranges = joint_ranges(robot, limits)
+    n = arm.n
+    ranges = joint_ranges(arm, limits)
     if task is not None or max_condition is not None:
-        report = _check_task(robot, task, max_condition, samples, seed, ranges, groups)
+        report = _check_task(arm, task, max_condition, samples, seed, ranges, groups)
         report.notes[:0] = notes
         return report
     box = [(lo, hi) for lo, hi in ranges]
@@ -549,8 +549,8 @@ def check(
     y = np.array([_unit(v) for v in rng.normal(size=(samples, n))])
     rows: list[Row] = []
     bounds: dict[str, float] = {}
-    torque = _si(robot, "N m", "N")
-    prismatic = [i for i, kind in enumerate(robot.kinds) if kind == "prismatic"]
+    torque = _si(arm, "N m", "N")
+    prismatic = [i for i, kind in enumerate(arm.kinds) if kind == "prismatic"]
     if prismatic:
         notes.append(
             "the arm has prismatic joints, so its bounds depend on q; they hold over the range "
@@ -558,37 +558,37 @@ def check(
         )
 
     if "inertia" in groups:
-        _inertia_rows(robot, q, box, rows, bounds)
+        _inertia_rows(arm, q, box, rows, bounds)
     if "coriolis" in groups or "skew" in groups:
-        _coriolis_rows(robot, q, x, y, box, rows, bounds, groups)
+        _coriolis_rows(arm, q, x, y, box, rows, bounds, groups)
     if "friction" in groups:
-        _friction_rows(robot, x, rng, rows, bounds)
+        _friction_rows(arm, x, rng, rows, bounds)
     if "gravity" in groups:
-        G = robot.gravity_vector(q)
+        G = arm.gravity_vector(q)
         norms = np.linalg.norm(G, axis=-1)
-        gb, how = _extreme(lambda p: float(np.linalg.norm(robot.gravity_vector(p))), q, norms, box, True)
+        gb, how = _extreme(lambda p: float(np.linalg.norm(arm.gravity_vector(p))), q, norms, box, True)
         bounds["gb"] = gb
         rows.append(Row("gravity bound", "||G(q)|| <= gb", bool(np.all(norms <= gb * (1 + 1e-12))), norms.max(), gb,
                         how, torque, "extreme", ("gb",)))  # fmt: skip
     if "linearity" in groups:
         qd, qdd = rng.uniform(-2, 2, (2, samples, n))
-        W = robot.regressor(q, qd, qdd)
-        tau = robot.inverse_dynamics(q, qd, qdd)
-        error = np.abs(W @ robot.parameters() - tau).max() / (np.abs(tau).max() + 1e-300)
+        W = arm.regressor(q, qd, qdd)
+        tau = arm.inverse_dynamics(q, qd, qdd)
+        error = np.abs(W @ arm.parameters() - tau).max() / (np.abs(tau).max() + 1e-300)
         rows.append(Row("linearity", "M qdd + Vm qd + F + G = W(q, qd, qdd) phi", error < 1e-10, error, None,
                         f"{samples} samples, recursive regressor", torque, "residual"))  # fmt: skip
     if "passivity" in groups:
-        _passivity_rows(robot, ranges, rows)
-    inertia = _si(robot, "kg m^2", "kg")
+        _passivity_rows(arm, ranges, rows)
+    inertia = _si(arm, "kg m^2", "kg")
     units = {"mu1": inertia, "mu2": inertia, "m1": inertia, "m2": inertia,
-             "vb": _si(robot, "N m/(rad/s)^2", "N/(m/s)^2"), "v": _si(robot, "N m/(rad/s)", "N/(m/s)"), "k": torque,
+             "vb": _si(arm, "N m/(rad/s)^2", "N/(m/s)^2"), "v": _si(arm, "N m/(rad/s)", "N/(m/s)"), "k": torque,
              "gb": torque}  # fmt: skip
-    return Report(robot.name, rows, bounds, ranges, notes, {key: unit for key, unit in units.items() if key in bounds})
+    return Report(arm.name, rows, bounds, ranges, notes, {key: unit for key, unit in units.items() if key in bounds})
 
 
-def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bounds: dict[str, float]) -> None:
-    unit = _si(robot, "kg m^2", "kg")
-    M = robot.inertia_matrix(q)
+def _inertia_rows(arm: Robot, q: np.ndarray, box: list, rows: list[Row], bounds: dict[str, float]) -> None:
+    unit = _si(arm, "kg m^2", "kg")
+    M = arm.inertia_matrix(q)
     scale = np.abs(M).max()
     asymmetry = np.abs(M - np.swapaxes(M, -1, -2)).max() / scale
     rows.append(Row("symmetry", "M(q) = M(q)^T", asymmetry < TOLERANCE, asymmetry, None, f"{len(q)} samples", unit,
@@ -596,10 +596,10 @@ def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bound
     eig = np.linalg.eigvalsh(0.5 * (M + np.swapaxes(M, -1, -2)))
 
     def smallest(p: np.ndarray) -> float:
-        return float(np.linalg.eigvalsh(robot.inertia_matrix(p))[0])
+        return float(np.linalg.eigvalsh(arm.inertia_matrix(p))[0])
 
     def largest(p: np.ndarray) -> float:
-        return float(np.linalg.eigvalsh(robot.inertia_matrix(p))[-1])
+        return float(np.linalg.eigvalsh(arm.inertia_matrix(p))[-1])
 
     mu1, how1 = _extreme(smallest, q, eig[:, 0], box, False)
     mu2, how2 = _extreme(largest, q, eig[:, -1], box, True)
@@ -611,7 +611,7 @@ def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bound
     ones = np.abs(M).sum(axis=-2).max(axis=-1)  # induced 1-norm: the largest column sum
 
     def norm1(p: np.ndarray) -> float:
-        return float(np.abs(robot.inertia_matrix(p)).sum(axis=0).max())
+        return float(np.abs(arm.inertia_matrix(p)).sum(axis=0).max())
 
     m1, _ = _extreme(norm1, q, ones, box, False)
     m2, how = _extreme(norm1, q, ones, box, True)
@@ -621,22 +621,22 @@ def _inertia_rows(robot: Robot, q: np.ndarray, box: list, rows: list[Row], bound
 
 
 def _coriolis_rows(
-    robot: Robot, q: np.ndarray, x: np.ndarray, y: np.ndarray, box: list, rows: list[Row], bounds: dict, groups: set
+    arm: Robot, q: np.ndarray, x: np.ndarray, y: np.ndarray, box: list, rows: list[Row], bounds: dict, groups: set
 ) -> None:
-    n = robot.n
-    torque = _si(robot, "N m", "N")
-    Vm = robot.coriolis_matrix(q, x)
-    V = robot.coriolis_vector(q, x)
+    n = arm.n
+    torque = _si(arm, "N m", "N")
+    Vm = arm.coriolis_matrix(q, x)
+    V = arm.coriolis_vector(q, x)
     scale = np.abs(Vm).max() + 1e-300
     if "coriolis" in groups:
-        stretched = robot.coriolis_vector(q, 2.5 * x)
+        stretched = arm.coriolis_vector(q, 2.5 * x)
         quadratic = np.abs(stretched - 6.25 * V).max() / (6.25 * np.abs(V).max() + 1e-300)
         rows.append(Row("quadratic", "V(q, s qd) = s^2 V(q, qd)", quadratic < TOLERANCE, quadratic, None,
                         f"{len(q)} samples, s = 2.5", torque, "residual"))  # fmt: skip
         norms = np.linalg.norm(Vm, ord=2, axis=(-2, -1))
 
         def vm_norm(p: np.ndarray) -> float:
-            return float(np.linalg.norm(robot.coriolis_matrix(p[:n], _unit(p[n:])), ord=2))
+            return float(np.linalg.norm(arm.coriolis_matrix(p[:n], _unit(p[n:])), ord=2))
 
         starts = np.hstack([q, x])
         vb, how = _extreme(vm_norm, starts, norms, box + [(-1.0, 1.0)] * n, True)
@@ -644,35 +644,35 @@ def _coriolis_rows(
         v_ratio = np.linalg.norm(V, axis=-1)  # |x| = 1
         holds = bool(np.all(v_ratio <= vb * (1 + 1e-9)) and np.all(norms <= vb * (1 + 1e-9)))
         rows.append(Row("Coriolis bound", "||V|| <= vb ||qd||^2 and ||Vm(q, qd)||_2 <= vb ||qd||", holds,
-                        norms.max(), vb, how + ", ||qd|| = 1", _si(robot, "N m/(rad/s)^2", "N/(m/s)^2"), "extreme",
+                        norms.max(), vb, how + ", ||qd|| = 1", _si(arm, "N m/(rad/s)^2", "N/(m/s)^2"), "extreme",
                         ("vb",)))  # fmt: skip
         symmetric = (
             np.abs(
-                np.einsum("...ij,...j->...i", robot.coriolis_matrix(q, x), y)
-                - np.einsum("...ij,...j->...i", robot.coriolis_matrix(q, y), x)
+                np.einsum("...ij,...j->...i", arm.coriolis_matrix(q, x), y)
+                - np.einsum("...ij,...j->...i", arm.coriolis_matrix(q, y), x)
             ).max()
             / scale
         )
         rows.append(Row("Christoffel symmetry", "Vm(q, x) y = Vm(q, y) x", symmetric < TOLERANCE, symmetric, None,
                         f"{len(q)} samples", torque, "residual"))  # fmt: skip
     if "skew" in groups:
-        S = robot.inertia_matrix_dot(q, x) - 2 * Vm
+        S = arm.inertia_matrix_dot(q, x) - 2 * Vm
         skew = np.abs(S + np.swapaxes(S, -1, -2)).max() / scale
         rows.append(Row("skew symmetry", "Mdot - 2 Vm is skew: x^T (Mdot - 2 Vm) x = 0", skew < TOLERANCE, skew, None,
                         f"{len(q)} samples", torque, "residual"))  # fmt: skip
 
 
-def _friction_rows(robot: Robot, x: np.ndarray, rng: np.random.Generator, rows: list[Row], bounds: dict) -> None:
+def _friction_rows(arm: Robot, x: np.ndarray, rng: np.random.Generator, rows: list[Row], bounds: dict) -> None:
     speeds = x * rng.uniform(0.0, 5.0, (len(x), 1))
-    F = robot.friction(speeds)
-    v = float(np.max(robot.viscous_friction, initial=0.0))
-    k = float(np.linalg.norm(np.abs(robot.coulomb_friction).max(axis=1)))
+    F = arm.friction(speeds)
+    v = float(np.max(arm.viscous_friction, initial=0.0))
+    k = float(np.linalg.norm(np.abs(arm.coulomb_friction).max(axis=1)))
     bounds["v"], bounds["k"] = v, k
     lhs = np.linalg.norm(F, axis=-1)
     rhs = v * np.linalg.norm(speeds, axis=-1) + k
     rows.append(Row("friction bound", "||Fv qd + Fd|| <= v ||qd|| + k", bool(np.all(lhs <= rhs * (1 + 1e-12) + 1e-15)),
                     float((lhs - rhs).max()), None, "v = max Fv_ii, k = ||max |Fd_i|||, on samples",
-                    _si(robot, "N m", "N"), "margin", ("v", "k")))  # fmt: skip
+                    _si(arm, "N m", "N"), "margin", ("v", "k")))  # fmt: skip
     power = np.einsum("...i,...i->...", speeds, F)
     rows.append(Row("dissipation", "qd^T F(qd) >= 0", bool(np.all(power >= -1e-12)), float(power.min()), 0.0,
                     f"{len(x)} samples", "W"))  # fmt: skip
@@ -727,43 +727,43 @@ stencil as far inside the regular region, relative to the distance to the singul
 _TINY = 1e-300
 
 
-def _task_output(task: object) -> cartesian.TaskOutput:
-    if not isinstance(task, cartesian.TaskOutput):
+def _task_output(task: object) -> task_space.TaskOutput:
+    if not isinstance(task, task_space.TaskOutput):
         raise ModelError(
-            "task must be a task output of armdyn.cartesian (ToolPosition, ToolPose, LinkPoint, PlanarPosition, "
+            "task must be a task output of armdyn.task_space (ToolPosition, ToolPose, LinkPoint, PlanarPosition, "
             f"Camera or Output), got {type(task).__name__}"
         )
     return task
 
 
 def _max_condition(value: object, task: object) -> float:
-    """The checked ``max_condition`` (DEFAULT_MAX_CONDITION for None)."""
+    """The checked ``max_condition`` (REGION_MAX_CONDITION for None)."""
     if task is None:
         raise ModelError("max_condition applies to task coordinates only: give task=... with it")
     if value is None:
-        return DEFAULT_MAX_CONDITION
+        return REGION_MAX_CONDITION
     limit = inputs.number(value, "max_condition")
-    ceiling = cartesian.DEFAULT_MAX_CONDITION
+    ceiling = task_space.DEFAULT_MAX_CONDITION
     if not 1.0 < limit <= ceiling:
         raise ModelError(
             f"max_condition must be greater than 1 (a condition number is at least 1) and at most {ceiling:g} "
-            f"(armdyn.cartesian's limit, above which J counts as singular), got {limit:g}"
+            f"(armdyn.task_space's limit, above which J counts as singular), got {limit:g}"
         )
     return limit
 
 
-def _task_units(output: cartesian.TaskOutput) -> tuple[dict[str, str], str | None]:
+def _task_units(output: task_space.TaskOutput) -> tuple[dict[str, str], str | None]:
     """The units of Mbar, f, vb and v in the output's coordinates, and a note where they need one."""
-    if isinstance(output, (cartesian.ToolPosition, cartesian.LinkPoint, cartesian.PlanarPosition)):
+    if isinstance(output, (task_space.ToolPosition, task_space.LinkPoint, task_space.PlanarPosition)):
         return {"inertia": "kg", "force": "N", "vb": "N/(m/s)^2", "v": "N/(m/s)"}, None
-    if isinstance(output, cartesian.Camera):
+    if isinstance(output, task_space.Camera):
         units = {"inertia": "J s^2/u^2", "force": "J/u", "vb": "J s^2/u^3", "v": "J s/u^2"}
         return units, (
             "u is the camera's image unit (that of its focal length, e.g. pixels): f = J^-T tau is work per "
             "image unit (J/u) and Mbar is in J s^2/u^2"
         )
     generic = dict.fromkeys(("inertia", "force", "vb", "v"), "output units")
-    if isinstance(output, cartesian.ToolPose):
+    if isinstance(output, task_space.ToolPose):
         return generic, (
             f"{output!r} mixes units: y = [p (m); orientation (rad)] with the rate [v (m/s); w (rad/s)] and "
             "f = [force (N); moment (N m)], so Mbar has blocks in kg, kg m and kg m^2: its values are labelled "
@@ -790,7 +790,7 @@ class _Region:
     """The regular samples of the joint ranges (cond J(q) < limit) and the task quantities on them."""
 
     robot: Robot
-    output: cartesian.TaskOutput
+    output: task_space.TaskOutput
     limit: float
     box: list[tuple[float, float]]
     q: np.ndarray
@@ -800,16 +800,16 @@ class _Region:
     def __post_init__(self) -> None:
         self.n, self.m = self.robot.n, self.J.shape[-2]
         self.square = self.m == self.n
-        self.guard = float(max(1e3 * self.limit, cartesian.DEFAULT_MAX_CONDITION))
-        scale = max(1.0, float(self.cond.max()) / DEFAULT_MAX_CONDITION)
+        self.guard = float(max(1e3 * self.limit, task_space.DEFAULT_MAX_CONDITION))
+        scale = max(1.0, float(self.cond.max()) / REGION_MAX_CONDITION)
         self.tolerance, self.fd_tolerance = TOLERANCE * scale, FD_TOLERANCE * scale
         self.symbol = "Mbar" if self.square else "Lambda"
 
     def inertia(self, q: np.ndarray) -> np.ndarray:
         """Mbar (square) or Lambda (redundant) at q, (n,) or (k, n)."""
         if self.square:
-            return cartesian.task_inertia(self.robot, self.output, q, max_condition=self.guard)
-        return cartesian.operational_inertia(self.robot, self.output, q, max_condition=self.guard)
+            return task_space.task_inertia(self.robot, self.output, q, max_condition=self.guard)
+        return task_space.operational_inertia(self.robot, self.output, q, max_condition=self.guard)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         return self.output.jacobian(self.robot, q)
@@ -817,7 +817,7 @@ class _Region:
     def margin(self, q: np.ndarray) -> float:
         """limit / cond J(q) - 1: positive inside the region, -1 where J is singular."""
         try:
-            return float(self.limit / cartesian.condition_number(self.robot, self.output, q) - 1.0)
+            return float(self.limit / task_space.condition_number(self.robot, self.output, q) - 1.0)
         except ModelError:
             return -1.0
 
@@ -901,7 +901,7 @@ class _Region:
         if self.square:
             inverse, A = np.linalg.solve(self.J, np.broadcast_to(np.eye(self.n), self.J.shape)), self.inertia(q)
         else:
-            space = cartesian.operational_space(robot, output, q, qd, max_condition=self.guard)
+            space = task_space.operational_space(robot, output, q, qd, max_condition=self.guard)
             inverse, A = space.Jbar, space.Lambda
         first = np.swapaxes(inverse, -1, -2) @ robot.coriolis_matrix(q, qd) @ inverse
         second = A @ output.jacobian_dot(robot, q, qd) @ inverse
@@ -909,7 +909,7 @@ class _Region:
 
 
 def _check_task(
-    robot: Robot,
+    arm: Robot,
     task: object,
     max_condition: object,
     samples: int,
@@ -920,22 +920,22 @@ def _check_task(
     """``check`` in the coordinates of a task output (see ``check``)."""
     limit = _max_condition(max_condition, task)
     output = _task_output(task)
-    n = robot.n
+    n = arm.n
     rng = np.random.default_rng(seed)
     low, high = np.array(ranges).T
     candidates = rng.uniform(low, high, (samples, n))
-    cond = np.asarray(cartesian.condition_number(robot, output, candidates))
+    cond = np.asarray(task_space.condition_number(arm, output, candidates))
     regular = cond < limit
     kept = int(regular.sum())
     if kept < MIN_REGULAR:
         raise ModelError(
-            f"only {kept} of {samples} sampled configurations of arm '{robot.name}' have cond J(q) below "
+            f"only {kept} of {samples} sampled configurations of arm '{arm.name}' have cond J(q) below "
             f"max_condition = {limit:g} for output {output!r}: the joint ranges are singular or nearly so almost "
             f"everywhere, and the task-space bounds need at least {MIN_REGULAR} regular samples; change the "
             "limits, raise max_condition or sample more"
         )
     q = candidates[regular]
-    region = _Region(robot, output, limit, [(lo, hi) for lo, hi in ranges], q, cond[regular], output.jacobian(robot, q))
+    region = _Region(arm, output, limit, [(lo, hi) for lo, hi in ranges], q, cond[regular], output.jacobian(arm, q))
     units, unit_note = _task_units(output)
     rows: list[Row] = []
     bounds: dict[str, float] = {}
@@ -946,7 +946,7 @@ def _check_task(
     ]
     if unit_note:
         notes.append(unit_note)
-    prismatic = [i for i, kind in enumerate(robot.kinds) if kind == "prismatic"]
+    prismatic = [i for i, kind in enumerate(arm.kinds) if kind == "prismatic"]
     if prismatic:
         notes.append(
             "the arm has prismatic joints, so its bounds depend on q; they hold over the range "
@@ -958,7 +958,7 @@ def _check_task(
         named = ", ".join(skipped[:-1]) + (" and " if len(skipped) > 1 else "") + (skipped[-1] if skipped else "")
         notes.append(
             f"{output!r} has m = {region.m} coordinates for n = {n} joints (redundant): the inertia rows are for "
-            "Khatib's Lambda = (J M^-1 J^T)^-1, the skew row for Lambda_dot - 2 mu_x (cartesian.operational_coriolis) "
+            "Khatib's Lambda = (J M^-1 J^T)^-1, the skew row for Lambda_dot - 2 mu_x (task_space.operational_coriolis) "
             "and the gravity row for p = Jbar^T G"
             + (
                 f"; the {named} rows are skipped: Vmbar, Fbar and Wbar are defined for square outputs "
@@ -971,17 +971,17 @@ def _check_task(
         _task_inertia_rows(region, rows, bounds, units["inertia"])
     if region.square and ("coriolis" in groups or "skew" in groups):
         _task_coriolis_rows(region, rng, rows, bounds, groups, units)
-        if "coriolis" in groups and isinstance(output, cartesian.ToolPose):
+        if "coriolis" in groups and isinstance(output, task_space.ToolPose):
             notes.append(
                 f"the rate of {output!r} is the twist [v; w], and w is not the derivative of any coordinates, so "
                 "Vmbar is not a Christoffel form: the Christoffel symmetry row is skipped (the skew row holds)"
             )
     elif "skew" in groups:
         qd = _units_rows(rng.normal(size=(kept, n)))
-        mu_x, _ = cartesian.operational_coriolis(robot, output, q, qd, max_condition=region.guard)
+        mu_x, _ = task_space.operational_coriolis(arm, output, q, qd, max_condition=region.guard)
         _skew_row(region, qd, mu_x, "mu_x", rows, units["force"])
     if region.square and "friction" in groups:
-        if np.any(robot.viscous_friction) or np.any(robot.coulomb_friction):
+        if np.any(arm.viscous_friction) or np.any(arm.coulomb_friction):
             _task_friction_rows(region, rng, rows, bounds, units)
         else:
             notes.append("the arm has no friction (F = 0, so Fbar = 0): the friction rows are skipped")
@@ -996,7 +996,7 @@ def _check_task(
         )
     kinds = {"mu1": "inertia", "mu2": "inertia", "m1": "inertia", "m2": "inertia", "vb": "vb", "v": "v", "k": "force",
              "gb": "force"}  # fmt: skip
-    return Report(robot.name, rows, bounds, ranges, notes, {key: units[kinds[key]] for key in bounds},
+    return Report(arm.name, rows, bounds, ranges, notes, {key: units[kinds[key]] for key in bounds},
                   task=repr(output), max_condition=limit)  # fmt: skip
 
 
@@ -1066,7 +1066,7 @@ def _task_coriolis_rows(
     y = _units_rows(rng.normal(size=(k, m)))
 
     def coriolis(p: np.ndarray, ydot: np.ndarray) -> np.ndarray:
-        return cartesian.task_coriolis(robot, output, p, _solve(J, ydot), max_condition=region.guard)
+        return task_space.task_coriolis(robot, output, p, _solve(J, ydot), max_condition=region.guard)
 
     Vx = coriolis(q, x)
     V = np.einsum("...ij,...j->...i", Vx, x)
@@ -1082,7 +1082,7 @@ def _task_coriolis_rows(
         def vm_norm(p: np.ndarray) -> float:
             qp = p[:n]
             qd = np.linalg.solve(region.jacobian(qp), _unit(p[n:]))
-            return float(np.linalg.norm(cartesian.task_coriolis(robot, output, qp, qd, max_condition=region.guard), 2))
+            return float(np.linalg.norm(task_space.task_coriolis(robot, output, qp, qd, max_condition=region.guard), 2))
 
         vb, how = region.refine(vm_norm, np.hstack([q, x]), norms, True, region.box + [(-1.0, 1.0)] * m)
         bounds["vb"] = vb
@@ -1090,7 +1090,7 @@ def _task_coriolis_rows(
         holds = bool(np.all(v_ratio <= vb * (1 + 1e-9)) and np.all(norms <= vb * (1 + 1e-9)))
         rows.append(Row("Coriolis bound", "||Vbar|| <= vb ||ydot||^2 and ||Vmbar(q, ydot)||_2 <= vb ||ydot||", holds,
                         float(norms.max()), vb, how + ", ||ydot|| = 1", units["vb"], "extreme", ("vb",)))  # fmt: skip
-    if "coriolis" in groups and not isinstance(output, cartesian.ToolPose):
+    if "coriolis" in groups and not isinstance(output, task_space.ToolPose):
         Vy = coriolis(q, y)
         symmetric = np.abs(np.einsum("...ij,...j->...i", Vx, y) - np.einsum("...ij,...j->...i", Vy, x)).max(axis=-1)
         other = np.maximum(np.abs(Vy).max(axis=(-2, -1)), region.parts(_solve(J, y)))
@@ -1107,7 +1107,7 @@ def _task_friction_rows(
     robot, output, q, J = region.robot, region.output, region.q, region.J
     k = len(q)
     speeds = _units_rows(rng.normal(size=(k, region.m))) * rng.uniform(0.0, 5.0, (k, 1))
-    F = cartesian.task_friction(robot, output, q, _solve(J, speeds), max_condition=region.guard)
+    F = task_space.task_friction(robot, output, q, _solve(J, speeds), max_condition=region.guard)
     viscous = robot.viscous_friction
     coulomb = float(np.linalg.norm(np.abs(robot.coulomb_friction).max(axis=1)))
 
@@ -1141,8 +1141,8 @@ def _task_gravity_row(region: _Region, rows: list[Row], bounds: dict, unit: str)
 
     def gravity(p: np.ndarray) -> np.ndarray:
         if region.square:
-            return cartesian.task_gravity(robot, output, p, max_condition=guard)
-        return cartesian.operational_space(robot, output, p, np.zeros_like(p), max_condition=guard).p
+            return task_space.task_gravity(robot, output, p, max_condition=guard)
+        return task_space.operational_space(robot, output, p, np.zeros_like(p), max_condition=guard).p
 
     norms = np.linalg.norm(gravity(region.q), axis=-1)
     gb, how = region.refine(lambda p: float(np.linalg.norm(gravity(p))), region.q, norms, True)
@@ -1156,10 +1156,10 @@ def _task_linearity_row(region: _Region, rng: np.random.Generator, rows: list[Ro
     robot, output, q, guard = region.robot, region.output, region.q, region.guard
     ydot, yddot = rng.uniform(-2, 2, (2, len(q), region.m))
     qd = _solve(region.J, ydot)
-    W = cartesian.task_regressor(robot, output, q, qd, yddot, max_condition=guard)
+    W = task_space.task_regressor(robot, output, q, qd, yddot, max_condition=guard)
     phi = robot.parameters()
     lhs = np.einsum("...ij,...j->...i", region.inertia(q), yddot)
-    lhs = lhs + cartesian.task_nonlinear(robot, output, q, qd, max_condition=guard)
+    lhs = lhs + task_space.task_nonlinear(robot, output, q, qd, max_condition=guard)
     scale = (np.abs(W) @ np.abs(phi)).max(axis=-1) + _TINY
     error = float((np.abs(W @ phi - lhs).max(axis=-1) / scale).max())
     rows.append(Row("linearity", "Mbar yddot + Nbar = Wbar(q, qd, yddot) phi, phi = arm.parameters()",

@@ -86,7 +86,7 @@ class Result:
     info: dict = field(default_factory=dict)
     energy_of: Callable[[], np.ndarray] | None = field(default=None, repr=False)
     task: object = None
-    """The task-space record (armdyn.cartesian.Tracking: y, y_d, error) under a task-space controller."""
+    """The task-space record (armdyn.control.Tracking: y, y_d, error) under a task-space controller."""
     drives: object = None
     """The drives' record (armdyn.actuators.DriveRecord: state, voltages, currents) of an arm with actuators."""
 
@@ -144,7 +144,7 @@ class Result:
 
         if self.task is None:
             raise ModelError("this run has no task-space record: simulate it under a task-space controller "
-                             "(armdyn.cartesian.ComputedTorque or OperationalSpaceControl)")  # fmt: skip
+                             "(armdyn.control.TaskComputedTorque or OperationalSpaceControl)")  # fmt: skip
         return plot_task(self, path, title)
 
     def to_csv(self, path: str | Path) -> None:
@@ -408,9 +408,10 @@ def _is_time(value: object) -> bool:
 
 def _users_own(item: object) -> bool:
     return item is not None and type(item).__module__ not in (
-        "armdyn.control",
-        "armdyn.trajectories",
-        "armdyn.cartesian",
+        "armdyn.control.joint",
+        "armdyn.control.task",
+        "armdyn.trajectories.joint",
+        "armdyn.trajectories.task",
     )
 
 
@@ -587,7 +588,10 @@ def simulate(
             PythonLoopWarning,
             stacklevel=2,
         )
-    described = {"controller": control.describe(controller), "trajectory": trajectories.describe(trajectory)}
+    described = {
+        "controller": control.describe_controller(controller),
+        "trajectory": trajectories.describe_trajectory(trajectory),
+    }
     if adaptive:
         result = _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method,
                            coulomb_smoothing, progress, setup)  # fmt: skip
@@ -1505,6 +1509,8 @@ def simulate_many(
         threads)  # fmt: skip
     times = np.arange(kept) * every * dt
     return Ensemble(arm, times, summaries, outcome, dict(zip(("q", "qd", "tau", "q_d"), samples, strict=True)) if kept
-                    else {}, {"dt": dt, "t_final": t_final, "after": after, "controller": control.describe(law),
-                             "trajectory": trajectories.describe(trajectory if not isinstance(trajectory, (list, tuple))
-                                                                 else trajectory[0])})  # fmt: skip
+                    else {}, {"dt": dt, "t_final": t_final, "after": after,
+                              "controller": control.describe_controller(law),
+                              "trajectory": trajectories.describe_trajectory(
+                                  trajectory if not isinstance(trajectory, (list, tuple)) else trajectory[0]),
+                              })  # fmt: skip

@@ -37,9 +37,9 @@ from armdyn.errors import ModelError
 from armdyn.robot import Robot
 from armdyn.simulation import SUMMARY_NAMES, Nominal, launch_many, law_table, nominal, vary_packed
 
-__all__ = ["Estimate", "Normal", "Spec", "Study", "StudyResult", "Uniform", "clopper_pearson", "runs_needed"]
+__all__ = ["Estimate", "Normal", "Requirement", "Study", "StudyResult", "Uniform", "clopper_pearson", "runs_needed"]
 
-BLOCK = 1000
+RUNS_PER_BLOCK = 1000
 """Runs per block: the unit of sampling, of work sent to a worker and of the files written."""
 
 
@@ -164,7 +164,7 @@ _PARAMETERS = ("payload", "mass_scale", "friction_scale")
 
 
 @dataclass(frozen=True)
-class Spec:
+class Requirement:
     """A requirement a run meets or not: clauses "quantity op bound" joined by "and".
 
     Quantities: a summary of ``simulate_many`` (final_error, max_error_after, rms_error, max_tau,
@@ -421,7 +421,7 @@ class StudyResult:
         One row per run: run id, sampled parameters, summaries, finished, and "holds".
     estimate : Estimate
         P(spec holds) with its interval.
-    spec : Spec
+    spec : Requirement
         The requirement.
     info : dict
         runs, seed, block, scheduler, blocks computed here (the others were read from ``out``),
@@ -430,7 +430,7 @@ class StudyResult:
 
     table: object
     estimate: Estimate
-    spec: Spec
+    spec: Requirement
     info: dict
 
     def plot(self, path: str | Path | None = None) -> object:
@@ -467,7 +467,7 @@ class Study:
         The law; its model (the belief) is the nominal arm unless the controller names one.
     trajectory : Sinusoid, Quintic or None, optional
         The desired path (None holds the start).
-    spec : str or Spec, optional
+    spec : str or Requirement, optional
         The requirement (default "max_error_after < 1e-3").
     t_final, dt, after : float, optional
         Each run's length, the RK4 step and the start of the "after" window (s); a spec's
@@ -496,7 +496,7 @@ class Study:
         arm: Robot,
         controller: object,
         trajectory: object = None,
-        spec: str | Spec = "max_error_after < 1e-3",
+        spec: str | Requirement = "max_error_after < 1e-3",
         t_final: float = 2.0,
         dt: float = 1e-3,
         after: float = 1.0,
@@ -505,14 +505,14 @@ class Study:
         mass_error: object = None,
         friction_error: object = None,
         start_error: object = None,
-        block: int = BLOCK,
+        block: int = RUNS_PER_BLOCK,
     ) -> None:
         from armdyn.simulation import _plant_buffers, _seconds, _steps, _unwrap
 
         if not isinstance(arm, Robot) or arm.is_symbolic:
             raise ModelError(f"arm must be a numeric armdyn Robot, got {type(arm).__name__}")
         n = arm.n
-        self.arm, self.spec = arm, spec if isinstance(spec, Spec) else Spec(spec)
+        self.arm, self.spec = arm, spec if isinstance(spec, Requirement) else Requirement(spec)
         self.t_final, self.dt = _seconds(t_final, dt)
         _steps(self.t_final, self.dt, n, False)  # refuses runs too long to record
         after = self.spec.after if self.spec.after is not None else inputs.number(after, "after", minimum=0.0)
@@ -658,8 +658,8 @@ def _study_folder(out: str | Path, study: Study, setup: Setup) -> Path:
     folder = Path(out)
     description = {"arm": study.arm.name, "spec": study.spec.text, "seed": setup.seed, "block": setup.block,
                    "runs": setup.runs, "t_final": study.t_final, "dt": study.dt, "after": study.after,
-                   "controller": control.describe(study.controller),
-                   "trajectory": trajectories.describe(study.trajectory),
+                   "controller": control.describe_controller(study.controller),
+                   "trajectory": trajectories.describe_trajectory(study.trajectory),
                    "distributions": {k: repr(v) for k, v in study.distributions.items()}}  # fmt: skip
     if folder.exists() and not folder.is_dir():
         raise ModelError(f"out {folder} is a file, not a folder")

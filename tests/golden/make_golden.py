@@ -51,8 +51,8 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
     """Scenario name -> zero-argument callable returning its arrays. The only place that uses armdyn."""
     import armdyn as ad
     from armdyn import actuators as act
-    from armdyn import cartesian as ct
     from armdyn import control
+    from armdyn import task_space as ts
     from armdyn import trajectories as tr
     from armdyn.simulation import PythonLoopWarning, plant_variants, simulate_many
     from armdyn.study import Normal, Study, Uniform
@@ -257,17 +257,19 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
     }
     cases |= {f"sim.{k}": v for k, v in others.items()}
 
-    # ----- task-space control (armdyn.cartesian) -----------------------------------------------------------------
+    # ----- task-space control (armdyn.control.task, armdyn.trajectories.task) -----------------------------------
     arm22 = ad.models.two_link_planar(1.0, 1.0, 2.0, 2.0)
     circle_joints = tr.CartesianCircle(2.0, 2.0, (2.0, 1.0), 0.5, 2.0)
-    y0 = ct.PlanarPosition().value(arm22, np.array([0.3, 1.2]))
+    y0 = ts.PlanarPosition().value(arm22, np.array([0.3, 1.2]))
     q_ur5, q_ur5_end = np.array([0.3, -1.2, 1.4, -1.6, -1.5, 0.4]), np.array([0.8, -1.0, 1.1, -1.3, -1.2, 0.9])
-    tip = ct.ToolPosition().value(puma(), qn)
+    tip = ts.ToolPosition().value(puma(), qn)
 
     task = {
         "two_link.ct_circle": lambda: simulate(
             arm22,
-            ct.ComputedTorque(ct.PlanarPosition(), ct.Circle((2.0, 1.0), 0.5, 2.0), 400.0, 40.0),
+            ad.control.TaskComputedTorque(
+                ts.PlanarPosition(), ad.trajectories.Circle((2.0, 1.0), 0.5, 2.0), 400.0, 40.0
+            ),
             circle_joints,
             0.3,
             q0=circle_joints(0.0)[0] + [0.02, -0.02],
@@ -275,15 +277,21 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
         ),
         "two_link.ct_line": lambda: simulate(
             arm22,
-            ct.ComputedTorque(ct.PlanarPosition(), ct.Line(y0, y0 + [0.3, -0.2], 0.2), 400.0, 40.0),
+            ad.control.TaskComputedTorque(
+                ts.PlanarPosition(), ad.trajectories.Line(y0, y0 + [0.3, -0.2], 0.2), 400.0, 40.0
+            ),
             None,
             0.3,
             q0=[0.3, 1.2],
         ),
         "two_link.ct_line_model": lambda: simulate(
             arm22.with_payload(0.5),
-            ct.ComputedTorque(
-                ct.PlanarPosition(), ct.Line(y0, y0 + [0.2, 0.1], 0.2, start_time=0.05), 300.0, 30.0, model=arm22
+            ad.control.TaskComputedTorque(
+                ts.PlanarPosition(),
+                ad.trajectories.Line(y0, y0 + [0.2, 0.1], 0.2, start_time=0.05),
+                300.0,
+                30.0,
+                model=arm22,
             ),
             None,
             0.3,
@@ -291,9 +299,9 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
         ),
         "ur5.ct_poseline": lambda: simulate(
             ur5().without_friction(),
-            ct.ComputedTorque(
-                ct.ToolPose(),
-                ct.PoseLine(ur5().tool_pose(q_ur5), ur5().tool_pose(q_ur5_end), 0.2, start_time=0.05),
+            ad.control.TaskComputedTorque(
+                ts.ToolPose(),
+                ad.trajectories.PoseLine(ur5().tool_pose(q_ur5), ur5().tool_pose(q_ur5_end), 0.2, start_time=0.05),
                 400.0,
                 40.0,
             ),
@@ -303,8 +311,14 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
         ),
         "puma560.osc_line": lambda: simulate(
             puma(),
-            ct.OperationalSpaceControl(
-                ct.ToolPosition(), ct.Line(tip, tip + [0.05, -0.03, 0.02], 0.2), 400.0, 40.0, qn, 100.0, 20.0
+            ad.control.OperationalSpaceControl(
+                ts.ToolPosition(),
+                ad.trajectories.Line(tip, tip + [0.05, -0.03, 0.02], 0.2),
+                400.0,
+                40.0,
+                qn,
+                100.0,
+                20.0,
             ),
             None,
             0.3,
@@ -312,9 +326,9 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
         ),
         "puma560.osc_line_rk45": lambda: simulate(
             puma(),
-            ct.OperationalSpaceControl(
-                ct.ToolPosition(),
-                ct.Line(tip, tip + [0.0, 0.05, 0.0], 0.15),
+            ad.control.OperationalSpaceControl(
+                ts.ToolPosition(),
+                ad.trajectories.Line(tip, tip + [0.0, 0.05, 0.0], 0.15),
                 400.0,
                 40.0,
                 lambda t: qn + 0.1 * np.sin(2 * t),
@@ -347,37 +361,47 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
 
     q02 = np.full(2, 0.2)
     drives = {
-        "puma560_dc.drivepid": lambda: simulate(act.puma560(), act.DrivePID(20.0, 0.5), sin6, 0.1, q0=qn),
-        "puma560_dc.drivepid_ki_none": lambda: simulate(act.puma560(), act.DrivePID(20.0, 0.5, 20.0), None, 0.1, q0=qn),
-        "puma560_motor_drives.drivepid": lambda: simulate(custom_puma(), act.DrivePID(20.0, 0.5), sin6, 0.1, q0=qn),
+        "puma560_dc.drivepid": lambda: simulate(
+            act.puma560_with_drives(), ad.control.DrivePID(20.0, 0.5), sin6, 0.1, q0=qn
+        ),
+        "puma560_dc.drivepid_ki_none": lambda: simulate(
+            act.puma560_with_drives(), ad.control.DrivePID(20.0, 0.5, 20.0), None, 0.1, q0=qn
+        ),
+        "puma560_motor_drives.drivepid": lambda: simulate(
+            custom_puma(), ad.control.DrivePID(20.0, 0.5), sin6, 0.1, q0=qn
+        ),
         "puma560_motor_drives.current_ct": lambda: simulate(
-            custom_puma(), act.CurrentComputedTorque(100.0, 20.0, bandwidth=1e3), sin6, 0.1, q0=qn
+            custom_puma(), ad.control.CurrentComputedTorque(100.0, 20.0, bandwidth=1e3), sin6, 0.1, q0=qn
         ),
         "two_link_dc.drivepid": lambda: simulate(
-            representative("two_link_planar", "dc"), act.DrivePID(20.0, 0.5, 20.0), sin2, 0.3, q0=q2
+            representative("two_link_planar", "dc"), ad.control.DrivePID(20.0, 0.5, 20.0), sin2, 0.3, q0=q2
         ),
         "two_link_dc.current_ct": lambda: simulate(
-            representative("two_link_planar", "dc"), act.CurrentComputedTorque(100.0, 20.0, 2.0), quintic2, 0.3, q0=q2
+            representative("two_link_planar", "dc"),
+            ad.control.CurrentComputedTorque(100.0, 20.0, 2.0),
+            quintic2,
+            0.3,
+            q0=q2,
         ),
         "two_link_flexible.drivepid": lambda: simulate(
             representative("two_link_planar", "flexible"),
-            act.DrivePID(20.0, 0.5, 10.0),
+            ad.control.DrivePID(20.0, 0.5, 10.0),
             tr.Sinusoid(0.1, 0.5, 0.0, q02),
             0.3,
             q0=q02,
         ),
         "polar_rp_hydraulic.drivepid": lambda: simulate(
             representative("polar_rp", "hydraulic"),
-            act.DrivePID(0.1, 0.002, 0.05),
+            ad.control.DrivePID(0.1, 0.002, 0.05),
             tr.Sinusoid(0.1, 0.5, 0.0, q02),
             0.3,
             q0=q02,
         ),
         "scara_hydraulic.drivepid_none": lambda: simulate(
-            representative("scara", "hydraulic"), act.DrivePID(0.1, 0.0, 0.1), None, 0.1, q0=np.full(4, 0.2)
+            representative("scara", "hydraulic"), ad.control.DrivePID(0.1, 0.0, 0.1), None, 0.1, q0=np.full(4, 0.2)
         ),
         "two_link_flexible.act_simulate_step": lambda: simulate_drives(
-            representative("two_link_planar", "flexible"), act.DrivePID(20.0, 0.5), sin2, 0.2, q0=q2, step=1e-4
+            representative("two_link_planar", "flexible"), ad.control.DrivePID(20.0, 0.5), sin2, 0.2, q0=q2, step=1e-4
         ),
     }
 
@@ -555,7 +579,7 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
     for name, make, seed in (("two_link", two_link, 1), ("puma560", puma, 2), ("ur5", ur5, 3)):
         cases |= {f"dyn.{name}.{k}": v for k, v in dynamics(make, seed).items()}
 
-    def task_quantities(make: Callable[[], ad.Robot], output: ct.TaskOutput, seed: int) -> dict[str, np.ndarray]:
+    def task_quantities(make: Callable[[], ad.Robot], output: ts.TaskOutput, seed: int) -> dict[str, np.ndarray]:
         arm = make()
         rng = np.random.default_rng(seed)
         q = (
@@ -566,25 +590,25 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
         qd = rng.uniform(-1, 1, (8, arm.n))
         ydd = rng.uniform(-1, 1, (8, output.value(arm, q[0]).shape[-1]))
         return {
-            "Mbar": ct.task_inertia(arm, output, q),
-            "Vmbar": ct.task_coriolis(arm, output, q, qd),
-            "Gbar": ct.task_gravity(arm, output, q),
-            "Nbar": ct.task_nonlinear(arm, output, q, qd),
-            "Fbar": ct.task_friction(arm, output, q, qd),
-            "Wbar": ct.task_regressor(arm, output, q, qd, ydd),
-            "f": ct.task_inverse_dynamics(arm, output, q, qd, ydd),
-            "yddot": ct.task_forward_dynamics(arm, output, q, qd, ydd),
-            "cond": ct.condition_number(arm, output, q),
+            "Mbar": ts.task_inertia(arm, output, q),
+            "Vmbar": ts.task_coriolis(arm, output, q, qd),
+            "Gbar": ts.task_gravity(arm, output, q),
+            "Nbar": ts.task_nonlinear(arm, output, q, qd),
+            "Fbar": ts.task_friction(arm, output, q, qd),
+            "Wbar": ts.task_regressor(arm, output, q, qd, ydd),
+            "f": ts.task_inverse_dynamics(arm, output, q, qd, ydd),
+            "yddot": ts.task_forward_dynamics(arm, output, q, qd, ydd),
+            "cond": ts.condition_number(arm, output, q),
         }
 
     def operational(seed: int) -> dict[str, np.ndarray]:
-        arm, output = puma(), ct.ToolPosition()
+        arm, output = puma(), ts.ToolPosition()
         rng = np.random.default_rng(seed)
         q, qd = qn + rng.uniform(-0.3, 0.3, (8, 6)), rng.uniform(-1, 1, (8, 6))
-        space = ct.operational_space(arm, output, q, qd)
-        mu, p = ct.operational_coriolis(arm, output, q, qd)
+        space = ts.operational_space(arm, output, q, qd)
+        mu, p = ts.operational_coriolis(arm, output, q, qd)
         return {
-            "Lambda": ct.operational_inertia(arm, output, q),
+            "Lambda": ts.operational_inertia(arm, output, q),
             "space.Lambda": space.Lambda,
             "space.Jbar": space.Jbar,
             "space.mu": space.mu,
@@ -596,8 +620,8 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
         }
 
     cases |= {
-        "taskdyn.two_link.planar_position": lambda: task_quantities(two_link, ct.PlanarPosition(), 4),
-        "taskdyn.puma560.tool_pose": lambda: task_quantities(puma, ct.ToolPose(), 5),
+        "taskdyn.two_link.planar_position": lambda: task_quantities(two_link, ts.PlanarPosition(), 4),
+        "taskdyn.puma560.tool_pose": lambda: task_quantities(puma, ts.ToolPose(), 5),
         "taskdyn.puma560.operational_space": lambda: operational(6),
     }
     return cases

@@ -243,12 +243,12 @@ def _motor(drive: object, joint: str) -> SymbolicMotor:
     )
 
 
-def checked_motors(robot: Robot, drives: object) -> list[SymbolicMotor]:
+def checked_motors(arm: Robot, drives: object) -> list[SymbolicMotor]:
     """The drives as SymbolicMotors, one per joint of an arm without motors (BOOK.md section 7).
 
     Parameters
     ----------
-    robot : Robot
+    arm : Robot
         The arm.
     drives : sequence
         One drive per joint: DCMotor (rigid), SymbolicMotor, or a dict of SymbolicMotor's fields.
@@ -264,8 +264,8 @@ def checked_motors(robot: Robot, drives: object) -> list[SymbolicMotor]:
         When the arm has motors of its own (Jm or G set), ``drives`` is not a sequence of as many
         drives as joints, or a drive is hydraulic, flexible, or not a drive at all.
     """
-    where = f"robot '{robot.name}'"
-    motors = [link.name for link in robot.links if link.motor_inertia != 0 or link.gear_ratio != 1]
+    where = f"robot '{arm.name}'"
+    motors = [link.name for link in arm.links if link.motor_inertia != 0 or link.gear_ratio != 1]
     if motors:
         raise ModelError(
             f"{where} already has motors (Jm or G) on joints {motors}: with drives they would be counted twice. "
@@ -274,9 +274,9 @@ def checked_motors(robot: Robot, drives: object) -> list[SymbolicMotor]:
         )
     if isinstance(drives, (str, bytes, Mapping)) or not isinstance(drives, Sequence):
         raise ModelError(f"drives must be a sequence of drives, one per joint, got {reprlib.repr(drives)}")
-    if len(drives) != robot.n:
-        raise ModelError(f"{where} has {robot.n} joints {robot.joint_names}; {len(drives)} drives were given")
-    return [_motor(drive, link.name) for link, drive in zip(robot.links, drives, strict=True)]
+    if len(drives) != arm.n:
+        raise ModelError(f"{where} has {arm.n} joints {arm.joint_names}; {len(drives)} drives were given")
+    return [_motor(drive, link.name) for link, drive in zip(arm.links, drives, strict=True)]
 
 
 def _rotor_friction(qd: sympy.Symbol, motor: SymbolicMotor) -> sympy.Expr:
@@ -695,7 +695,7 @@ class CompiledActuatedForm:
 
 
 def derive_actuated(
-    robot: Robot | ActuatedArm,
+    arm: Robot | ActuatedArm,
     drives: Sequence[object] | None = None,
     method: str = "auto",
     friction: str | bool = True,
@@ -706,7 +706,7 @@ def derive_actuated(
 
     Parameters
     ----------
-    robot : Robot or ActuatedArm
+    arm : Robot or ActuatedArm
         The arm without motors of its own (Jm = 0, G = 1: its friction is the joint friction
         F), or an ``armdyn.actuators.ActuatedArm``, which carries its drives.
     drives : sequence, optional
@@ -745,13 +745,13 @@ def derive_actuated(
         raise ModelError(
             "derive_actuated needs the joint-space derivation: call armdyn.symbolic.derive(robot, drives=...)"
         )
-    if isinstance(robot, ActuatedArm):
+    if isinstance(arm, ActuatedArm):
         if drives is not None:
             raise ModelError("derive: an ActuatedArm carries its drives; drives=... is for a Robot")
-        robot, drives = robot.robot, robot.drives
-    elif not isinstance(robot, Robot):
-        raise TypeError(f"robot must be an armdyn Robot or ActuatedArm, got {type(robot).__name__}")
+        arm, drives = arm.robot, arm.drives
+    elif not isinstance(arm, Robot):
+        raise TypeError(f"robot must be an armdyn Robot or ActuatedArm, got {type(arm).__name__}")
     elif drives is None:
-        raise ModelError(f"derive: robot '{robot.name}' needs drives=[...], one per joint")
-    motors = checked_motors(robot, drives)
-    return ActuatedClosedForm(joint_space(robot, method, friction, progress), motors)
+        raise ModelError(f"derive: robot '{arm.name}' needs drives=[...], one per joint")
+    motors = checked_motors(arm, drives)
+    return ActuatedClosedForm(joint_space(arm, method, friction, progress), motors)

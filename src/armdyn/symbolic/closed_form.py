@@ -21,20 +21,20 @@ from armdyn.symbolic.derive import Derivation, derive_raw
 
 if TYPE_CHECKING:
     from armdyn.actuators import ActuatedArm
-    from armdyn.cartesian import TaskOutput
     from armdyn.symbolic.actuated import ActuatedClosedForm
     from armdyn.symbolic.task import TaskClosedForm
+    from armdyn.task_space import TaskOutput
 
 _DERIVED = 0.5  # the share of derive's progress taken by the derivation, before the conversion to SymPy
 _FACTOR_LIMIT = 4  # joints up to which common factors are taken out (a2 m2 (a1 c2 + a2)); slow for six
 
 
-def robot_symbols(robot: Robot) -> dict[str, sympy.Symbol]:
+def robot_symbols(arm: Robot) -> dict[str, sympy.Symbol]:
     """The SymPy symbols among the arm's parameters, by name (they keep their assumptions).
 
     Parameters
     ----------
-    robot : Robot
+    arm : Robot
         The arm: its gravity, mass properties, joint placements and frame offsets are searched.
 
     Returns
@@ -43,8 +43,8 @@ def robot_symbols(robot: Robot) -> dict[str, sympy.Symbol]:
         Each symbol found, by name.
     """
     found: dict[str, sympy.Symbol] = {}
-    values = [robot.gravity]
-    for link in robot.links:
+    values = [arm.gravity]
+    for link in arm.links:
         values += [link.inertial.mass, link.inertial.com, link.inertial.inertia]
         values += [link.joint.placement, link.joint.frame_offset]
     for value in values:
@@ -561,7 +561,7 @@ def _plain(name: str) -> str:
 
 
 def derive(
-    robot: Robot | ActuatedArm,
+    arm: Robot | ActuatedArm,
     method: str = "auto",
     friction: str | bool = True,
     progress: Callable[[float, str], object] | None = None,
@@ -587,7 +587,7 @@ def derive(
 
     Parameters
     ----------
-    robot : Robot or ActuatedArm
+    arm : Robot or ActuatedArm
         The arm; its parameters may be numbers, SymPy expressions, or both. An
         ``armdyn.actuators.ActuatedArm`` gives the closed form of the arm with its drives.
     method : str, optional
@@ -605,7 +605,7 @@ def derive(
         "Christoffel symbols", "Coriolis matrix", "tau", then "SymPy form of M" and so
         on, and "task space" with ``output``), last with (1.0, "done").
     output : TaskOutput, optional
-        An output y = h(q) of ``armdyn.cartesian`` (ToolPosition, LinkPoint,
+        An output y = h(q) of ``armdyn.task_space`` (ToolPosition, LinkPoint,
         PlanarPosition or Camera, with as many rows as the arm has joints): the result is
         then the equation in its coordinates, Mbar yddot + Nbar = f (BOOK.md section 6).
         Default None, the joint-space equation.
@@ -634,17 +634,17 @@ def derive(
     """
     from armdyn.actuators import ActuatedArm
 
-    if drives is not None or isinstance(robot, ActuatedArm):
+    if drives is not None or isinstance(arm, ActuatedArm):
         from armdyn.symbolic.actuated import derive_actuated
 
         if output is not None:
             raise ModelError("derive: task coordinates (output=...) of an arm with drives are not supported")
-        return derive_actuated(robot, drives, method, friction, progress, derive)
+        return derive_actuated(arm, drives, method, friction, progress, derive)
     chosen = "recursive" if method == "auto" else method
     if output is not None:
         from armdyn.symbolic.task import TaskClosedForm, check_output
 
-        check_output(robot, output)
+        check_output(arm, output)
     share = 1.0 if output is None else 0.8  # of the progress, the joint-space form's share
     inner = outer = None
     if progress is not None:
@@ -657,8 +657,8 @@ def derive(
             if stage != "done" or output is None:
                 progress(share * fraction, stage)
 
-    raw = derive_raw(robot, chosen, friction, inner)
-    form = ClosedForm(robot, raw, friction, chosen, outer)
+    raw = derive_raw(arm, chosen, friction, inner)
+    form = ClosedForm(arm, raw, friction, chosen, outer)
     if output is None:
         return form
     if progress is not None:

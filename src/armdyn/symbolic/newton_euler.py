@@ -997,14 +997,14 @@ def checked_entry(function: GeneratedFunction, n: int) -> str:
 LARGEST = 1e15
 
 
-def generate_code(robot: object, functions: Sequence[str] = FUNCTIONS) -> GeneratedCode:
+def generate_code(arm: object, functions: Sequence[str] = FUNCTIONS) -> GeneratedCode:
     """Generated code for the robot equation of a numeric arm, by a customized Newton-Euler recursion
     (Khalil and Kleinfinger 1987; the module docstring): tau, M, G and N as straight-line code whose
     cost grows linearly with the joints (M: with their number of pairs).
 
     Parameters
     ----------
-    robot : Robot
+    arm : Robot
         An arm with numeric parameters (``Robot.packed`` not None).
     functions : sequence of str, optional
         Which of "tau", "M", "G", "N", "Vm" (the Christoffel-consistent Coriolis matrix) and "Wb" (the
@@ -1021,14 +1021,14 @@ def generate_code(robot: object, functions: Sequence[str] = FUNCTIONS) -> Genera
     armdyn.ModelError
         When the arm has symbolic parameters or a function name is unknown.
     """
-    packed = getattr(robot, "packed", None)
+    packed = getattr(arm, "packed", None)
     if packed is None:
-        raise ModelError(f"generate_code needs an arm with numeric parameters; '{getattr(robot, 'name', robot)}' "
+        raise ModelError(f"generate_code needs an arm with numeric parameters; '{getattr(arm, 'name', arm)}' "
                          "has symbols (use derive for closed forms in symbols)")  # fmt: skip
     names = [functions] if isinstance(functions, str) else list(functions)
     unknown = [f for f in names if f not in ARGUMENTS]
     if unknown or not names:
         raise ModelError(f"functions must be some of {tuple(ARGUMENTS)}, got {names}")
-    base = base_parameters(robot, at_rest=True) if "Wb" in names else None
+    base = base_parameters(arm, at_rest=True) if "Wb" in names else None
     columns = () if base is None else [int(c) for c in base.columns]
-    return GeneratedCode(robot, {name: generate(packed, name, columns) for name in names}, base)
+    return GeneratedCode(arm, {name: generate(packed, name, columns) for name in names}, base)

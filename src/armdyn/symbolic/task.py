@@ -7,7 +7,7 @@ Jacobian J = dh/dq (m = n, ydot = J qd), the arm obeys Mbar yddot + Nbar = f wit
     Gbar  = J^-T G,   Fbar = J^-T F,     Nbar  = Vmbar ydot + Fbar + Gbar,
 
 all written here in the joint symbols q1.., qd1.. (ydot = J qd). The outputs are the
-point outputs of ``armdyn.cartesian``: ToolPosition, LinkPoint, PlanarPosition, and
+point outputs of ``armdyn.task_space``: ToolPosition, LinkPoint, PlanarPosition, and
 Camera (the pinhole projection y = f [x_c / z_c, y_c / z_c] of the tool point).
 
 The algebra runs on the trigonometric polynomials of ``armdyn.symbolic.algebra``. With
@@ -35,13 +35,13 @@ import symengine as se
 import sympy
 
 from armdyn import inputs, kinematics
-from armdyn.cartesian import Camera, LinkPoint, PlanarPosition, TaskOutput, ToolPose, ToolPosition
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic import notebook
 from armdyn.symbolic.algebra import number, transform
 from armdyn.symbolic.codegen import count_operations
 from armdyn.symbolic.derive import _Arm
+from armdyn.task_space import Camera, LinkPoint, PlanarPosition, TaskOutput, ToolPose, ToolPosition
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -55,12 +55,12 @@ _TRIGSIMP_LIMIT = 16  # operations in a numerator up to which SymPy's trigsimp i
 _MATRICES = ("h", "J", "J_inv", "Mbar", "Vmbar", "Gbar", "Fbar", "Nbar")
 
 
-def check_output(robot: Robot, output: object) -> TaskOutput:
+def check_output(arm: Robot, output: object) -> TaskOutput:
     """``output`` checked as a point output with a square Jacobian for ``robot`` (BOOK.md section 6).
 
     Parameters
     ----------
-    robot : Robot
+    arm : Robot
         The arm.
     output : object
         The output given to ``derive``.
@@ -83,13 +83,13 @@ def check_output(robot: Robot, output: object) -> TaskOutput:
         )
     if not isinstance(output, POINT_OUTPUTS):
         kind = repr(output) if isinstance(output, TaskOutput) else type(output).__name__
-        raise ModelError(f"closed-form task dynamics support the outputs of armdyn.cartesian {_SUPPORTED}; got {kind}")
+        raise ModelError(f"closed-form task dynamics support the outputs of armdyn.task_space {_SUPPORTED}; got {kind}")
     if isinstance(output, LinkPoint):
-        kinematics.link_index(robot, output.link)
+        kinematics.link_index(arm, output.link)
     m = 2 if isinstance(output, Camera) else len(output._rows)
-    if m != robot.n:
+    if m != arm.n:
         raise ModelError(
-            f"output {output!r} has {m} rows but arm '{robot.name}' has {robot.n} joints: closed-form task dynamics "
+            f"output {output!r} has {m} rows but arm '{arm.name}' has {arm.n} joints: closed-form task dynamics "
             f"need a square J (m = n); supported are {_SUPPORTED}"
         )
     return output

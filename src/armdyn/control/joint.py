@@ -371,14 +371,14 @@ def control_law(
         tau[i] = min(max(tau[i], -gain[LIMIT, i]), gain[LIMIT, i])
 
 
-def describe(controller: object) -> str:
+def describe_controller(controller: object) -> str:
     """A short description of a controller for titles and reports: its kind and gains."""
     if controller is None:
         return "no control (zero torque)"
     if isinstance(controller, Digital):
-        return f"{describe(controller.controller)}, sampled every {controller.period * 1e3:g} ms"
+        return f"{describe_controller(controller.controller)}, sampled every {controller.period * 1e3:g} ms"
     if isinstance(controller, Saturated):
-        return f"{describe(controller.controller)}, torques within +-{_short(controller.limit)}"
+        return f"{describe_controller(controller.controller)}, torques within +-{_short(controller.limit)}"
     if isinstance(controller, ComputedTorque | PDGravity | PID):
         gains = [f"kp = {_short(controller.kp)}", f"kv = {_short(controller.kv)}"]
         ki = getattr(controller, "ki", 0.0)
@@ -388,7 +388,7 @@ def describe(controller: object) -> str:
         belief = f", model '{model.name}'" if model is not None else ""
         label = {"ComputedTorque": "computed torque", "PDGravity": "PD plus gravity", "PID": "joint PID"}
         return f"{label[type(controller).__name__]} ({', '.join(gains)}{belief})"
-    own = getattr(type(controller), "describe", None)  # a law that describes itself (armdyn.cartesian's)
+    own = getattr(type(controller), "describe", None)  # a law that describes itself (armdyn.control.task's)
     if callable(own):
         return str(own(controller))
     return getattr(controller, "__name__", type(controller).__name__)

@@ -265,7 +265,7 @@ def packed(trajectory: object, n: int) -> tuple[int, np.ndarray] | None:
     return None
 
 
-def describe(trajectory: object) -> str:
+def describe_trajectory(trajectory: object) -> str:
     """A short description of a trajectory for titles and reports."""
     if trajectory is None:
         return "hold the start"
