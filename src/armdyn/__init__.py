@@ -5,7 +5,7 @@ from armdyn import models as models
 from armdyn.dynamics import lagrange
 from armdyn.dynamics.regressor import base_parameters, identify
 from armdyn.dynamics.threads import set_threads, threads
-from armdyn.errors import MissingDependencyError, ModelError, SimulationError, SingularError
+from armdyn.errors import ArgumentError, MissingDependencyError, ModelError, SimulationError, SingularError
 from armdyn.model import ArmModel, Inertial, Joint, Link
 from armdyn.robot import Robot
 from armdyn.urdf import load_urdf
@@ -42,6 +42,7 @@ def __getattr__(name: str) -> object:
 
 
 __all__ = [
+    "ArgumentError",
     "ArmModel",
     "Inertial",
     "Joint",

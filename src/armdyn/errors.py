@@ -1,6 +1,8 @@
 """The exceptions armdyn raises, each a subclass of the built-in exception of its kind (as in python-control).
 
 - ``ModelError`` (a ValueError): an arm model or an argument that breaks a physical or structural rule.
+- ``ArgumentError`` (a ModelError and a TypeError): an argument of the wrong kind, such as an arm that is not
+  an armdyn arm, or a symbolic arm where numbers are needed.
 - ``SingularError`` (a ModelError): a state at which the arm's equations have no unique solution, M(q)
   singular or J(q) singular or too ill-conditioned.
 - ``SimulationError`` (a RuntimeError): a run that could not go on; it holds the run up to then.
@@ -12,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MissingDependencyError", "ModelError", "SimulationError", "SingularError"]
+__all__ = ["ArgumentError", "MissingDependencyError", "ModelError", "SimulationError", "SingularError"]
 
 
 class ModelError(ValueError):
@@ -20,6 +22,15 @@ class ModelError(ValueError):
 
     The message names the link (or argument) and the rule broken; armdyn never
     silently corrects a model.
+    """
+
+
+class ArgumentError(ModelError, TypeError):
+    """An argument of the wrong kind: an arm that is not an armdyn arm, a symbolic arm where numbers are needed,
+    a controller or trajectory of another kind than the function takes.
+
+    Both a ModelError (so that one ``except armdyn.ModelError`` catches every bad input) and a TypeError
+    (what Python raises for an argument of the wrong type).
     """
 
 

@@ -13,9 +13,21 @@ from collections.abc import Sequence
 import numpy as np
 
 from armdyn import memory
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 
 LARGEST_STATE = 1e15  # beyond this a joint angle's sine and cosine are no longer exact in float64
+
+
+def arm_argument(value: object, kind: type, name: str = "arm", numeric: bool = False, why: str = "") -> None:
+    """Refuse an arm argument of the wrong kind (one message and one class, ArgumentError, everywhere): not an
+    instance of ``kind`` (Robot, ArmModel or ActuatedArm), or symbolic where ``numeric`` numbers are needed
+    (``why`` says where to go instead)."""
+    if not isinstance(value, kind):
+        raise ArgumentError(f"{name} must be an armdyn {kind.__name__}, got {type(value).__name__}")
+    if numeric and getattr(value, "is_symbolic", False):
+        raise ArgumentError(
+            f"{name} '{getattr(value, 'name', '')}' has symbolic (SymPy) parameters; numbers are needed here{why}"
+        )
 
 
 def state(
