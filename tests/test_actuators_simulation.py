@@ -67,7 +67,7 @@ def test_simulate_with_drives_refuses_what_it_does_not_run() -> None:
             "controller must be an armdyn.control.DrivePID",
         ),
         (lambda: ad.simulate(arm, law, lambda t: t, t_final=0.01), "trajectory must be None"),
-        (lambda: ad.simulate(arm, law, None, t_final=0.01, method="rk45"), "does not take method"),
+        (lambda: ad.simulate(arm, law, None, t_final=0.01, method="rk45"), "method does not apply"),
         (lambda: ad.simulate(arm, law, None, t_final=-1.0), "t_final"),
         (lambda: ad.simulate(arm, DrivePID(-1.0, 0.5), None, t_final=0.01), "kp"),
         (lambda: ad.simulate(arm, law, None, t_final=0.01, q0=np.zeros(5)), "q0"),
@@ -128,7 +128,7 @@ def test_flexible_and_hydraulic_runs_converge_to_the_numpy_full_model(name: str,
     default = ad.simulate(arm, law, path, t_final=0.5, dt=1e-3, q0=q0)
     errors = []
     for step in (None, default.info["step"] / 2, default.info["step"] / 4):
-        result = act.simulate(arm, law, path, t_final=0.5, dt=1e-3, q0=q0, step=step)
+        result = ad.simulate(arm, law, path, t_final=0.5, dt=1e-3, q0=q0, step=step)
         errors.append(np.max(np.abs(result.drives.x[::50] - reference) / scale))
     print(f"{name} {kind}: substeps {default.info['substeps']}, relative errors {errors}")
     assert errors[0] < 1e-3
@@ -227,8 +227,11 @@ def test_bad_laws_and_steps_are_refused() -> None:
             lambda: ad.simulate(arm, CurrentComputedTorque(100.0, 20.0, bandwidth=0.0), None, t_final=0.01),
             "bandwidth",
         ),
-        (lambda: act.simulate(arm, DrivePID(1.0, 0.1), None, t_final=0.01, step=-1e-4), "step"),
-        (lambda: act.simulate(arm, DrivePID(1.0, 0.1), None, 0.01, 1e-3, None, None, float("nan")), "step"),
+        (lambda: ad.simulate(arm, DrivePID(1.0, 0.1), None, t_final=0.01, step=-1e-4), "step"),
+        (lambda: ad.simulate(arm, DrivePID(1.0, 0.1), None, t_final=0.01, step=float("nan")), "step"),
+        (lambda: ad.simulate(arm, DrivePID(1.0, 0.1), None, t_final=0.01, runs=2), "runs does not apply"),
+        (lambda: ad.simulate(arm, DrivePID(1.0, 0.1), None, t_final=0.01, method="rk45"), "method does not apply"),
+        (lambda: ad.simulate(ad.models.puma560(), DrivePID(1.0, 0.1), None, t_final=0.01, step=1e-4), "step applies"),
         (lambda: act.representative_drives(ad.models.two_link_planar(), "pneumatic"), "kind must be one of"),
         (lambda: act.stable_step(arm, np.zeros((2, 6))), "one configuration"),
         (

@@ -1,4 +1,4 @@
-"""simulate_many: N closed-loop runs in one compiled call, each equal to its single run."""
+"""simulate(..., runs=): N closed-loop runs in one compiled call, each equal to its single run."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import armdyn as ad
 from armdyn import control
 from armdyn import trajectories as tr
 from armdyn.errors import ModelError
-from armdyn.simulation import SUMMARY_NAMES, plant_variants, simulate_many
+from armdyn.simulation import SUMMARY_NAMES, plant_variants, simulate
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +21,7 @@ def test_one_run_equals_simulate(puma: ad.Robot) -> None:
     """Same RK4, same law: the run kept in full equals ad.simulate to rounding (here exactly)."""
     q0 = puma.configuration("qn")
     law, path = control.ComputedTorque(100.0, 20.0, 5.0), tr.Sinusoid(0.1, 0.5, 0.0, q0)
-    many = simulate_many(puma, law, path, t_final=1.0, q0=q0, keep="full")
+    many = simulate(puma, law, path, t_final=1.0, q0=q0, keep="full")
     single = ad.simulate(puma, law, path, t_final=1.0, q0=q0)
     for name, values in (("q", single.q), ("qd", single.qd), ("tau", single.tau), ("q_d", single.q_d)):
         assert np.abs(many.samples[name][0] - values).max() <= 1e-12 * max(1.0, np.abs(values).max()), name
@@ -47,9 +47,9 @@ def test_runs_with_different_plants_models_gains_and_starts_equal_their_single_r
     gains = np.stack([np.stack([np.full(6, 100.0 + 10 * k), np.full(6, 20.0), np.zeros(6)]) for k in range(runs)])
     tau_d = rng.uniform(-1, 1, (runs, 6))
     law = control.ComputedTorque(1.0, 1.0)
-    one = simulate_many(puma, law, paths, t_final=0.5, q0=q0, plants=plants, models=models, gains=gains,
+    one = simulate(puma, law, paths, t_final=0.5, q0=q0, plants=plants, models=models, gains=gains,
                         disturbance=tau_d, keep=1, threads=1)  # fmt: skip
-    two = simulate_many(puma, law, paths, t_final=0.5, q0=q0, plants=plants, models=models, gains=gains,
+    two = simulate(puma, law, paths, t_final=0.5, q0=q0, plants=plants, models=models, gains=gains,
                         disturbance=tau_d, keep=1, threads=2)  # fmt: skip
     assert np.array_equal(one.summaries, two.summaries) and np.array_equal(one.samples["q"], two.samples["q"])
     for k in range(runs):
@@ -63,9 +63,9 @@ def test_runs_with_different_plants_models_gains_and_starts_equal_their_single_r
 def test_decimated_samples_and_summaries_only(puma: ad.Robot) -> None:
     q0 = puma.configuration("qn")
     law, path = control.PDGravity(200.0, 30.0), tr.Sinusoid(0.05, 1.0, 0.0, q0)
-    full = simulate_many(puma, law, path, t_final=0.3, q0=q0, keep="full")
-    every = simulate_many(puma, law, path, t_final=0.3, q0=q0, keep=10)
-    summary = simulate_many(puma, law, path, t_final=0.3, q0=q0)
+    full = simulate(puma, law, path, t_final=0.3, q0=q0, keep="full")
+    every = simulate(puma, law, path, t_final=0.3, q0=q0, keep=10)
+    summary = simulate(puma, law, path, t_final=0.3, q0=q0, runs=1)
     assert every.samples["q"].shape == (1, 31, 6) and np.array_equal(every.samples["q"][0], full.samples["q"][0, ::10])
     assert summary.samples == {} and summary.t.size == 0 and np.array_equal(summary.summaries, full.summaries)
     frame = summary.summary()
@@ -80,24 +80,24 @@ def test_a_run_that_diverges_is_marked_and_the_others_finish() -> None:
     law = control.PDGravity(1e9, 0.0)  # far beyond RK4's stability at 10 ms
     gains = [[[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]], [[1e9, 1e9], [0.0, 0.0], [0.0, 0.0]]]
     path = tr.Sinusoid(0.5, 1.0)
-    result = simulate_many(arm, law, path, t_final=1.0, dt=1e-2, q0=[[0.0, 0.0], [0.5, 0.5]], gains=gains)
+    result = simulate(arm, law, path, t_final=1.0, dt=1e-2, q0=[[0.0, 0.0], [0.5, 0.5]], gains=gains)
     assert result.finished.tolist() == [True, False] and result.outcome[1, 1] == 2
 
 
 def test_plant_variants_equal_robots_built_one_by_one(puma: ad.Robot) -> None:
     """The packed variants equal with_payload's arms (mass properties by the parallel-axis theorem) and scaled links."""
-    from armdyn.simulation import _plant_buffers
+    from armdyn.simulation import packed_plants
 
     masses, centres, moments = [0.0, 1.5], [[0, 0, 0], [0.01, 0.02, 0.1]], [[0, 0, 0], [0.01, 0.012, 0.015]]
     variants = plant_variants(puma, 2, payload_mass=masses, payload_com=centres, payload_inertia=moments)
     for k in range(2):
-        packed, _ = _plant_buffers([puma.with_payload(masses[k], centres[k], moments[k])])
+        packed, _ = packed_plants([puma.with_payload(masses[k], centres[k], moments[k])])
         body = np.arange(packed.shape[1]) >= 20  # the header's pivot floor scales with the arm's inertia
         assert np.abs(variants.packed[k, body] - packed[0, body]).max() < 1e-12
     scaled = plant_variants(puma, 1, mass_scale=2.0, friction_scale=0.0)
     q = puma.configuration("qn")
-    heavy = simulate_many(puma, None, None, t_final=0.01, q0=q, plants=scaled, keep="full")
-    light = simulate_many(puma.without_friction(), None, None, t_final=0.01, q0=q, keep="full")
+    heavy = simulate(puma, None, None, t_final=0.01, q0=q, plants=scaled, keep="full")
+    light = simulate(puma.without_friction(), None, None, t_final=0.01, q0=q, keep="full")
     assert heavy.samples["q"].shape == light.samples["q"].shape
 
 
@@ -111,13 +111,13 @@ def test_plant_variants_equal_robots_built_one_by_one(puma: ad.Robot) -> None:
         ({"gains": np.ones((2, 6))}, "gains must be"),
         ({"plants": "heavy"}, "plants must be None"),
         ({"trajectory": [tr.Sinusoid(0.1, 1.0), tr.Quintic(0.0, 1.0, 0.0, 1.0)]}, "one kind"),
-        ({"controller": lambda t, q, qd, q_d, qd_d, qdd_d, e: q}, "runs armdyn.control's laws"),
+        ({"runs": 1, "controller": lambda t, q, qd, q_d, qd_d, qdd_d, e: q}, "run armdyn.control's laws"),
     ],
 )
 def test_bad_inputs_are_model_errors(puma: ad.Robot, arguments: dict, message: str) -> None:
     options = {"controller": control.PDGravity(10.0, 1.0), "t_final": 0.01} | arguments
     with pytest.raises(ModelError, match=message):
-        simulate_many(puma, **options)
+        simulate(puma, **options)
 
 
 def test_bad_variants_are_model_errors(puma: ad.Robot) -> None:
@@ -135,10 +135,10 @@ def test_bad_variants_are_model_errors(puma: ad.Robot) -> None:
 def test_the_envelope_figure(puma: ad.Robot, tmp_path) -> None:
     q0 = puma.configuration("qn")
     payloads = np.linspace(0.0, 2.0, 12)
-    runs = simulate_many(puma, control.ComputedTorque(100.0, 20.0), tr.Sinusoid(0.1, 0.5, 0.0, q0), t_final=0.2,
+    runs = simulate(puma, control.ComputedTorque(100.0, 20.0), tr.Sinusoid(0.1, 0.5, 0.0, q0), t_final=0.2,
                          q0=q0, keep=5, plants=plant_variants(puma, 12, payload_mass=payloads))  # fmt: skip
     runs.plot(tmp_path / "envelope.png")
-    simulate_many(puma, None, None, t_final=0.01, q0=q0).plot(tmp_path / "histograms.png", quantity="max_tau")
+    simulate(puma, None, None, t_final=0.01, q0=q0, runs=1).plot(tmp_path / "histograms.png", quantity="max_tau")
     assert (tmp_path / "envelope.png").stat().st_size > 20_000 and (tmp_path / "histograms.png").exists()
     with pytest.raises(ModelError, match="quantity must be one of"):
         runs.plot(quantity="speed")

@@ -30,13 +30,13 @@ _LAZY_MODULES = (
 
 def __getattr__(name: str) -> object:
     """The heavier parts load on first use: armdyn.symbolic (SymPy), armdyn.properties (SciPy),
-    armdyn.actuators, armdyn.simulation and its companions; ``armdyn.simulate`` and ``armdyn.simulate_many``
+    armdyn.actuators, armdyn.simulation and its companions; ``armdyn.simulate``
     are armdyn.simulation's."""
     import importlib
 
     if name in _LAZY_MODULES:
         return importlib.import_module(f"armdyn.{name}")
-    if name in ("simulate", "simulate_many"):
+    if name == "simulate":
         return getattr(importlib.import_module("armdyn.simulation"), name)
     raise AttributeError(f"module 'armdyn' has no attribute '{name}'")
 

@@ -1443,7 +1443,7 @@ def study(
     trajectory: str = typer.Option("sine", help="sine (about the start), quintic (from it) or none (hold it)."),
     amplitude: float = typer.Option(0.1, help="Trajectory amplitude (rad or m)."),
     frequency: float = typer.Option(0.5, help="Trajectory frequency (Hz)."),
-    t_final: float = typer.Option(2.0, "--t-final", help="Each run's length (s)."),
+    t_final: float = typer.Option(5.0, "--t-final", help="Each run's length (s)."),
     dt: float = typer.Option(1e-3, help="RK4 step (s)."),
     spec: str = typer.Option("max-error-after-1s<1e-3", "--spec", help=STUDY_SPEC_HELP),
     confidence: float = typer.Option(0.95, help="Confidence of the interval."),

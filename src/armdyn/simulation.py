@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numba import njit, prange
@@ -33,6 +34,7 @@ from armdyn import control, inputs, memory, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
+from armdyn.dynamics.drives import INPUT_LIMIT, clipped, closed_loop
 from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.linalg import cholesky, cholesky_solve
 from armdyn.dynamics.packed import (
@@ -44,6 +46,7 @@ from armdyn.dynamics.packed import (
     LINK_POSITION,
     LINK_ROTATION,
     MASS,
+    N_JOINTS,
     PIVOT_FLOOR,
     STRIDE,
     TOOL_LINK,
@@ -51,7 +54,8 @@ from armdyn.dynamics.packed import (
     workspace_size,
 )
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
-from armdyn.errors import ModelError, SimulationError
+from armdyn.dynamics.status import OK
+from armdyn.errors import ArgumentError, ModelError, SimulationError
 from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
@@ -301,8 +305,64 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     x[:] = y
 
 
+@njit(**NUMBA_OPTIONS)
+def run_drives(
+    model: np.ndarray,
+    drives: np.ndarray,
+    gains: np.ndarray,
+    law: int,
+    kind: int,
+    params: np.ndarray,
+    q0: np.ndarray,
+    y: np.ndarray,
+    h: float,
+    substeps: int,
+    times: np.ndarray,
+    states: np.ndarray,
+    applied: np.ndarray,
+    torques: np.ndarray,
+    accelerations: np.ndarray,
+    references: np.ndarray,
+) -> int:
+    """RK4 on y = [x, z] (the arm with its drives and the law's integrators), ``substeps`` steps of h between
+    samples, the drive-level law evaluated at every stage (armdyn.dynamics.drives.closed_loop); records each
+    sample (the inputs after their limits). Returns -1, or the sample where M(q) was singular or the state
+    stopped being finite. The four stages share one evaluation site, so the inlined model is compiled once."""
+    n, size, last = int(model[N_JOINTS]), y.shape[0], states.shape[0] - 1
+    rates, stage_y = np.empty((4, size)), np.empty(size)
+    u, tau, reference, work = np.empty(n), np.empty(n), np.empty((3, n)), np.empty(2 * n)
+    recorded = states.shape[1]
+    for sample in range(last + 1):
+        t = sample * substeps * h
+        for step in range(substeps):
+            for stage in range(4):
+                c = 0.0 if stage == 0 else (0.5 if stage < 3 else 1.0)
+                if stage > 0:
+                    rk4_stage_state(y, rates[stage - 1], c, h, stage_y)
+                at = y if stage == 0 else stage_y
+                status = closed_loop(model, drives, gains, law, kind, params, q0, t + (step + c) * h, at, u, tau,
+                                     reference, work, rates[stage], stage != 2)  # fmt: skip
+                if status != OK:
+                    return sample
+                if step == 0 and stage == 0:
+                    times[sample] = t
+                    states[sample] = y[:recorded]
+                    for j in range(n):
+                        applied[sample, j] = clipped(u[j], drives[INPUT_LIMIT, j])
+                    torques[sample] = tau
+                    accelerations[sample] = rates[0, n : 2 * n]
+                    references[sample] = reference[0]
+                    for j in range(size):
+                        if not np.isfinite(y[j]):
+                            return sample
+                    if sample == last:
+                        return -1
+            rk4_advance(y, rates, h)
+    return -1
+
+
 # ----- the Python side ---------------------------------------------------------------------------------
-def _plant_buffers(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
+def packed_plants(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     """Compiled plants with their Coulomb friction taken out (the loop adds the smoothed one)."""
     plants, coulombs = [], []
     for arm in arms:
@@ -317,7 +377,7 @@ def _plant_buffers(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     return np.stack(plants), np.stack(coulombs)
 
 
-def _unwrap(controller: object, n: int) -> tuple[control.Spec | None, float, object]:
+def unwrapped_law(controller: object, n: int) -> tuple[control.Spec | None, float, object]:
     """(spec for the compiled loop or None, sample period (0 continuous), the controller), each
     controller of a Digital or Saturated chain checked first (a class, a torque limit per joint)."""
     if controller is None:
@@ -415,7 +475,7 @@ def _users_own(item: object) -> bool:
     )
 
 
-def _seconds(t_final: object, dt: object) -> tuple[float, float]:
+def checked_times(t_final: object, dt: object) -> tuple[float, float]:
     """t_final and dt as positive floats (below 1e15), or a ModelError naming them."""
     checked = []
     for name, value in (("t_final", t_final), ("dt", dt)):
@@ -447,7 +507,7 @@ def _smoothing_choice(eps: object) -> str | float:
     return inputs.number(eps, "coulomb_smoothing", minimum=0.0)
 
 
-def _steps(t_final: float, dt: float, n: int, adaptive: bool) -> int:
+def step_count(t_final: float, dt: float, n: int, adaptive: bool) -> int:
     """The number of steps, round(t_final / dt), refused before anything is allocated when the
     record would hold more than MAX_SAMPLES samples or more bytes than the memory available."""
     samples = t_final / dt + 1  # a float: it may be far beyond any array (1e14 s / 1e-300 s)
@@ -476,8 +536,20 @@ def simulate(
     events: Sequence[tuple[float, Robot]] = (),
     coulomb_smoothing: float | str = "auto",
     progress: Callable[[float], None] | None = None,
-) -> Result:
-    """Simulate the arm under control from (q0, qd0) for t_final seconds (Chapter 4, BOOK.md section 8).
+    step: float | None = None,
+    runs: int | None = None,
+    plants: Plants | Robot | None = None,
+    models: Plants | Robot | None = None,
+    gains: object = None,
+    keep: str | int | None = None,
+    after: float | None = None,
+    threads: int | None = None,
+) -> Result | Ensemble:
+    """Simulate a plant under control from (q0, qd0) for t_final seconds (Chapter 4, BOOK.md section 8).
+
+    The one way to simulate: one run of an arm (a Robot), one run of an arm with its drives (an
+    ActuatedArm, Section 3.6: the drives' electrics and hydraulics integrated with the links), or many
+    runs at once (``runs=``, or any of the per-run arguments below).
 
     Integrates M qdd + N(q, qd) + tau_d = tau. With ``method="rk4"`` (the book's TRESP) the
     controller runs once per step, or once per sample period of a Digital controller with
@@ -523,12 +595,33 @@ def simulate(
         the step, see the module docstring); 0 is the exact sign law.
     progress : callable, optional
         Called with the fraction done (0 to 1) as the compiled run (or an adaptive one) proceeds.
+    step : float, optional
+        An arm with drives only: the largest RK4 step (s), the run recording every ``dt``; by default
+        the step the drives' time constants allow (armdyn.actuators.stable_step at the start).
+    runs : int, optional
+        Many runs in one compiled call, parallel over runs (each equal to the single run with its
+        arguments to rounding): N, or by default the length of the per-run arguments. q0, qd0 and the
+        disturbance may then hold one row per run, the trajectory may be a sequence (one per run, of
+        one kind), and the controller must be one of armdyn.control's joint laws; method="rk4" only.
+    plants, models : Plants or Robot, optional
+        Many runs: the plants, and the controller's models (its belief), one variant per run or one
+        for all (``plant_variants``).
+    gains : array_like, optional
+        Many runs: (N, 3, n) or (3, n), kp, kv and ki per run, replacing the controller's.
+    keep : "summary", "full" or int, optional
+        Many runs: what is kept of each, the summaries only (default), every step, or every k-th step.
+    after : float, optional
+        Many runs: the start of the "max error after" window of the summaries (s), default 1.
+    threads : int, optional
+        Many runs: Numba's thread count for the call (default: as set; all cores).
 
     Returns
     -------
-    Result
-        Times, joint positions, velocities, accelerations and torques (time first), the
-        desired positions with a trajectory, energies, and ``info`` (the route taken).
+    Result or Ensemble
+        One run: times, joint positions, velocities, accelerations and torques (time first), the
+        desired positions with a trajectory, energies, ``info`` (the route taken) and, for an arm
+        with drives, ``drives`` (a DriveRecord). Many runs: an Ensemble (per-run summaries, and the
+        samples kept, with dimensions run, time and joint).
 
     Raises
     ------
@@ -544,17 +637,30 @@ def simulate(
         is not "auto" or a number >= 0, or the method is unknown (the message lists the
         methods); and during the run when a controller, trajectory or disturbance of the
         user's returns other than n finite values (the message names which).
+    armdyn.ArgumentError
+        When the plant is neither a Robot nor an arm with drives, or an option does not apply to the
+        plant or to many runs (the message names it).
     SimulationError
         When M(q) becomes singular or the state non-finite during the run (its ``result``
-        holds the run up to then).
+        holds the run up to then), or an adaptive solver fails.
     """
-    if type(arm).__name__ == "ActuatedArm":  # the arm with its drives' electrics
-        return _with_drives(arm, controller, trajectory, t_final, dt, method, q0, qd0, disturbance, events,
-                            coulomb_smoothing, progress)  # fmt: skip
-    if not isinstance(arm, Robot):
-        raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+    single_run_options = {"method": (method, "rk4"), "events": (tuple(events), ()), "progress": (progress, None),
+                          "coulomb_smoothing": (coulomb_smoothing, "auto")}  # fmt: skip
+    per_run = {"runs": runs, "plants": plants, "models": models, "gains": gains, "keep": keep, "after": after,
+               "threads": threads}  # fmt: skip
+    if isinstance(arm, DrivenPlant):
+        _refuse_options(arm, {**single_run_options, "disturbance": (disturbance, None),
+                              **{name: (value, None) for name, value in per_run.items()}})  # fmt: skip
+        return _simulate_driven(arm, controller, trajectory, t_final, dt, q0, qd0, step)
+    inputs.arm_argument(arm, Robot, "arm", why=" (simulate takes a numeric Robot or an armdyn.actuators.ActuatedArm)")
+    if step is not None:
+        raise ArgumentError("step applies to an arm with drives (a Robot's RK4 step is dt)")
+    if any(value is not None for value in per_run.values()) or _holds_runs(q0, qd0, disturbance, trajectory):
+        _refuse_options(arm, single_run_options)
+        return _simulate_runs(arm, controller, trajectory, t_final, dt, runs, q0, qd0, plants, models, gains,
+                              disturbance, keep, after, threads)  # fmt: skip
     n = arm.n
-    t_final, dt = _seconds(t_final, dt)
+    t_final, dt = checked_times(t_final, dt)
     method = _method_name(method)
     adaptive = method in ADAPTIVE
     coulomb_smoothing = _smoothing_choice(coulomb_smoothing)
@@ -567,9 +673,9 @@ def simulate(
         disturbance = np.broadcast_to(_one_state(disturbance, n, "disturbance", allow_scalar=True), (n,)).copy()
     events = _events(arm, events)
     arms = [arm] + [e[1] for e in events]
-    steps = _steps(t_final, dt, n, adaptive)
+    steps = step_count(t_final, dt, n, adaptive)
     law = controller
-    spec, period, controller = _unwrap(controller, n)
+    spec, period, controller = unwrapped_law(controller, n)
     if adaptive and period:
         raise ModelError("a Digital controller needs method='rk4' (the book's fixed-step TRESP)")
     compiled = (
@@ -606,16 +712,92 @@ def simulate(
     return result
 
 
-def _with_drives(arm, controller, trajectory, t_final, dt, method, q0, qd0, disturbance, events, eps, progress):
-    """simulate() of an ActuatedArm: armdyn.actuators.simulate (through the arm, which knows its module),
-    which takes fewer options."""
-    unsupported = [name for name, value, default in (("method", method, "rk4"), ("disturbance", disturbance, None),
-                   ("events", tuple(events), ()), ("coulomb_smoothing", eps, "auto"), ("progress", progress, None))
-                   if not (value is default or value == default)]  # fmt: skip
-    if unsupported:
-        raise ModelError(f"an arm with actuators is simulated by armdyn.actuators.simulate (RK4 with its electrics), "
-                         f"which does not take {', '.join(unsupported)}")  # fmt: skip
-    return arm._simulate(controller, trajectory, t_final, dt, q0, qd0)
+@runtime_checkable
+class DrivenPlant(Protocol):
+    """What the stepper needs of an arm with drives (armdyn.actuators.ActuatedArm implements it): its
+    joints and full state, the mechanics the drives act on, the drives packed for the compiled model,
+    the RK4 step their time constants allow, its start, and the record of what the drives did."""
+
+    name: str
+    n: int
+    n_states: int
+
+    def mechanical_robot(self) -> Robot: ...
+
+    def packed_drives(self) -> np.ndarray: ...
+
+    def stable_step(self, q: object, bandwidth: object = None) -> float: ...
+
+    def initial_state(self, q: object, qd: object = None) -> np.ndarray: ...
+
+    def drive_record(self, states: np.ndarray, applied: np.ndarray) -> object: ...
+
+
+def _refuse_options(arm: object, options: Mapping[str, tuple[object, object]]) -> None:
+    """An ArgumentError naming the options given that do not apply to this plant or route."""
+    given = [name for name, (value, default) in options.items()
+             if not (value is default or (isinstance(value, (str, tuple)) and value == default))]  # fmt: skip
+    if given:
+        what = "an arm with drives" if isinstance(arm, DrivenPlant) else "many runs at once"
+        raise ArgumentError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to {what}")
+
+
+def _holds_runs(q0: object, qd0: object, disturbance: object, trajectory: object) -> bool:
+    """Whether an argument holds one row (or one trajectory) per run."""
+    rows = any(np.ndim(value) == 2 for value in (q0, qd0, disturbance) if not callable(value))
+    return rows or isinstance(trajectory, (list, tuple))
+
+
+def _simulate_driven(
+    arm: DrivenPlant, controller: object, trajectory: object, t_final: float, dt: float, q0: object, qd0: object,
+    step: float | None,
+) -> Result:  # fmt: skip
+    """One run of an arm with its drives (BOOK.md section 7): the full model x = [q, qd, q_M, qd_M, i, x_v,
+    P_L] and the law's integrators by compiled RK4, the drive-level law evaluated at every stage, the inputs
+    clipped to their limits and the currents and spools held within theirs. The drives are stiff (L/R is
+    about a millisecond, an oil column rings at hundreds of hertz): the run records every ``dt`` and
+    integrates with the step their time constants allow (``info["substeps"]`` steps per sample)."""
+    from armdyn.control.drives import drive_law
+
+    n = arm.n
+    drives = arm.packed_drives()
+    law, gains, bandwidth = drive_law(controller, arm)
+    t_final, dt = checked_times(t_final, dt)
+    path = trajectories.packed(trajectory, n)
+    if path is None:
+        raise ArgumentError("trajectory must be None, an armdyn.trajectories.Sinusoid or a Quintic (an arm with "
+                            "drives runs compiled)")  # fmt: skip
+    start, rates = (np.zeros(n) if x is None else _one_state(x, n, name) for x, name in ((q0, "q0"), (qd0, "qd0")))
+    longest = arm.stable_step(start, bandwidth)
+    if step is not None:
+        longest = inputs.number(step, "step")
+        if not (0 < longest < math.inf):
+            raise ModelError(f"step must be a positive number of seconds, got {step}")
+    samples, substeps = round(t_final / dt) + 1, max(1, math.ceil(dt / longest - 1e-9))
+    y = np.concatenate([arm.initial_state(start, rates), np.zeros(n)])
+    times, states = np.empty(samples), np.empty((samples, arm.n_states))
+    applied, torques = np.empty((samples, n)), np.empty((samples, n))
+    accelerations, references = np.empty((samples, n)), np.empty((samples, n))
+    mechanical = arm.mechanical_robot()
+    stopped = run_drives(mechanical.packed, drives, gains, law, path[0], path[1], start, y, dt / substeps, substeps,
+                         times, states, applied, torques, accelerations, references)  # fmt: skip
+    rows = samples if stopped < 0 else stopped
+    q, qd = states[:rows, :n], states[:rows, n : 2 * n]
+    info = {"method": "rk4 (compiled, with the drives' dynamics)", "dt": dt, "substeps": substeps,
+            "step": dt / substeps, "controller": control.describe_controller(controller),
+            "trajectory": trajectories.describe_trajectory(trajectory)}  # fmt: skip
+    result = Result(times[:rows], q, qd, accelerations[:rows], torques[:rows],
+                    references[:rows] if trajectory is not None else None, mechanical, info,
+                    lambda: mechanical.kinetic_energy(q, qd) + mechanical.potential_energy(q))  # fmt: skip
+    result.drives = arm.drive_record(states[:rows], applied[:rows])
+    if stopped >= 0:
+        raise SimulationError(
+            f"the run of '{arm.name}' with its drives stopped at t = {stopped * dt:.6g} s: M(q) became singular or "
+            "the state not finite (lower the gains, give a smaller step=, or check the drives' limits); the run "
+            "up to then is in this error's .result",
+            result,
+        )
+    return result
 
 
 def law_table(spec: control.Spec, period: float, dt: float, n: int) -> tuple[np.ndarray, int]:
@@ -634,11 +816,11 @@ def law_table(spec: control.Spec, period: float, dt: float, n: int) -> tuple[np.
 def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):
     """The plant, controller and trajectory tuples of run_rk4 and continuous_rate."""
     n = arm.n
-    plants, coulombs = _plant_buffers(arms)
+    plants, coulombs = packed_plants(arms)
     switches = np.array([e[0] for e in events], dtype=float)
     if spec.model is not None and spec.model.n != n:
         raise ModelError("the controller's model must have the plant's joints")
-    models, model_coulombs = _plant_buffers([spec.model if spec.model is not None else arm])
+    models, model_coulombs = packed_plants([spec.model if spec.model is not None else arm])
     model, model_coulomb = models[0], model_coulombs[0]
     gain, hold = law_table(spec, period, dt, n)
     trajectory_kind, params = trajectories.packed(trajectory, n)
@@ -1094,7 +1276,7 @@ def nominal(arm: Robot) -> Nominal:
     armdyn.ModelError
         When the arm is symbolic.
     """
-    base, coulomb = _plant_buffers([arm])
+    base, coulomb = packed_plants([arm])
     tool = int(arm.packed[TOOL_LINK])
     start = HEADER + STRIDE * tool
     rotation = arm.packed[start + LINK_ROTATION : start + LINK_ROTATION + 9].reshape(3, 3).copy()
@@ -1128,7 +1310,7 @@ def vary_packed(
 
 
 SUMMARY_NAMES = ("final_error", "max_error_after", "rms_error", "max_tau", "final_q")
-"""The per-run, per-joint summaries simulate_many keeps (rows of its summary array)."""
+"""The per-run, per-joint summaries many runs keep (simulate with runs=) (rows of its summary array)."""
 FINAL_ERROR, MAX_ERROR_AFTER, RMS_ERROR, MAX_TAU, FINAL_Q = range(5)
 
 
@@ -1204,7 +1386,7 @@ def run_many(
 
 @dataclass
 class Ensemble:
-    """What ``simulate_many`` kept of N runs: per-run summaries, and samples when asked.
+    """What ``simulate(..., runs=N)`` kept of N runs: per-run summaries, and samples when asked.
 
     Attributes
     ----------
@@ -1252,10 +1434,11 @@ class Ensemble:
 
         Raises
         ------
-        armdyn.ModelError
-            When pandas is not installed.
+        None
+            It only arranges the summaries.
         """
-        pandas = _optional("pandas")
+        import pandas  # a dependency, imported when first used (start-up time)
+
         columns = {}
         for k, name in enumerate(SUMMARY_NAMES):
             values = self.summaries[:, k]
@@ -1277,10 +1460,11 @@ class Ensemble:
 
         Raises
         ------
-        armdyn.ModelError
-            When xarray is not installed.
+        None
+            It only arranges the arrays.
         """
-        xarray = _optional("xarray")
+        import xarray
+
         variables = {name: (("run", "joint"), self.summaries[:, k]) for k, name in enumerate(SUMMARY_NAMES)}
         variables |= {name: (("run", "time", "joint"), values) for name, values in self.samples.items()}
         variables |= {"stopped_at": (("run",), self.outcome[:, 0]), "reason": (("run",), self.outcome[:, 1])}
@@ -1315,16 +1499,6 @@ class Ensemble:
         if quantity not in SUMMARY_NAMES:
             raise ModelError(f"quantity must be one of {', '.join(SUMMARY_NAMES)}, got {quantity!r}")
         return plot_ensemble(self, path, quantity, SUMMARY_NAMES.index(quantity))
-
-
-def _optional(module: str) -> object:
-    """An optional dependency, or a ModelError saying how to install it."""
-    import importlib
-
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise ModelError(f"this needs {module}: pip install 'armdyn[study]'") from None
 
 
 def launch_many(
@@ -1367,7 +1541,7 @@ def _variants(value: object, arm: Robot, runs: int, name: str) -> tuple[np.ndarr
     if isinstance(value, Robot):
         if value.n != arm.n or value.is_symbolic:
             raise ModelError(f"{name} must be a numeric arm with the plant's {arm.n} joints")
-        packed, coulomb = _plant_buffers([value])
+        packed, coulomb = packed_plants([value])
         return packed, coulomb, np.zeros(runs, dtype=np.int64)
     if isinstance(value, Plants):
         if value.arm.n != arm.n or value.packed.shape[1] != arm.packed.shape[0]:
@@ -1386,87 +1560,48 @@ def _paths(trajectory: object, runs: int, n: int) -> tuple[int, np.ndarray]:
         raise ModelError(f"give one trajectory or one per run ({runs}), got {len(trajectory)}")
     specs = [trajectories.packed(path, n) for path in (trajectory if many else [trajectory])]
     if any(spec is None for spec in specs):
-        raise ModelError("simulate_many runs None, armdyn.trajectories.Sinusoid or Quintic trajectories")
+        raise ArgumentError("many runs run None, armdyn.trajectories.Sinusoid or Quintic trajectories")
     if len({spec[0] for spec in specs}) != 1:
         raise ModelError("the runs' trajectories must be of one kind (all Sinusoid, or all Quintic)")
     params = np.stack([spec[1] for spec in specs])
     return specs[0][0], np.ascontiguousarray(np.broadcast_to(params, (runs, *params.shape[1:])))
 
 
-def simulate_many(
+def _simulate_runs(
     arm: Robot,
     controller: object,
-    trajectory: object = None,
-    t_final: float = 2.0,
-    dt: float = 1e-3,
-    runs: int | None = None,
-    q0: object = None,
-    qd0: object = None,
-    plants: Plants | Robot | None = None,
-    models: Plants | Robot | None = None,
-    gains: object = None,
-    disturbance: object = None,
-    keep: str | int = "summary",
-    after: float = 1.0,
-    threads: int | None = None,
+    trajectory: object,
+    t_final: float,
+    dt: float,
+    runs: int | None,
+    q0: object,
+    qd0: object,
+    plants: Plants | Robot | None,
+    models: Plants | Robot | None,
+    gains: object,
+    disturbance: object,
+    keep: str | int | None,
+    after: float | None,
+    threads: int | None,
 ) -> Ensemble:
-    """N closed-loop runs in one compiled call, parallel over runs (Chapter 4's TRESP, as ``simulate``).
+    """N closed-loop runs in one compiled call, parallel over runs (Chapter 4's TRESP, as one run).
 
-    Each run integrates the robot equation under the controller by the same fixed-step RK4 as
-    ``simulate(..., method="rk4")`` (run k equals that single run to rounding), with its own start,
-    plant, controller model, gains, trajectory and constant disturbance. Plant and model variants
-    are packed arrays (``plant_variants``), never Robot objects per run. What is kept is chosen:
-    ``keep="summary"`` keeps per run and joint only the final error, the largest |error| from
-    ``after`` seconds on, the RMS error, the largest |tau| and the final q (40 n bytes a run: a
-    million runs of a six-joint arm in 240 MB); an integer k also keeps q, qd, tau and q_d every
-    k-th step; ``"full"`` every step.
-
-    Parameters
-    ----------
-    arm : Robot
-        The nominal arm: the plant of every run unless ``plants`` varies it.
-    controller : ComputedTorque, PDGravity, PID, one of them inside Digital or Saturated, or None
-        One of armdyn.control's laws (its ``model`` is the belief of every run unless ``models``);
-        None applies no torque.
-    trajectory : Sinusoid or Quintic or None, or a sequence of them (one per run, of one kind)
-        The desired path; None holds the start.
-    t_final, dt : float, optional
-        The runs' length and the RK4 step (s).
-    runs : int, optional
-        N; by default the longest per-run argument's length.
-    q0, qd0 : array_like, optional
-        The start: (n,) for every run or (N, n).
-    plants, models : Plants or Robot or None, optional
-        The plants, and the controller's models (its belief), one variant per run or one for all.
-    gains : array_like, optional
-        (N, 3, n) or (3, n): kp, kv, ki per run, replacing the controller's.
-    disturbance : array_like, optional
-        A constant tau_d: (n,) or (N, n).
-    keep : "summary", "full" or int, optional
-        What is kept per run (see above).
-    after : float, optional
-        The start of the "max error after" window (s), default 1.
-    threads : int, optional
-        Numba's thread count for this call (default: as set; all cores).
-
-    Returns
-    -------
-    Ensemble
-        The summaries (and samples kept), with their outcome per run.
-
-    Raises
-    ------
-    armdyn.ModelError
-        When an argument has the wrong shape or kind, the controller is not a compiled law, the
-        runs' number is unclear or the kept samples would exceed the memory available.
+    Each run integrates the robot equation under the controller by the same fixed-step RK4 as one run
+    (run k equals that single run to rounding), with its own start, plant, controller model, gains,
+    trajectory and constant disturbance. Plant and model variants are packed arrays (``plant_variants``),
+    never Robot objects per run. What is kept is chosen: ``keep="summary"`` keeps per run and joint only
+    the final error, the largest |error| from ``after`` seconds on, the RMS error, the largest |tau| and
+    the final q (40 n bytes a run: a million runs of a six-joint arm in 240 MB); an integer k also keeps
+    q, qd, tau and q_d every k-th step; ``"full"`` every step. The arguments are ``simulate``'s.
     """
-    if not isinstance(arm, Robot) or arm.is_symbolic:
-        raise ModelError(f"arm must be a numeric armdyn Robot, got {type(arm).__name__}")
+    keep = "summary" if keep is None else keep
+    after = 1.0 if after is None else after
+    inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (many runs run compiled code)")
     n = arm.n
-    t_final, dt = _seconds(t_final, dt)
-    spec, period, law = _unwrap(controller, n)
+    t_final, dt = checked_times(t_final, dt)
+    spec, period, law = unwrapped_law(controller, n)
     if spec is None:
-        raise ModelError("simulate_many runs armdyn.control's laws (ComputedTorque, PDGravity, PID, in Digital or "
+        raise ArgumentError("many runs run armdyn.control's laws (ComputedTorque, PDGravity, PID, in Digital or "
                          f"Saturated) or None (no torque), got {type(controller).__name__}")  # fmt: skip
     lengths = {len(v) for v in (plants, models) if isinstance(v, Plants)}
     lengths |= {np.shape(v)[0] for v in (q0, qd0, disturbance) if np.ndim(v) == 2}
@@ -1496,7 +1631,7 @@ def simulate_many(
     path_kind, params = _paths(trajectory, runs, n)
     starts = (_runs_of(q0, "q0", runs, n), _runs_of(qd0, "qd0", runs, n))
     tau_d = _runs_of(disturbance, "disturbance", runs, n)
-    steps = _steps(t_final, dt, n, False)
+    steps = step_count(t_final, dt, n, False)
     rows = steps + 1
     every = 0 if keep == "summary" else 1 if keep == "full" else keep
     if isinstance(every, str) or not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 0:

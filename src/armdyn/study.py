@@ -5,7 +5,7 @@ distributions, a controller that believes in the nominal arm, and a specificatio
 "max_error_after < 1e-3". ``Study.run(runs, seed)`` draws the runs in fixed blocks: block b's
 random stream is ``SeedSequence(seed, spawn_key=(b,))``, so a run's parameters, and therefore
 its result, do not depend on how the blocks are spread over threads, processes or machines.
-Each block is one compiled ``simulate_many`` call on arrays (``Setup``: the packed nominal arm,
+Each block is one compiled call of the many-runs path of ``simulate`` (``runs=``) on arrays (``Setup``: the packed nominal arm,
 the law's gains, the path), never a pickled Robot. Blocks run in this process by default; with
 ``scheduler="local-cluster"`` on a ``dask.distributed.LocalCluster``, or with an address on an
 existing cluster (each worker one task thread, its Numba thread count set, its compiled-code cache
@@ -167,7 +167,7 @@ _PARAMETERS = ("payload", "mass_scale", "friction_scale")
 class Requirement:
     """A requirement a run meets or not: clauses "quantity op bound" joined by "and".
 
-    Quantities: a summary of ``simulate_many`` (final_error, max_error_after, rms_error, max_tau,
+    Quantities: a summary of many runs of ``simulate`` (final_error, max_error_after, rms_error, max_tau,
     largest over the joints, or for one joint as "max_error_after q2"), or a sampled parameter
     (payload, mass_scale, friction_scale). Hyphens may stand for underscores, and
     "max-error-after-1s" sets the window's start to 1 s.
@@ -353,7 +353,7 @@ class Setup:
 
 def run_block(setup: Setup, index: int, threads: int | None = None) -> object:
     """Block ``index`` of a study: its runs' parameters from SeedSequence(seed, spawn_key=(index,)),
-    one compiled simulate_many call, and a DataFrame of the runs (run id, parameters, summaries,
+    one compiled call of simulate's many-runs path (launch_many), and a DataFrame of the runs (run id, parameters, summaries,
     finished). The same block gives the same bits wherever it runs.
 
     Parameters
@@ -497,7 +497,7 @@ class Study:
         controller: object,
         trajectory: object = None,
         spec: str | Requirement = "max_error_after < 1e-3",
-        t_final: float = 2.0,
+        t_final: float = 5.0,
         dt: float = 1e-3,
         after: float = 1.0,
         q0: object = None,
@@ -507,21 +507,21 @@ class Study:
         start_error: object = None,
         block: int = RUNS_PER_BLOCK,
     ) -> None:
-        from armdyn.simulation import _plant_buffers, _seconds, _steps, _unwrap
+        from armdyn.simulation import packed_plants, checked_times, step_count, unwrapped_law
 
         if not isinstance(arm, Robot) or arm.is_symbolic:
             raise ModelError(f"arm must be a numeric armdyn Robot, got {type(arm).__name__}")
         n = arm.n
         self.arm, self.spec = arm, spec if isinstance(spec, Requirement) else Requirement(spec)
-        self.t_final, self.dt = _seconds(t_final, dt)
-        _steps(self.t_final, self.dt, n, False)  # refuses runs too long to record
+        self.t_final, self.dt = checked_times(t_final, dt)
+        step_count(self.t_final, self.dt, n, False)  # refuses runs too long to record
         after = self.spec.after if self.spec.after is not None else inputs.number(after, "after", minimum=0.0)
         self.after = after
-        law_spec, period, self.controller = _unwrap(controller, n)
+        law_spec, period, self.controller = unwrapped_law(controller, n)
         if law_spec is None or controller is None:
             raise ModelError("a study runs one of armdyn.control's laws (ComputedTorque, PDGravity, PID)")
         gains, hold = law_table(law_spec, period, self.dt, n)
-        belief, belief_coulomb = _plant_buffers([law_spec.model if law_spec.model is not None else arm])
+        belief, belief_coulomb = packed_plants([law_spec.model if law_spec.model is not None else arm])
         path = trajectories.packed(trajectory, n)
         if path is None:
             raise ModelError("a study's trajectory must be None, an armdyn.trajectories.Sinusoid or a Quintic")
@@ -680,10 +680,10 @@ def _warm(threads: int) -> str:
     import numba
 
     from armdyn import models
-    from armdyn.simulation import simulate_many
+    from armdyn.simulation import simulate
 
     numba.set_num_threads(threads)
-    simulate_many(models.two_link_planar(), control.PDGravity(1.0, 1.0), None, t_final=0.002)
+    simulate(models.two_link_planar(), control.PDGravity(1.0, 1.0), None, t_final=0.002, runs=1)
     return "warm"
 
 

@@ -54,7 +54,7 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
     from armdyn import control
     from armdyn import task_space as ts
     from armdyn import trajectories as tr
-    from armdyn.simulation import PythonLoopWarning, plant_variants, simulate_many
+    from armdyn.simulation import PythonLoopWarning, plant_variants
     from armdyn.study import Normal, Study, Uniform
 
     def simulate(*args: object, **kwargs: object) -> dict[str, np.ndarray]:
@@ -406,7 +406,7 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
     }
 
     def simulate_drives(*args: object, **kwargs: object) -> dict[str, np.ndarray]:
-        result = act.simulate(*args, **kwargs)
+        result = ad.simulate(*args, **kwargs)
         return {
             "t": result.t,
             "q": result.q,
@@ -418,9 +418,9 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
 
     cases |= {f"drives.{k}": v for k, v in drives.items()}
 
-    # ----- batches of runs (simulate_many) ------------------------------------------------------------------------
+    # ----- batches of runs (simulate with runs=) ------------------------------------------------------------------
     def ensemble(*args: object, **kwargs: object) -> dict[str, np.ndarray]:
-        many = simulate_many(*args, **kwargs)
+        many = ad.simulate(*args, **{"keep": "summary", **kwargs})  # keep= takes the many-runs path
         return {"t": many.t, "summaries": many.summaries, "outcome": many.outcome} | {
             f"samples.{k}": v for k, v in many.samples.items()
         }

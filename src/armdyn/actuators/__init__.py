@@ -3,8 +3,8 @@
 ``motors``: the DC motor behind a gear (rigid or flexible shaft), its transfer function and Example
 3.6-1; ``hydraulics``: the servo valve and piston; ``arm``: the arm with a drive on every joint
 (``ActuatedArm``, ``with_actuators``, ``motor_drives``, the PUMA 560 with its drives); ``sizing``:
-representative drives for an arm; ``stepping``: the arm with its drives integrated by compiled RK4
-under a drive-level law (armdyn.control.drives).
+representative drives for an arm; ``packing``: the drives as the compiled stepper takes them (the arm with
+its drives is simulated by ``armdyn.simulate``, under a drive-level law of armdyn.control.drives).
 """
 
 from armdyn.actuators.arm import (
@@ -17,8 +17,8 @@ from armdyn.actuators.arm import (
 )
 from armdyn.actuators.hydraulics import Hydraulic
 from armdyn.actuators.motors import DCMotor, example_3_6_1, transfer_function
+from armdyn.actuators.packing import DriveRecord, stable_step
 from armdyn.actuators.sizing import representative_drives
-from armdyn.actuators.stepping import DriveRecord, simulate, stable_step
 
 __all__ = [
     "PUMA560_ELECTRICS",
@@ -31,7 +31,6 @@ __all__ = [
     "motor_drives",
     "puma560_with_drives",
     "representative_drives",
-    "simulate",
     "stable_step",
     "transfer_function",
     "with_actuators",

@@ -38,7 +38,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from armdyn import inputs
-from armdyn.actuators import stepping
+from armdyn.actuators import packing
 from armdyn.actuators.hydraulics import Hydraulic
 from armdyn.actuators.motors import DCMotor
 from armdyn.errors import ModelError
@@ -807,8 +807,66 @@ class ActuatedArm:
         A, B = self.linearize(x0, v0)
         return control.ss(A, B, np.eye(self.n_states), np.zeros(B.shape))
 
-    def _simulate(self, *arguments: object) -> object:
-        return stepping.simulate(self, *arguments)
+    # ----- what the simulation's stepper takes of a plant with drives (armdyn.simulation.DrivenPlant) ---------
+    def packed_drives(self) -> np.ndarray:
+        """The drives' parameters packed for the compiled model (armdyn.dynamics.drives), (ROWS, n).
+
+        Returns
+        -------
+        numpy.ndarray
+            One row per parameter, one column per joint, with each joint's indices into the state.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a DC drive has no inductance (its current is then not a state of the full model).
+        """
+        self._check_full()
+        return packing.packed_drives(self)
+
+    def stable_step(self, q: object, bandwidth: object = None) -> float:
+        """The RK4 step (s) that resolves the drives' fast dynamics near q (``armdyn.actuators.stable_step``).
+
+        Parameters
+        ----------
+        q : array_like
+            One configuration, (n,).
+        bandwidth : array_like or None, optional
+            The current loops' w_c (n values), when a law closes them.
+
+        Returns
+        -------
+        float
+            The step, s (math.inf when nothing is fast).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When q is not one configuration, or M(q) is singular.
+        """
+        return packing.stable_step(self, q, bandwidth)
+
+    def drive_record(self, states: np.ndarray, applied: np.ndarray) -> packing.DriveRecord:
+        """What the drives did during a run, from its full states (T, n_states) and inputs applied (T, n).
+
+        Parameters
+        ----------
+        states : numpy.ndarray
+            The full state at every sample.
+        applied : numpy.ndarray
+            The inputs applied at every sample (after their limits).
+
+        Returns
+        -------
+        DriveRecord
+            The states with the currents, spools and load pressures picked out.
+
+        Raises
+        ------
+        None
+            It only slices the states.
+        """
+        return packing.drive_record(self, states, applied)
 
     def __repr__(self) -> str:
         kinds = ", ".join(type(drive).__name__ for drive in self.drives)

@@ -1,5 +1,6 @@
 """Drive-level laws (BOOK.md section 7): independent joint PID on each drive's input and computed torque
-through current commands; their compiled forms are in armdyn.dynamics.drives, which runs them."""
+through current commands; their compiled forms are in armdyn.dynamics.drives, which the simulation's
+stepper evaluates at every RK4 stage. ``drive_law`` gives the stepper a law's code and gains."""
 
 from __future__ import annotations
 
@@ -9,7 +10,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.actuators.motors import DCMotor
+from armdyn.dynamics import drives as compiled
+from armdyn.errors import ArgumentError, ModelError
 
 if TYPE_CHECKING:
     from armdyn.actuators.arm import ActuatedArm
@@ -60,6 +63,26 @@ class DrivePID:
         """
         named = ((self.kp, "kp"), (self.kv, "kv"), (self.ki, "ki"))
         return np.stack([inputs.gains(gain, name, n) for gain, name in named])
+
+    def drive_law(self, arm: ActuatedArm) -> tuple[int, np.ndarray, np.ndarray | None]:
+        """The compiled law's code, its gains (4, n: kp, kv, ki and an unused row) and no current loop.
+
+        Parameters
+        ----------
+        arm : ActuatedArm
+            The arm whose drives the law drives.
+
+        Returns
+        -------
+        tuple
+            (armdyn.dynamics.drives.DRIVE_PID, gains (4, n), None).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a gain is not one or n finite numbers at least 0.
+        """
+        return compiled.DRIVE_PID, np.vstack([self.gains(arm.n), np.zeros(arm.n)]), None
 
     def describe(self) -> str:
         """The law and its gains, for titles and reports.
@@ -136,6 +159,32 @@ class CurrentComputedTorque:
             rows.append(bandwidth)
         return np.stack(rows)
 
+    def drive_law(self, arm: ActuatedArm) -> tuple[int, np.ndarray, np.ndarray | None]:
+        """The compiled law's code, its gains (4, n: kp, kv, ki, w_c) and the current loops' bandwidths.
+
+        Parameters
+        ----------
+        arm : ActuatedArm
+            The arm, whose drives must all be rigid DC drives.
+
+        Returns
+        -------
+        tuple
+            (armdyn.dynamics.drives.CURRENT_COMPUTED_TORQUE, gains (4, n), w_c (n,)).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a drive is flexible or hydraulic, a gain is not one or n finite numbers at least 0, or a
+            bandwidth is not positive.
+        """
+        others = [d.name for d in arm.drives if not (isinstance(d, DCMotor) and not d.flexible)]
+        if others:
+            raise ModelError(f"computed torque through current commands needs rigid DC drives; {others}{arm._where} "
+                             "are flexible or hydraulic (use DrivePID)")  # fmt: skip
+        gains = self.gains(arm)
+        return compiled.CURRENT_COMPUTED_TORQUE, gains, gains[compiled.BANDWIDTH]
+
     def describe(self) -> str:
         """The law and its gains, for titles and reports.
 
@@ -156,3 +205,12 @@ class CurrentComputedTorque:
 
 VoltagePD = DrivePID
 """The PD on the motor voltages: DrivePID without the integral (kept as the book's name for it)."""
+
+
+def drive_law(controller: object, arm: ActuatedArm) -> tuple[int, np.ndarray, np.ndarray | None]:
+    """The compiled drive-level law of ``controller`` for ``arm`` (see ``DrivePID.drive_law``), or an
+    ArgumentError naming the laws an arm with drives runs."""
+    if not isinstance(controller, (DrivePID, CurrentComputedTorque)):
+        raise ArgumentError("an arm with drives runs a drive-level law: controller must be an armdyn.control.DrivePID "
+                            f"or CurrentComputedTorque, got {type(controller).__name__}")  # fmt: skip
+    return controller.drive_law(arm)

@@ -1,5 +1,6 @@
 """The arm with its drives, compiled (BOOK.md section 7; Merritt 1967): the full model's state
-derivative and a fixed-step RK4 run under a drive-level control law.
+derivative under a drive-level control law (``closed_loop``), which the simulation's compiled stepper
+integrates.
 
 The state is x = [q, qd, q_M, qd_M, i, x_v, P_L] as ``armdyn.actuators.ActuatedArm`` orders it
 (``state_derivative`` there is the NumPy version of ``full_rates``). The arm's mechanics
@@ -58,7 +59,7 @@ def _held(rate: float, value: float, limit: float) -> float:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _clipped(value: float, limit: float) -> float:
+def clipped(value: float, limit: float) -> float:
     return min(max(value, -limit), limit)
 
 
@@ -98,7 +99,7 @@ def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarr
     for j in range(n):
         out[j] = x[n + j]
         kind, r = drives[KIND, j], drives[RATIO, j]
-        u_j = _clipped(u[j], drives[INPUT_LIMIT, j])
+        u_j = clipped(u[j], drives[INPUT_LIMIT, j])
         if kind == HYDRAULIC:
             s, p = int(drives[SPOOL_AT, j]), int(drives[PRESSURE_AT, j])
             spool_rate = (drives[VALVE_GAIN, j] * u_j - x[s]) / drives[VALVE_TIME, j]
@@ -157,7 +158,7 @@ def current_computed_torque(
     status = inverse_dynamics_one(model, x[:n], x[n : 2 * n], command, tau_c)
     for j in range(n):
         r, c = drives[RATIO, j], int(drives[CURRENT_AT, j])
-        i_c = _clipped(r * tau_c[j] / drives[TORQUE_CONSTANT, j], drives[CURRENT_LIMIT, j])
+        i_c = clipped(r * tau_c[j] / drives[TORQUE_CONSTANT, j], drives[CURRENT_LIMIT, j])
         u[j] = (drives[RESISTANCE, j] * x[c] + drives[BACK_EMF, j] * x[n + j] / r
                 + drives[INDUCTANCE, j] * gains[BANDWIDTH, j] * (i_c - x[c]))  # fmt: skip
     return status
@@ -192,60 +193,3 @@ def closed_loop(model: np.ndarray, drives: np.ndarray, gains: np.ndarray, law: i
     if status != OK:
         return status
     return full_rates(model, drives, y[:size], u, tau, out[:size])
-
-
-@njit(**NUMBA_OPTIONS)
-def run_drives(
-    model: np.ndarray,
-    drives: np.ndarray,
-    gains: np.ndarray,
-    law: int,
-    kind: int,
-    params: np.ndarray,
-    q0: np.ndarray,
-    y: np.ndarray,
-    h: float,
-    substeps: int,
-    times: np.ndarray,
-    states: np.ndarray,
-    inputs: np.ndarray,
-    torques: np.ndarray,
-    accelerations: np.ndarray,
-    references: np.ndarray,
-) -> int:
-    """RK4 on y = [x, z], ``substeps`` steps of h between samples; records each sample (the inputs
-    after their limits). Returns -1, or the sample where M(q) was singular or the state stopped
-    being finite. The four stages share one evaluation site, so the inlined model is compiled once."""
-    n, size, last = int(model[N_JOINTS]), y.shape[0], states.shape[0] - 1
-    rates, stage_y = np.empty((4, size)), np.empty(size)
-    u, tau, reference, work = np.empty(n), np.empty(n), np.empty((3, n)), np.empty(2 * n)
-    recorded = states.shape[1]
-    for sample in range(last + 1):
-        t = sample * substeps * h
-        for step in range(substeps):
-            for stage in range(4):
-                c = 0.0 if stage == 0 else (0.5 if stage < 3 else 1.0)
-                if stage > 0:
-                    for j in range(size):
-                        stage_y[j] = y[j] + c * h * rates[stage - 1, j]
-                at = y if stage == 0 else stage_y
-                status = closed_loop(model, drives, gains, law, kind, params, q0, t + (step + c) * h, at, u, tau,
-                                     reference, work, rates[stage], stage != 2)  # fmt: skip
-                if status != OK:
-                    return sample
-                if step == 0 and stage == 0:
-                    times[sample] = t
-                    states[sample] = y[:recorded]
-                    for j in range(n):
-                        inputs[sample, j] = _clipped(u[j], drives[INPUT_LIMIT, j])
-                    torques[sample] = tau
-                    accelerations[sample] = rates[0, n : 2 * n]
-                    references[sample] = reference[0]
-                    for j in range(size):
-                        if not np.isfinite(y[j]):
-                            return sample
-                    if sample == last:
-                        return -1
-            for j in range(size):
-                y[j] += h / 6.0 * (rates[0, j] + 2.0 * rates[1, j] + 2.0 * rates[2, j] + rates[3, j])
-    return -1
