@@ -15,6 +15,7 @@ all are inlined into their callers.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Final, Literal, TypedDict
 
 import numpy as np
 from numba import njit, types
@@ -27,7 +28,22 @@ from armdyn.dynamics.packed import FIRST_MOMENT, HEADER, INERTIA, KIND, MASS, N_
 from armdyn.dynamics.status import NOT_FINITE, OK, WRONG_LENGTH
 from armdyn.inputs import LARGEST_STATE
 
-NUMBA_OPTIONS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
+
+class NumbaOptions(TypedDict):
+    """The keyword arguments every kernel passes to ``njit``."""
+
+    cache: bool
+    fastmath: set[str]
+    error_model: Literal["python", "numpy"]
+    boundscheck: bool
+
+
+NUMBA_OPTIONS: Final[NumbaOptions] = {
+    "cache": True,
+    "fastmath": {"contract"},
+    "error_model": "numpy",
+    "boundscheck": False,
+}
 
 # The one-state kernels' explicit signatures: C-contiguous float64 arrays. (A read-only model
 # array would cost Numba about 60 ns more to type at every call; the tests check instead
