@@ -39,11 +39,12 @@ def state(
     if value is None or isinstance(value, (str, bytes, dict)):
         raise ModelError(f"{name} must be an array of numbers of shape ({n},) or (..., {n}){where}, got {value!r}")
     try:
-        complex_input = np.iscomplexobj(value)
+        complex_input = np.iscomplexobj(value)  # type: ignore[arg-type]  # NumPy documents any object; its stub says array-like
         if complex_input and not complex_ok:
             raise ModelError(f"{name} must be real{where}; it is complex")
-        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biufc":
-            raise TypeError(f"{name} holds {value.dtype} values, not numbers")
+        dtype = getattr(value, "dtype", None)
+        if dtype is not None and dtype.kind not in "biufc":
+            raise TypeError(f"{name} holds {dtype} values, not numbers")
         array = np.asarray(np.asarray(value), dtype=complex if complex_input else float)  # no ndarray subclass
     except (TypeError, ValueError, ArithmeticError) as error:
         if isinstance(error, ModelError):
@@ -148,9 +149,10 @@ def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
 def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
     """A tool wrench [force; moment] (6,) or one per state (..., 6), as a (B, 6) C array."""
     try:
-        if np.iscomplexobj(f_ext):
+        if np.iscomplexobj(f_ext):  # type: ignore[arg-type]  # NumPy documents any object; its stub says array-like
             raise TypeError("complex")
-        if getattr(f_ext, "dtype", None) is not None and f_ext.dtype.kind not in "biuf":
+        dtype = getattr(f_ext, "dtype", None)
+        if dtype is not None and dtype.kind not in "biuf":
             raise TypeError("not numbers")
         wrench = np.asarray(f_ext, dtype=float)
     except (TypeError, ValueError, ArithmeticError):
@@ -173,8 +175,9 @@ def gains(value: object, name: str, n: int) -> np.ndarray:
 def vector(value: object, name: str) -> np.ndarray:
     """A finite number or 1-D array of numbers, as a 1-D float array."""
     try:
-        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biuf":
-            raise TypeError(f"{name} holds {value.dtype} values, not numbers")
+        dtype = getattr(value, "dtype", None)
+        if dtype is not None and dtype.kind not in "biuf":
+            raise TypeError(f"{name} holds {dtype} values, not numbers")
         array = np.atleast_1d(np.asarray(value, dtype=float))
     except (TypeError, ValueError, ArithmeticError):
         raise ModelError(f"{name} must be a finite number or a 1-D array, got {value!r}") from None
@@ -203,10 +206,11 @@ def numbers(value: object, name: str, shape: tuple[int, ...] | None = None, wher
     if value is None or isinstance(value, (str, bytes, dict, set)):
         raise ModelError(f"{name} must be {expected}{where}, got {_shown(value)}")
     try:
-        if np.iscomplexobj(value):
+        if np.iscomplexobj(value):  # type: ignore[arg-type]  # NumPy documents any object; its stub says array-like
             raise ModelError(f"{name} must be real{where}; it is complex")
-        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biuf":
-            raise TypeError(f"{name} holds {value.dtype} values")
+        dtype = getattr(value, "dtype", None)
+        if dtype is not None and dtype.kind not in "biuf":
+            raise TypeError(f"{name} holds {dtype} values")
         array = np.array(value, dtype=float)
     except (TypeError, ValueError, ArithmeticError) as error:
         if isinstance(error, ModelError):

@@ -18,7 +18,7 @@ import numpy as np
 
 from armdyn.errors import ModelError
 from armdyn.model.arm import Link
-from armdyn.model.inertial import Inertial, parameter
+from armdyn.model.inertial import Inertial, Scalar, parameter
 from armdyn.model.joint import Joint
 from armdyn.robot import Robot
 
@@ -43,7 +43,7 @@ def _symbols(names: str) -> tuple:
     return sympy.symbols(names, positive=True)
 
 
-def _checked(arm: str, masses: dict[str, object], others: dict[str, object]) -> list[object]:
+def _checked(arm: str, masses: dict[str, object], others: dict[str, object]) -> list[Scalar]:
     """The parameters of a book example, in order (masses first): SymPy expressions as given,
     numbers as finite real floats, masses (and inertias) >= 0; else a ModelError naming the
     parameter and what it is."""
@@ -52,7 +52,7 @@ def _checked(arm: str, masses: dict[str, object], others: dict[str, object]) -> 
     return values + [parameter(v, f"{what[k[0]]} {k}", arm) for k, v in others.items()]
 
 
-def _planar_gravity(g: object) -> list[object]:
+def _planar_gravity(g: Scalar) -> list[Scalar]:
     """The book's planar arms move in the vertical x-y plane with y up."""
     return [0, -g, 0] if hasattr(g, "free_symbols") else [0.0, -float(g), 0.0]
 
@@ -411,12 +411,12 @@ def _value(text: str, where: str) -> float:
     import ast
     import operator
 
-    binary = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
-              ast.Pow: operator.pow}  # fmt: skip
-    unary = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+    binary: dict[type[ast.operator], Callable[[float, float], float]] = {ast.Add: operator.add, ast.Sub: operator.sub,
+        ast.Mult: operator.mul, ast.Div: operator.truediv, ast.Pow: operator.pow}  # fmt: skip
+    unary: dict[type[ast.unaryop], Callable[[float], float]] = {ast.USub: operator.neg, ast.UAdd: operator.pos}
 
     def evaluate(node: ast.AST) -> float:
-        if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
             return float(node.value)
         if isinstance(node, ast.Name) and node.id == "pi":
             return _PI

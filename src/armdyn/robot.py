@@ -11,6 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from armdyn import kinematics
 from armdyn.dynamics import api
 from armdyn.dynamics import regressor as parameterization
@@ -32,6 +34,8 @@ class Robot(ArmModel):
         The model array the compiled kernels read, made with the arm (None for symbolic
         parameters). No call writes it; neither should you.
     """
+
+    packed: np.ndarray | None
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)

@@ -16,6 +16,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
 from armdyn.robot import Robot
+
+if TYPE_CHECKING:
+    from lxml import etree
 
 _MOVING = {"revolute", "continuous", "prismatic"}
 # The test for joints that move no mass: M(q) is factored at this many random configurations
@@ -118,7 +122,7 @@ def _parse(path: Path) -> _Robot:
     return _Robot(root.get("name"), links, [_read_joint(element, path) for element in root.iterfind("joint")])
 
 
-def _name(element: object, path: Path) -> str:
+def _name(element: etree._Element, path: Path) -> str:
     """The name attribute of a <link> or <joint>, which the URDF specification requires."""
     name = element.get("name")
     if name is None:
@@ -129,7 +133,7 @@ def _name(element: object, path: Path) -> str:
     return name
 
 
-def _number(element: object, attribute: str, default: float | None, where: str, what: str) -> float | None:
+def _number(element: etree._Element, attribute: str, default: float | None, where: str, what: str) -> float | None:
     """An attribute read as a number (Python's float: NaN and infinity pass, for the checks that name them), or
     ``default`` when it is absent; refused unless it is a number."""
     text = element.get(attribute)
@@ -143,7 +147,7 @@ def _number(element: object, attribute: str, default: float | None, where: str, 
         ) from None
 
 
-def _pose(origin: object) -> np.ndarray | None:
+def _pose(origin: etree._Element | None) -> np.ndarray | None:
     """The 4x4 pose an ``<origin xyz rpy>`` gives (each 0 0 0 when absent), None for no element.
 
     rpy are fixed-axis roll, pitch, yaw: R = Rz(yaw) Ry(pitch) Rx(roll), written out term by term as trimesh's
@@ -168,7 +172,7 @@ def _pose(origin: object) -> np.ndarray | None:
     return pose
 
 
-def _read_link(element: object, path: Path) -> _Link:
+def _read_link(element: etree._Element, path: Path) -> _Link:
     name = _name(element, path)
     found = element.find("inertial")
     if found is None:
@@ -202,7 +206,7 @@ def _read_link(element: object, path: Path) -> _Link:
     )
 
 
-def _read_joint(element: object, path: Path) -> _Joint:
+def _read_joint(element: etree._Element, path: Path) -> _Joint:
     name = _name(element, path)
     where = f"{path.name}: joint '{name}'"
     ends = []
@@ -230,10 +234,11 @@ def _read_joint(element: object, path: Path) -> _Joint:
             _number(mimic, attribute, None, where, "<mimic>")
     origin = _pose(element.find("origin"))
     axis = np.array([float(word) for word in xyz.split()])
-    return _Joint(name, element.get("type"), *ends, origin, axis, limit, dynamics, mimic is not None)
+    parent, child = ends
+    return _Joint(name, element.get("type"), parent, child, origin, axis, limit, dynamics, mimic is not None)
 
 
-def _check_vectors(root: object, file: str) -> None:
+def _check_vectors(root: etree._Element, file: str) -> None:
     """Refuse an xyz, rpy or axis of the file that reaches the model (``_VECTORS``) unless it is
     3 numbers, each below LARGEST_STATE (1e15) in magnitude where finite: products of larger
     values overflow. NaN and infinity are left to the checks that name them (``_origin``,
@@ -273,7 +278,7 @@ def _origin(element: _Joint | _Inertial, where: str) -> np.ndarray:
     return pose
 
 
-def _finite(value: object, where: str, what: str) -> float:
+def _finite(value: str | float, where: str, what: str) -> float:
     """``value`` as a float, refused with a ModelError naming ``where`` and ``what`` unless finite."""
     try:
         number = float(value)  # the file's <dynamics> damping and friction reach here as text
@@ -424,6 +429,7 @@ def load_urdf(
                 f"{where}: link '{joint.child}' already has parent joint '{parent_of[joint.child]}': "
                 "a kinematic loop, which a tree cannot hold"
             )
+        assert joint.parent is not None and joint.child is not None  # both name links of the file
         parent_of[joint.child] = joint.name
         children[joint.parent].append(joint)
     roots = [name for name in links if name not in parent_of]
@@ -485,7 +491,7 @@ def load_urdf(
     return arm
 
 
-def _file_path(path: object) -> Path:
+def _file_path(path: str | bytes | os.PathLike[str] | os.PathLike[bytes]) -> Path:
     """``path`` (str, bytes or os.PathLike) as a Path, or a TypeError naming it."""
     try:
         name = os.fspath(path)
@@ -533,7 +539,7 @@ def _massless_joints(arm: Robot) -> list[str]:
         column = work[:, j + 1 :, j]
         scale = np.where(zero[:, j], 0.0, 1.0 / np.where(zero[:, j], 1.0, pivot))
         work[:, j + 1 :, j + 1 :] -= scale[:, None, None] * column[:, :, None] * column[:, None, :]
-    return [name for name, always in zip(arm.joint_names, zero.all(axis=0), strict=True) if always]
+    return [name for name, always in zip(arm.joint_names, np.all(zero, axis=0), strict=True) if always]
 
 
 def _check_locked(file: str, joints: list[_Joint], locked: object) -> dict:
@@ -592,10 +598,11 @@ def _moving_link(file: str, joint: _Joint, parent: int, placement: np.ndarray, b
     kind = "prismatic" if joint.type == "prismatic" else "revolute"
     limits = (-np.inf, np.inf)
     if joint.type != "continuous" and joint.limit is not None:  # the specification: lower and upper default to 0
-        limits = tuple(
+        lower, upper = (
             0.0 if value is None else _finite(value, where, f"<limit> {bound}")
             for bound, value in (("lower", joint.limit.lower), ("upper", joint.limit.upper))
         )
+        limits = (lower, upper)
     damping = friction = 0.0
     if joint.dynamics is not None:
         damping = _finite(joint.dynamics.damping or 0.0, where, "<dynamics> damping")

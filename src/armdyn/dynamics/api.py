@@ -22,7 +22,7 @@ import __future__
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from numba import get_num_threads, set_num_threads
@@ -63,6 +63,8 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from armdyn.robot import Robot
+
+_Declaration = TypeVar("_Declaration", bound=Callable[..., object])
 
 _empty = np.empty
 # What the compiled one-state entries raise for arguments they do not take (lists, batches, other
@@ -119,6 +121,7 @@ def _frame(frame: object) -> int:
     if type(frame) is str and frame in _FRAMES:
         return _FRAMES[frame]
     kinematics.check_frame(frame)
+    assert isinstance(frame, str)  # check_frame lets only the strings "base" and "tool" through
     return _FRAMES[frame]
 
 
@@ -233,7 +236,7 @@ def {name}({parameters}):
 """
 
 
-def _public(declaration: Callable) -> Callable:
+def _public(declaration: _Declaration) -> _Declaration:
     """The public function of TABLE's row for ``declaration`` (its name, signature and docstring):
 
         result = new (n-shaped) array, or out
@@ -826,7 +829,8 @@ def inverse_dynamics_derivatives(
                 return d_q, d_qd
         except _NOT_ONE_STATE:
             if (thawed := inputs.thawed(q, qd, qdd)) is not None:
-                return inverse_dynamics_derivatives(arm, *thawed, coulomb_smoothing=coulomb_smoothing)
+                q, qd, qdd = thawed
+                return inverse_dynamics_derivatives(arm, q, qd, qdd, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, _where(arm))
     results = _pair(out, (*batch, n, n), 2)
     if flat[0].shape[0]:
@@ -877,7 +881,8 @@ def forward_dynamics_derivatives(
                 return d_q, d_qd, d_tau
         except _NOT_ONE_STATE:
             if (thawed := inputs.thawed(q, qd, tau)) is not None:
-                return forward_dynamics_derivatives(arm, *thawed, coulomb_smoothing=coulomb_smoothing)
+                q, qd, tau = thawed
+                return forward_dynamics_derivatives(arm, q, qd, tau, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), n, _where(arm))
     results = _pair(out, (*batch, n, n), 3)
     singular = np.full(flat[0].shape[0], -1)

@@ -18,6 +18,7 @@ import hashlib
 import os
 import shutil
 from pathlib import Path
+from types import FunctionType
 
 from numba.core import config
 
@@ -39,8 +40,9 @@ def sources_hash(package: Path = PACKAGE) -> str:
 
 def cache_folder(stamp: str, package: Path = PACKAGE) -> Path:
     """The folder for kernels compiled from sources with this hash."""
-    if config.CACHE_DIR:
-        return Path(config.CACHE_DIR) / "armdyn" / f"{PREFIX}{stamp}"
+    cache_dir = config.CACHE_DIR  # type: ignore[attr-defined]  # Numba sets its config from the environment at run time
+    if cache_dir:
+        return Path(cache_dir) / "armdyn" / f"{PREFIX}{stamp}"
     in_tree = package / "__pycache__"
     if os.access(package, os.W_OK) and (not in_tree.exists() or os.access(in_tree, os.W_OK)):
         return in_tree / f"{PREFIX}{stamp}"
@@ -62,7 +64,7 @@ FOLDER = cache_folder(STAMP)
 class KernelCacheLocator(CacheLocator):
     """Numba cache locator for armdyn's own compiled functions (see the module docstring)."""
 
-    def __init__(self, py_func: object, py_file: str) -> None:
+    def __init__(self, py_func: FunctionType, py_file: str) -> None:
         self._lineno = py_func.__code__.co_firstlineno
         self._path = str(FOLDER / Path(py_file).resolve().relative_to(PACKAGE).parent)
 
@@ -76,7 +78,7 @@ class KernelCacheLocator(CacheLocator):
         return str(self._lineno)
 
     @classmethod
-    def from_function(cls, py_func: object, py_file: str) -> KernelCacheLocator | None:
+    def from_function(cls, py_func: FunctionType, py_file: str) -> KernelCacheLocator | None:
         if not Path(py_file).resolve().is_relative_to(PACKAGE):
             return None  # not armdyn's: Numba's own locators decide
         locator = cls(py_func, py_file)

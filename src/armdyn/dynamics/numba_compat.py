@@ -20,10 +20,14 @@ from __future__ import annotations
 import threading
 import warnings
 from types import MethodType
+from typing import TYPE_CHECKING, Any
 
 import numba
 from numba.core import caching
 from numba.core.dispatcher import Dispatcher
+
+if TYPE_CHECKING:
+    from numba.core.typing.templates import Signature
 
 SUPPORTED = ((0, 60), (0, 69))
 """Numba versions armdyn is tested with: from the first (inclusive) to the second (exclusive)."""
@@ -52,7 +56,7 @@ def check_version(text: str = numba.__version__) -> bool:
     return False
 
 
-def _require(owner: object, name: str) -> object:
+def _require(owner: object, name: str) -> Any:
     if not hasattr(owner, name):
         raise ImportError(
             f"Numba {numba.__version__} has no {getattr(owner, '__name__', owner)}.{name}, which armdyn's compiled "
@@ -70,7 +74,7 @@ for _name in _DISPATCHER_INTERNALS[:3]:
     _require(Dispatcher, _name)
 
 
-def one_state_dispatcher(dispatcher: Dispatcher, signature: object) -> Dispatcher:
+def one_state_dispatcher(dispatcher: Dispatcher, signature: Signature) -> Dispatcher:
     """``dispatcher`` made to compile (or load from the cache) only ``signature``, at its first call,
     and to refuse any other argument types with a TypeError at once.
 
@@ -85,7 +89,7 @@ def one_state_dispatcher(dispatcher: Dispatcher, signature: object) -> Dispatche
 
     def compile_signature(self: Dispatcher, *args: object, **kwargs: object) -> Dispatcher:
         with first_call:
-            if self._can_compile:
+            if self._can_compile:  # type: ignore[attr-defined]  # a Numba internal, not in its stubs
                 self.compile(signature)
                 self.disable_compile()
         return self
@@ -100,9 +104,10 @@ def one_state_dispatcher(dispatcher: Dispatcher, signature: object) -> Dispatche
         # which every refused call takes next, names what is wrong
         raise TypeError(message)
 
-    dispatcher._compile_for_args = MethodType(compile_signature, dispatcher)
-    dispatcher._search_new_conversions = MethodType(no_conversion, dispatcher)
-    dispatcher._explain_matching_error = MethodType(refuse, dispatcher)
+    # Numba internals, not in its stubs (see the module docstring)
+    dispatcher._compile_for_args = MethodType(compile_signature, dispatcher)  # type: ignore[attr-defined]
+    dispatcher._search_new_conversions = MethodType(no_conversion, dispatcher)  # type: ignore[attr-defined]
+    dispatcher._explain_matching_error = MethodType(refuse, dispatcher)  # type: ignore[attr-defined]
     return dispatcher
 
 

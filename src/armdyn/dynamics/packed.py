@@ -100,7 +100,8 @@ def _homogeneous(rotation: np.ndarray) -> np.ndarray:
 def body_frames(robot: ArmModel) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """(placement of each joint frame in its parent's body frame, pose of each link frame in its body frame)."""
     align = [_homogeneous(_rotation_onto(link.joint.axis)) for link in robot.links]
-    placements, link_in_body = [], []
+    placements: list[np.ndarray] = []
+    link_in_body: list[np.ndarray] = []
     for i, link in enumerate(robot.links):
         before = robot.base if link.parent < 0 else link_in_body[link.parent]
         placements.append(before @ link.joint.placement @ align[i])
@@ -151,5 +152,5 @@ def inertia_scale(robot: ArmModel) -> float:
     total = float(np.sum(robot.reflected_inertia))
     for link in robot.links:
         body = link.inertial
-        total += float(np.trace(body.inertia)) + body.mass * (reach + np.linalg.norm(body.com)) ** 2
+        total += float(np.trace(body.inertia)) + float(body.mass * (reach + np.linalg.norm(body.com)) ** 2)
     return total if total > 0 else 1.0

@@ -461,10 +461,10 @@ def base_parameters(
     seed = inputs.integer(seed, "seed", 0)
     drives = _flag(drives, "drives")
     at_rest = _flag(at_rest, "at_rest")
-    tolerance = inputs.vector(tolerance, "tolerance")
-    if tolerance.shape != (1,) or not 0 < tolerance[0] < 1:
-        raise ModelError(f"tolerance must be one number in (0, 1), got {tolerance.tolist()}")
-    tolerance = float(tolerance[0])
+    given = inputs.vector(tolerance, "tolerance")
+    if given.shape != (1,) or not 0 < given[0] < 1:
+        raise ModelError(f"tolerance must be one number in (0, 1), got {given.tolist()}")
+    tolerance = float(given[0])
     rng = np.random.default_rng(seed)
     lower, upper = robot.qlim
     low = np.where(np.isfinite(lower), lower, -np.pi)
@@ -670,7 +670,8 @@ def identify(
     W = base.regressor(*arrays[:3]).reshape(-1, r)[keep]
     y = arrays[3].reshape(-1)[keep]
     joint = np.tile(np.arange(n), samples)[keep]
-    R = np.linalg.qr(np.column_stack([W, y]), mode="r")  # [W y] = Q R: R[:r, :r] has W's singular values
+    # [W y] = Q R: R[:r, :r] has W's singular values (NumPy's stub types mode "r" as returning Q and R; it returns R)
+    R: np.ndarray = np.linalg.qr(np.column_stack([W, y]), mode="r")  # type: ignore[assignment]
     singular = np.linalg.svd(R[:r, :r], compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
     rank = int(np.sum(singular > singular[0] * max(W.shape) * np.finfo(float).eps)) if singular[0] > 0 else 0

@@ -15,6 +15,7 @@ all are inlined into their callers.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Final, Literal, TypedDict
 
 import numpy as np
 from numba import njit, types
@@ -27,7 +28,28 @@ from armdyn.dynamics.packed import FIRST_MOMENT, HEADER, INERTIA, KIND, MASS, N_
 from armdyn.dynamics.status import NOT_FINITE, OK, WRONG_LENGTH
 from armdyn.inputs import LARGEST_STATE
 
-NUMBA_OPTIONS = {"cache": True, "fastmath": {"contract"}, "error_model": "numpy", "boundscheck": False}
+if TYPE_CHECKING:
+    from llvmlite import ir
+    from numba.core.base import BaseContext
+    from numba.core.typing.context import BaseContext as TypingContext
+    from numba.core.typing.templates import Signature
+
+
+class NumbaOptions(TypedDict):
+    """The keyword arguments every kernel passes to ``njit``."""
+
+    cache: bool
+    fastmath: set[str]
+    error_model: Literal["python", "numpy"]
+    boundscheck: bool
+
+
+NUMBA_OPTIONS: Final[NumbaOptions] = {
+    "cache": True,
+    "fastmath": {"contract"},
+    "error_model": "numpy",
+    "boundscheck": False,
+}
 
 # The one-state kernels' explicit signatures: C-contiguous float64 arrays. (A read-only model
 # array would cost Numba about 60 ns more to type at every call; the tests check instead
@@ -37,7 +59,7 @@ VECTOR = types.float64[::1]
 MATRIX = types.float64[:, ::1]
 
 
-def one_state(signature: types.Signature) -> Callable[[Callable], Dispatcher]:
+def one_state(signature: Signature) -> Callable[[Callable], Dispatcher]:
     """``njit(signature)`` compiled (or loaded from the cache) at the kernel's first call, not at
     import: importing armdyn then costs no compilation, and a program pays only for the kernels
     it calls.
@@ -57,13 +79,17 @@ STACK_SCRATCH = 4096  # values (32 KiB): a one-state kernel's scratch up to this
 
 
 @intrinsic
-def _stack_empty(typingctx: object, size: types.Integer) -> tuple:
+def _stack_empty(
+    typingctx: TypingContext, size: types.Integer
+) -> tuple[Signature, Callable[[BaseContext, ir.IRBuilder, Signature, tuple[ir.Value, ...]], ir.Value]]:
     """A float64 array of ``size`` values in the calling function's stack frame (uninitialized, no
     reference count): no allocation, but valid only until that function returns, so it must be
     called from code inlined into the kernel that uses it, never returned or stored."""
     array_type = types.Array(types.float64, 1, "C")
 
-    def codegen(context: object, builder: object, signature: object, args: tuple) -> object:
+    def codegen(
+        context: BaseContext, builder: ir.IRBuilder, signature: Signature, args: tuple[ir.Value, ...]
+    ) -> ir.Value:
         (count,) = args
         data = builder.alloca(context.get_value_type(types.float64), size=count)
         array = context.make_array(array_type)(context, builder)
@@ -81,7 +107,7 @@ def scratch(size: int) -> np.ndarray:
     costs about 50 ns, a fifth of a small arm's inverse dynamics), on the heap beyond (thread
     stacks are small). For the one-state kernels only; see _stack_empty."""
     if size <= STACK_SCRATCH:
-        return _stack_empty(size)
+        return _stack_empty(size)  # type: ignore[call-arg, arg-type]  # Numba's stub keeps typingctx, which Numba passes
     return np.empty(size)
 
 

@@ -36,7 +36,8 @@ def set_threads(count: int) -> None:
 
     from armdyn import inputs
 
-    count = inputs.integer(count, "count", 1, numba.config.NUMBA_NUM_THREADS, " (NUMBA_NUM_THREADS at start-up)")
+    largest = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # Numba sets its config at run time
+    count = inputs.integer(count, "count", 1, largest, " (NUMBA_NUM_THREADS at start-up)")
     numba.set_num_threads(count)
 
 

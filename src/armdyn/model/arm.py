@@ -10,7 +10,7 @@ import dataclasses
 import reprlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Self, cast
 
 import numpy as np
 
@@ -206,7 +206,7 @@ class ArmModel:
         table: Sequence[Mapping[str, Any]],
         convention: str = "standard",
         **robot_options: Any,
-    ) -> ArmModel:
+    ) -> Self:
         """An arm from a Denavit-Hartenberg table, one mapping per joint (Appendix A).
 
         Each joint's parent is the joint before it (a serial chain).
@@ -251,7 +251,9 @@ class ArmModel:
             unknown = set(row) - _DH_KEYS - {"strict"}
             if unknown:
                 raise ModelError(f"{where}: unknown DH row keys {sorted(unknown, key=str)} (known: {sorted(_DH_KEYS)})")
-            a, alpha, d, theta = dh_parameters(*(row.get(key, 0.0) for key in ("a", "alpha", "d", "theta")), where)
+            a, alpha, d, theta = dh_parameters(
+                row.get("a", 0.0), row.get("alpha", 0.0), row.get("d", 0.0), row.get("theta", 0.0), where
+            )
             joint = dh_joint(row.get("kind", "R"), a, alpha, d, theta, convention, name)
             inertial = Inertial(
                 row.get("mass", 0.0),
@@ -276,7 +278,7 @@ class ArmModel:
             rows.append({"kind": joint.kind, "a": a, "alpha": alpha, "d": d, "theta": theta})
         return cls(links, dh={"convention": convention, "rows": rows}, **robot_options)
 
-    def replace(self, links: Sequence[Link] | None = None, **changes: Any) -> ArmModel:
+    def replace(self, links: Sequence[Link] | None = None, **changes: Any) -> Self:
         """A copy with some links or options changed (the arm itself never changes).
 
         Parameters
@@ -297,7 +299,7 @@ class ArmModel:
         armdyn.ModelError
             When the changed arm is invalid (see the class docstring).
         """
-        options = {
+        options: dict[str, Any] = {
             "name": self.name,
             "gravity": self._gravity,
             "base": self._base,
@@ -310,7 +312,7 @@ class ArmModel:
         options.update(changes)
         return type(self)(self._links if links is None else links, **options)
 
-    def with_payload(self, mass: float, com: Iterable[float] = (0.0, 0.0, 0.0), inertia: object = None) -> ArmModel:
+    def with_payload(self, mass: float, com: Iterable[float] = (0.0, 0.0, 0.0), inertia: object = None) -> Self:
         """The arm carrying a payload rigidly attached to the tool link (added, never overwriting).
 
         The payload's mass properties are added to the tool link's (parallel-axis theorem).
@@ -336,12 +338,14 @@ class ArmModel:
             When the payload's mass properties are invalid (see Inertial).
         """
         tool = self._links[self._tool_link]
-        payload = Inertial(mass, com, np.zeros((3, 3)) if inertia is None else inertia, f"{tool.name} payload")
+        # Inertial takes array_like values (it checks and converts them); its fields are typed as the arrays kept
+        given = cast(np.ndarray, np.zeros((3, 3)) if inertia is None else inertia)
+        payload = Inertial(mass, cast(np.ndarray, com), given, f"{tool.name} payload")
         links = list(self._links)
         links[self._tool_link] = dataclasses.replace(tool, inertial=tool.inertial + payload)
         return self.replace(links)
 
-    def without_friction(self) -> ArmModel:
+    def without_friction(self) -> Self:
         """The same arm with no viscous or Coulomb friction.
 
         Returns
@@ -351,7 +355,7 @@ class ArmModel:
         """
         return self.replace([dataclasses.replace(link, viscous=0.0, coulomb=(0.0, 0.0)) for link in self._links])
 
-    def without_motors(self) -> ArmModel:
+    def without_motors(self) -> Self:
         """The same arm with no motor rotor inertia (friction, if any, is kept at the joint side).
 
         Returns
@@ -364,7 +368,7 @@ class ArmModel:
             dataclasses.replace(
                 link,
                 viscous=link.gear_ratio**2 * link.viscous,
-                coulomb=tuple(abs(link.gear_ratio) * c for c in link.coulomb),
+                coulomb=(abs(link.gear_ratio) * link.coulomb[0], abs(link.gear_ratio) * link.coulomb[1]),
                 motor_inertia=0.0,
                 gear_ratio=1.0,
             )
@@ -372,7 +376,7 @@ class ArmModel:
         ]
         return self.replace(links)
 
-    def with_gravity(self, gravity: Iterable[object]) -> ArmModel:
+    def with_gravity(self, gravity: Iterable[object]) -> Self:
         """The same arm under another gravity.
 
         Parameters
@@ -392,7 +396,7 @@ class ArmModel:
         """
         return self.replace(gravity=gravity)
 
-    def reduced(self, locked: Mapping[str, float]) -> ArmModel:
+    def reduced(self, locked: Mapping[str, float]) -> Self:
         """The arm with some joints locked: each becomes fixed at a given value.
 
         Pinocchio's reduced model (``pin.buildReducedModel``). A locked joint's body is

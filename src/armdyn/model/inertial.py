@@ -18,11 +18,16 @@ import reprlib
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeAlias, TypeVar
 
 import numpy as np
 
 from armdyn.errors import ModelError
+
+if TYPE_CHECKING:
+    from sympy import Expr
+
+Scalar: TypeAlias = "float | Expr"  # a number parameter: a float, or a SymPy expression for closed-form work
 
 _RELATIVE_TOLERANCE = 1e-9
 _SMALLEST_LENGTH = 0.01  # m: the least size a link is taken to have when setting the tolerance
@@ -77,9 +82,10 @@ def _numbers(value: object, name: str, bounds: bool, expected: str) -> np.ndarra
     if value is None or isinstance(value, (str, bytes, dict, set)):
         raise ModelError(f"{name} must be {expected}, got {reprlib.repr(value)}")
     try:
-        if np.iscomplexobj(value):
+        if np.iscomplexobj(value):  # type: ignore[arg-type]  # NumPy documents any object; its stub says array-like
             raise ModelError(f"{name} must be real; it is complex")
-        if getattr(value, "dtype", None) is not None and value.dtype.kind not in "biuf":
+        dtype = getattr(value, "dtype", None)
+        if dtype is not None and dtype.kind not in "biuf":
             raise TypeError(name)
         with np.errstate(over="raise"):  # a long double beyond float64 raises instead of becoming inf
             array = np.array(value, dtype=float)
@@ -139,7 +145,7 @@ def parameter_array(value: object, name: str, where: str) -> np.ndarray:
     return array
 
 
-def parameter(value: object, name: str, where: str, minimum: float | None = None) -> object:
+def parameter(value: object, name: str, where: str, minimum: float | None = None) -> Scalar:
     """A number parameter: a SymPy expression as given, else a finite real float (at least
     ``minimum`` when given), or a ModelError naming ``name`` and ``where``."""
     if _is_symbolic(value):
@@ -225,7 +231,7 @@ class Inertial:
         of 1e15 or more in magnitude are refused (products of them overflow).
     """
 
-    mass: object = 0.0
+    mass: Scalar = 0.0
     com: np.ndarray = field(default_factory=lambda: np.zeros(3))
     inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
     name: str = "link"
@@ -352,7 +358,7 @@ class Inertial:
         return _trusted(mass, com, about(self) + about(other), self.name)
 
 
-def _trusted(mass: object, com: np.ndarray, inertia: np.ndarray, name: str) -> Inertial:
+def _trusted(mass: Scalar, com: np.ndarray, inertia: np.ndarray, name: str) -> Inertial:
     """An Inertial derived from already validated ones (a rotation or a sum keeps validity)."""
     body = object.__new__(Inertial)
     for key, value in (("mass", mass), ("com", com), ("inertia", inertia), ("name", name), ("strict", False)):

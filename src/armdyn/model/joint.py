@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armdyn.errors import ModelError
-from armdyn.model.inertial import parameter, parameter_array, real_array
+from armdyn.model.inertial import Scalar, parameter, parameter_array, real_array
 
 REVOLUTE, PRISMATIC = "revolute", "prismatic"
 _KIND_ALIASES = {"r": REVOLUTE, "revolute": REVOLUTE, "continuous": REVOLUTE, "p": PRISMATIC, "prismatic": PRISMATIC}
 
 
-def _cos_sin(angle: object) -> tuple[object, object]:
+def _cos_sin(angle: Scalar) -> tuple[Scalar, Scalar]:
     if hasattr(angle, "free_symbols"):
         import sympy
 
@@ -39,7 +39,7 @@ def _homogeneous(rotation: object, translation: object) -> np.ndarray:
     return transform
 
 
-def rot_x(angle: object) -> np.ndarray:
+def rot_x(angle: Scalar) -> np.ndarray:
     """Rx(angle), the 4x4 rotation about x.
 
     Parameters
@@ -56,7 +56,7 @@ def rot_x(angle: object) -> np.ndarray:
     return _homogeneous([[1, 0, 0], [0, c, -s], [0, s, c]], [0, 0, 0])
 
 
-def rot_z(angle: object) -> np.ndarray:
+def rot_z(angle: Scalar) -> np.ndarray:
     """Rz(angle), the 4x4 rotation about z.
 
     Parameters
@@ -73,7 +73,7 @@ def rot_z(angle: object) -> np.ndarray:
     return _homogeneous([[c, -s, 0], [s, c, 0], [0, 0, 1]], [0, 0, 0])
 
 
-def trans(x: object = 0, y: object = 0, z: object = 0) -> np.ndarray:
+def trans(x: Scalar = 0, y: Scalar = 0, z: Scalar = 0) -> np.ndarray:
     """The 4x4 translation by (x, y, z).
 
     Parameters
@@ -160,7 +160,7 @@ class Joint:
         for key in ("placement", "frame_offset"):
             object.__setattr__(self, key, _pose(getattr(self, key), key, where))
         axis = real_array(self.axis, "axis", where).reshape(-1)  # a column (3, 1) is that axis
-        norm = np.linalg.norm(axis) if axis.shape == (3,) else 0.0
+        norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
         if axis.shape != (3,) or abs(norm - 1.0) > 1e-9:
             raise ModelError(f"{where}: axis must be a unit 3-vector, got {reprlib.repr(self.axis)}")
         axis.setflags(write=False)
@@ -195,7 +195,7 @@ def check_rigid(transform: np.ndarray, where: str) -> None:
 
 
 def dh_joint(
-    kind: str, a: object, alpha: object, d: object, theta: object, convention: str = "standard", name: str = "joint"
+    kind: str, a: Scalar, alpha: Scalar, d: Scalar, theta: Scalar, convention: str = "standard", name: str = "joint"
 ) -> Joint:
     """A joint from one Denavit-Hartenberg row (Appendix A).
 
@@ -241,7 +241,13 @@ def dh_joint(
     return Joint(kind, placement, np.array([0.0, 0.0, 1.0]), offset, name)
 
 
-def dh_parameters(a: object, alpha: object, d: object, theta: object, where: str) -> tuple[object, ...]:
+def dh_parameters(
+    a: object, alpha: object, d: object, theta: object, where: str
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """The DH parameters (a, alpha, d, theta) checked: each a finite real float or a SymPy expression."""
-    values = {"a": a, "alpha": alpha, "d": d, "theta": theta}
-    return tuple(parameter(value, f"DH parameter {key}", where) for key, value in values.items())
+    return (
+        parameter(a, "DH parameter a", where),
+        parameter(alpha, "DH parameter alpha", where),
+        parameter(d, "DH parameter d", where),
+        parameter(theta, "DH parameter theta", where),
+    )
