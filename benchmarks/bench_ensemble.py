@@ -1,9 +1,9 @@
-"""Many closed-loop runs at once (armdyn.simulate_many) beside a Python loop over ad.simulate and MuJoCo's
+"""Many closed-loop runs at once (armdyn.simulate with runs=) beside a Python loop over ad.simulate and MuJoCo's
 rollout, on one machine.
 
 1. 10,000 PUMA 560 computed-torque runs of 2 s at 1 kHz with random payloads, summaries only: runs per
    second on 1 and 2 threads (parallel efficiency), beside a Python loop over ad.simulate.
-2. 1,000 UR5 runs of 1 s at 1 ms, RK4, zero torque, from random initial states: simulate_many beside
+2. 1,000 UR5 runs of 1 s at 1 ms, RK4, zero torque, from random initial states: simulate(runs=) beside
    MuJoCo's rollout on the same arm (its URDF, contacts and joint limits off) at the same thread count,
    with the final states compared.
 
@@ -22,7 +22,7 @@ import numpy as np
 import armdyn as ad
 from armdyn import control
 from armdyn import trajectories as tr
-from armdyn.simulation import plant_variants, simulate_many
+from armdyn.simulation import plant_variants, simulate
 
 ROBOTS = Path(ad.__file__).resolve().parents[2] / ".venv/lib/python3.11/site-packages/cmeel.prefix/share"
 UR5 = "example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
@@ -34,11 +34,11 @@ def puma_study(runs: int) -> None:
     law, path = control.ComputedTorque(100.0, 20.0), tr.Sinusoid(0.1, 0.5, 0.0, q0)
     payloads = np.random.default_rng(0).uniform(0.0, 2.0, runs)
     plants = plant_variants(arm, runs, payload_mass=payloads)
-    simulate_many(arm, law, path, t_final=0.01, q0=q0, plants=plant_variants(arm, 2))  # compile or load
+    simulate(arm, law, path, t_final=0.01, q0=q0, plants=plant_variants(arm, 2))  # compile or load
     rates = {}
     for threads in (1, 2):
         start = time.perf_counter()
-        result = simulate_many(arm, law, path, t_final=2.0, q0=q0, plants=plants, threads=threads)
+        result = simulate(arm, law, path, t_final=2.0, q0=q0, plants=plants, threads=threads)
         rates[threads] = runs / (time.perf_counter() - start)
     loop_runs = 200
     start = time.perf_counter()
@@ -51,11 +51,11 @@ def puma_study(runs: int) -> None:
     bare_rate = loop_runs / (time.perf_counter() - start)
     per_run = result.summaries[0].nbytes + result.outcome[0].nbytes
     print(f"PUMA 560, {runs} computed-torque runs of 2 s at 1 kHz, random payloads 0-2 kg, summaries only")
-    print(f"  simulate_many, 1 thread: {rates[1]:.0f} runs/s; 2 threads: {rates[2]:.0f} runs/s "
+    print(f"  simulate(runs=), 1 thread: {rates[1]:.0f} runs/s; 2 threads: {rates[2]:.0f} runs/s "
           f"(parallel efficiency {rates[2] / (2 * rates[1]):.0%})")  # fmt: skip
     print(f"  Python loop over ad.simulate (with_payload each run, {loop_runs} runs timed): {loop_rate:.0f} runs/s")
     print(f"  the same loop without building a variant (one arm): {bare_rate:.0f} runs/s")
-    print(f"  simulate_many per core: {rates[1] / loop_rate:.2f}x the loop ({rates[1] / bare_rate:.2f}x the loop's "
+    print(f"  simulate(runs=) per core: {rates[1] / loop_rate:.2f}x the loop ({rates[1] / bare_rate:.2f}x the loop's "
           f"floor); on 2 threads {rates[2] / loop_rate:.2f}x")  # fmt: skip
     print(f"  memory kept per run: {per_run} bytes; max |error| after 1 s over the runs: "
           f"{np.abs(result.summaries[:, 1]).max():.2e} rad")  # fmt: skip
@@ -80,9 +80,9 @@ def ur5_rollouts(runs: int, threads: int = 2) -> None:
     model = mujoco_ur5(ROBOTS / UR5)
     rng = np.random.default_rng(1)
     q0, qd0 = rng.uniform(-np.pi, np.pi, (runs, 6)), rng.uniform(-1, 1, (runs, 6))
-    simulate_many(arm, None, None, t_final=0.01, q0=q0[:2], qd0=qd0[:2])
+    simulate(arm, None, None, t_final=0.01, q0=q0[:2], qd0=qd0[:2])
     start = time.perf_counter()
-    ours = simulate_many(arm, None, None, t_final=1.0, q0=q0, qd0=qd0, threads=threads)
+    ours = simulate(arm, None, None, t_final=1.0, q0=q0, qd0=qd0, threads=threads)
     armdyn_rate = runs / (time.perf_counter() - start)
     size = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     states = np.zeros((runs, size))
@@ -94,7 +94,7 @@ def ur5_rollouts(runs: int, threads: int = 2) -> None:
     mujoco_rate = runs / (time.perf_counter() - start)
     difference = np.abs(finals[:, -1, 1 : 1 + model.nq] - ours.summaries[:, 4]).max()
     print(f"UR5, {runs} runs of 1 s at 1 ms, RK4, zero torque, random starts, {threads} threads")
-    print(f"  simulate_many: {armdyn_rate:.0f} runs/s; MuJoCo rollout: {mujoco_rate:.0f} runs/s "
+    print(f"  simulate(runs=): {armdyn_rate:.0f} runs/s; MuJoCo rollout: {mujoco_rate:.0f} runs/s "
           f"({armdyn_rate / mujoco_rate:.1f}x); final q differ by {difference:.1e} rad at most")  # fmt: skip
 
 

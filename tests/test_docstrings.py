@@ -47,7 +47,6 @@ MODULES = (
 ENTRY_POINTS = (
     "armdyn.load_urdf",
     "armdyn.simulation.simulate",
-    "armdyn.simulation.simulate_many",
     "armdyn.simulation.plant_variants",
     "armdyn.properties.check",
     "armdyn.identify",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ast
 import pickle
+import re
 import shutil
 import subprocess
 import sys
@@ -228,3 +229,120 @@ def test_armdyn_kernels_are_cached_in_the_hashed_folder() -> None:
     locator = inverse_dynamics_one._cache._impl._locator
     assert isinstance(locator, cache.KernelCacheLocator)
     assert Path(locator.get_cache_path()).is_relative_to(cache.FOLDER)
+
+
+def _source_lines(pattern: str) -> dict[str, int]:
+    """Module -> number of lines of its source matching the regular expression."""
+    compiled = re.compile(pattern)
+    return {
+        name: count
+        for name, path in MODULES.items()
+        if (count := sum(1 for line in path.read_text().splitlines() if compiled.search(line)))
+    }
+
+
+def test_no_route_is_decided_by_a_class_name() -> None:
+    """type(x).__name__ == "..." (or x.__class__.__name__) never decides what runs: isinstance or a protocol does."""
+    offenders = []
+    for module, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Compare) and any(
+                isinstance(part, ast.Attribute) and part.attr == "__name__" and not _is_module_name(part)
+                for part in [node.left, *node.comparators]
+            ):
+                offenders.append(f"{module}:{node.lineno}")
+    assert not offenders, offenders
+
+
+def _is_module_name(node: ast.Attribute) -> bool:
+    return isinstance(node.value, ast.Name) and node.value.id == "__name__"
+
+
+def test_one_home_for_rk4_cholesky_quintic_and_coulomb() -> None:
+    # RK4's update y + h/6 (k1 + 2 k2 + 2 k3 + k4): compiled once, its NumPy reference (simulate's Python
+    # loop) once, and the passivity row of the property check, which integrates the kinetic energy beside the arm
+    assert _source_lines(r"/ 6(\.0)? \* \(.*\+ 2(\.0)? \* .*\+ 2(\.0)? \* ") == {
+        "armdyn.simulation": 3,  # the compiled rk4_advance, and q and qd in the Python loop
+        "armdyn.properties": 1,
+    }
+    # Cholesky: a pivot's square root, in dynamics/linalg.py only
+    assert set(_source_lines(r"sqrt\((d|total|pivot|s)\)")) == {"armdyn.dynamics.linalg"}
+    # the quintic time law 10 u^3 - 15 u^4 + 6 u^5
+    assert _source_lines(r"10(\.0)? \* \w+ ?\*\* ?3") == {"armdyn.trajectories.joint": 1}
+    # the Coulomb law's sign and its tanh smoothing, in dynamics/friction.py only
+    assert set(_source_lines(r"math\.tanh\(|np\.tanh\(")) <= {"armdyn.dynamics.friction", "armdyn.dynamics.derivatives"}
+    assert set(_source_lines(r"if rate > 0\.0 else|> 0\.0 else \(.* < 0\.0")) == {"armdyn.dynamics.friction"}
+
+
+# Names defined in more than one module on purpose: the Lagrange-Euler reference and the NumPy kinematics are the
+# compiled functions' independent oracles, under the same names; the traced Newton-Euler of symbolic/ writes the
+# kernels' steps as symbols, under their names; the command line's commands are named after what they run; the
+# symbolic algebra's number, skew and cross are SymEngine's, beside the NumPy ones.
+_REFERENCE = "armdyn.dynamics.lagrange"
+ALLOWED_REPEATS = {
+    **{
+        name: ["armdyn.dynamics.api", _REFERENCE]
+        for name in (
+            "coriolis_vector",
+            "inertia_matrix",
+            "inertia_matrix_dot",
+            "inverse_dynamics",
+            "kinetic_energy",
+            "potential_energy",
+        )
+    },
+    **{name: ["armdyn.dynamics.api", _REFERENCE, "armdyn.symbolic.derive"] for name in ("friction", "gravity_vector")},
+    "coriolis_matrix": ["armdyn.dynamics.api", _REFERENCE, "armdyn.symbolic.newton_euler"],
+    **{
+        name: ["armdyn.dynamics.api", "armdyn.kinematics"]
+        for name in ("jacobian", "jacobian_dot", "link_transforms", "tool_pose")
+    },
+    "body_coriolis": ["armdyn.dynamics.coriolis", "armdyn.symbolic.newton_euler"],
+    "body_regressor": ["armdyn.dynamics.regressor", "armdyn.symbolic.newton_euler"],
+    "force_cross": ["armdyn.dynamics.derivatives", "armdyn.symbolic.newton_euler"],
+    **{
+        name: ["armdyn.dynamics.spatial", "armdyn.symbolic.newton_euler"]
+        for name in ("force_to_parent", "joint_transform", "motion_to_child")
+    },
+    **{
+        name: ["armdyn.cli", module]
+        for name, module in (
+            ("check", "armdyn.properties"),
+            ("derive", "armdyn.symbolic.closed_form"),
+            ("identify", "armdyn.dynamics.regressor"),
+            ("simulate", "armdyn.simulation"),
+        )
+    },
+    "number": ["armdyn.inputs", "armdyn.model.display", "armdyn.symbolic.algebra"],
+    "skew": ["armdyn.kinematics", "armdyn.symbolic.algebra"],
+    "cross": ["armdyn.symbolic.algebra", "armdyn.symbolic.newton_euler"],
+    **{
+        name: ["armdyn.symbolic.codegen", "armdyn.symbolic.newton_euler"]
+        for name in ("FUNCTIONS", "c_source", "python_source")
+    },
+}
+
+
+def test_every_public_name_is_defined_once() -> None:
+    """A public name (no leading underscore) defined at module level in two modules of the package is two
+    homes for one idea, or one name for two; re-exports in __init__ files do not count."""
+    homes: dict[str, list[str]] = {}
+    for module, path in MODULES.items():
+        if path.name == "__init__.py":
+            continue
+        for node in ast.parse(path.read_text()).body:
+            names = []
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                names = [node.name]
+            elif isinstance(node, ast.Assign):
+                names = [t.id for t in node.targets if isinstance(t, ast.Name)]
+                names += [
+                    e.id for t in node.targets if isinstance(t, ast.Tuple) for e in t.elts if isinstance(e, ast.Name)
+                ]
+            elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+                names = [node.target.id]
+            for name in names:
+                if not name.startswith("_"):
+                    homes.setdefault(name, []).append(module)
+    repeated = {name: modules for name, modules in homes.items() if len(modules) > 1}
+    assert repeated == ALLOWED_REPEATS, {k: v for k, v in repeated.items() if ALLOWED_REPEATS.get(k) != v}

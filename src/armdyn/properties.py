@@ -425,7 +425,7 @@ def inertia_bounds(arm: Robot, samples: int = 400, seed: int = 0, limits: Sequen
     return report.bounds["mu1"], report.bounds["mu2"]
 
 
-MAX_SAMPLES = 1_000_000
+MAX_CHECK_SAMPLES = 1_000_000
 """The most random configurations ``check`` samples: beyond it a check takes minutes and the
 sampled extremes no longer change."""
 
@@ -486,7 +486,7 @@ def check(
     arm : Robot or armdyn.actuators.ActuatedArm
         The arm, or an arm with its drives.
     samples : int, optional
-        Number of random joint configurations (default 300, from 4 to MAX_SAMPLES = 1,000,000).
+        Number of random joint configurations (default 300, from 4 to MAX_CHECK_SAMPLES = 1,000,000).
     seed : int, optional
         Seed of the random generator (default 0).
     limits : sequence of (float, float), optional
@@ -511,7 +511,7 @@ def check(
     Raises
     ------
     armdyn.ModelError
-        When ``samples`` is below 4 or above MAX_SAMPLES, ``seed`` is negative, ``limits`` is not
+        When ``samples`` is below 4 or above MAX_CHECK_SAMPLES, ``seed`` is negative, ``limits`` is not
         n finite (lower, upper) pairs with lower <= upper, ``only`` is empty or names a group not in
         GROUPS (the message lists them), or when the arm has symbolic parameters. With ``task``:
         when it is not a task output of armdyn.task_space or has more rows than the arm has
@@ -532,7 +532,7 @@ def check(
         )
         arm = arm.reduced_robot()
     _check_robot(arm)
-    samples = inputs.integer(samples, "samples", 4, MAX_SAMPLES, " (each sample is evaluated and refined)")
+    samples = inputs.integer(samples, "samples", 4, MAX_CHECK_SAMPLES, " (each sample is evaluated and refined)")
     seed = inputs.integer(seed, "seed", 0)
     groups = _groups(only)
     n = arm.n

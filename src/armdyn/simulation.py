@@ -69,7 +69,7 @@ bytes a sample), and minutes of the compiled loop. A run whose record needs more
 system has available is refused too (``_available_memory``), before anything is allocated."""
 
 
-SINGULAR, DIVERGED = 1, 2  # why a compiled run stopped
+STOPPED_SINGULAR, STOPPED_DIVERGED = 1, 2  # why a compiled run stopped
 
 
 class PythonLoopWarning(UserWarning):
@@ -245,7 +245,7 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     steps = (t0, dt, first, last). state = ([q; qd], held torque, integral of e, outcome),
     advanced in place. record = (t, q, qd, qdd, tau, q_d), each indexed by step.
     The run stops where M becomes singular or the state non-finite: outcome = (rows recorded,
-    SINGULAR or DIVERGED, joint); it stays (-1, 0, -1) while all is well.
+    STOPPED_SINGULAR or STOPPED_DIVERGED, joint); it stays (-1, 0, -1) while all is well.
     """
     models, coulombs, switches, disturbance, eps = plant
     kind, model, model_coulomb, gain, hold, shares_plant = controller
@@ -283,7 +283,7 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
         else:
             singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, rates[0, n:])
         if singular >= 0:
-            outcome[0], outcome[1], outcome[2] = k, SINGULAR, singular
+            outcome[0], outcome[1], outcome[2] = k, STOPPED_SINGULAR, singular
             break
         T_[k] = t
         for i in range(n):
@@ -296,10 +296,10 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
         rk4_advance(y, rates, dt)
         for i in range(n):  # a state that blew up explains a singular stage too
             if not (abs(q[i]) < LARGEST_STATE and abs(qd[i]) < np.inf):  # NaN fails both
-                outcome[0], outcome[1], outcome[2] = k + 1, DIVERGED, i
+                outcome[0], outcome[1], outcome[2] = k + 1, STOPPED_DIVERGED, i
                 break
         if outcome[0] < 0 and singular >= 0:
-            outcome[0], outcome[1], outcome[2] = k + 1, SINGULAR, singular
+            outcome[0], outcome[1], outcome[2] = k + 1, STOPPED_SINGULAR, singular
         if outcome[0] >= 0:
             break
     x[:] = y
@@ -867,7 +867,7 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
 def _stopped(arm: Robot, reason: int, joint: int, t: float, q: np.ndarray, result: Result) -> SimulationError:
     """The error of a run that cannot go on, naming the time and the joint."""
     name = arm.joint_names[joint]
-    if reason == SINGULAR:
+    if reason == STOPPED_SINGULAR:
         message = (
             f"the simulation of '{arm.name}' stopped at t = {t:.6g} s: M(q) is singular at q = "
             f"{np.array2string(q, precision=4)}, nothing with mass or inertia moves about joint '{name}'"
@@ -1017,7 +1017,7 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
                     arms[0], {"method": "rk4 (Python)", "dt": dt, "integral": e_int},
                     lambda: _energies(arms, events, times[:rows], out["q"][:rows], out["qd"][:rows]))  # fmt: skip
     if rows <= steps:
-        raise _stopped(arms[0], DIVERGED, joint, rows * dt, q, result)
+        raise _stopped(arms[0], STOPPED_DIVERGED, joint, rows * dt, q, result)
     return result
 
 
@@ -1055,7 +1055,7 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
     def compiled_rate(t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         singular = continuous_rate(t, x, setup[0], setup[1], setup[2], buffers[0], buffers[1])
         if singular >= 0:
-            raise _stopped(arms[0], SINGULAR, singular, t, x[:n], Result(times[:0], *[np.empty((0, n))] * 4,
+            raise _stopped(arms[0], STOPPED_SINGULAR, singular, t, x[:n], Result(times[:0], *[np.empty((0, n))] * 4,
                                                                           None, arms[0]))  # fmt: skip
         return buffers[0].copy(), buffers[1].copy()
 

@@ -5,8 +5,9 @@ distributions, a controller that believes in the nominal arm, and a specificatio
 "max_error_after < 1e-3". ``Study.run(runs, seed)`` draws the runs in fixed blocks: block b's
 random stream is ``SeedSequence(seed, spawn_key=(b,))``, so a run's parameters, and therefore
 its result, do not depend on how the blocks are spread over threads, processes or machines.
-Each block is one compiled call of the many-runs path of ``simulate`` (``runs=``) on arrays (``Setup``: the packed nominal arm,
-the law's gains, the path), never a pickled Robot. Blocks run in this process by default; with
+Each block is one compiled call of the many-runs path of ``simulate`` (``runs=``) on arrays
+(``Setup``: the packed nominal arm, the law's gains, the path), never a pickled Robot. Blocks run
+in this process by default; with
 ``scheduler="local-cluster"`` on a ``dask.distributed.LocalCluster``, or with an address on an
 existing cluster (each worker one task thread, its Numba thread count set, its compiled-code cache
 warmed before work is sent; a block lost with its worker is recomputed, to the same bits). With
@@ -353,8 +354,8 @@ class Setup:
 
 def run_block(setup: Setup, index: int, threads: int | None = None) -> object:
     """Block ``index`` of a study: its runs' parameters from SeedSequence(seed, spawn_key=(index,)),
-    one compiled call of simulate's many-runs path (launch_many), and a DataFrame of the runs (run id, parameters, summaries,
-    finished). The same block gives the same bits wherever it runs.
+    one compiled call of simulate's many-runs path (launch_many), and a DataFrame of the runs (run id,
+    parameters, summaries, finished). The same block gives the same bits wherever it runs.
 
     Parameters
     ----------
@@ -507,7 +508,7 @@ class Study:
         start_error: object = None,
         block: int = RUNS_PER_BLOCK,
     ) -> None:
-        from armdyn.simulation import packed_plants, checked_times, step_count, unwrapped_law
+        from armdyn.simulation import checked_times, packed_plants, step_count, unwrapped_law
 
         if not isinstance(arm, Robot) or arm.is_symbolic:
             raise ModelError(f"arm must be a numeric armdyn Robot, got {type(arm).__name__}")

@@ -48,10 +48,10 @@ def packed_drives(arm: ActuatedArm) -> np.ndarray:
     """The drives' parameters packed for armdyn.dynamics.drives, (ROWS, n), with each joint's indices into x."""
     from armdyn.dynamics import drives as packed
 
-    table = np.zeros((packed.ROWS, arm.n))
+    table = np.zeros((packed.DRIVE_ROWS, arm.n))
     kind = np.where(arm._is_dc, np.where(arm._rigid, packed.RIGID, packed.FLEXIBLE), packed.HYDRAULIC)
     rows = {
-        packed.KIND: kind, packed.RATIO: arm._r, packed.TORQUE_CONSTANT: arm._K_M, packed.BACK_EMF: arm._K_b,
+        packed.DRIVE_KIND: kind, packed.RATIO: arm._r, packed.TORQUE_CONSTANT: arm._K_M, packed.BACK_EMF: arm._K_b,
         packed.RESISTANCE: arm._R_a, packed.INDUCTANCE: arm._L, packed.INPUT_LIMIT: arm._u_max,
         packed.CURRENT_LIMIT: arm._i_max, packed.ROTOR_INERTIA: arm._J_M, packed.ROTOR_VISCOUS: arm._B_M,
         packed.COULOMB_POSITIVE: arm._Tc_pos, packed.COULOMB_NEGATIVE: arm._Tc_neg, packed.STIFFNESS: arm._K,

@@ -28,6 +28,7 @@ from numba import njit
 
 from armdyn import inputs
 from armdyn.dynamics.crba import mass_matrix_and_bias
+from armdyn.dynamics.drives import KI, KP, KV
 from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.rnea import gravity_core
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
@@ -36,7 +37,7 @@ from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 
 NO_CONTROL, COMPUTED_TORQUE, PD_GRAVITY, PID_JOINT = 0, 1, 2, 3
-KP, KV, KI, LIMIT = 0, 1, 2, 3  # rows of the compiled laws' gain table
+LIMIT = 3  # the torque limit's row of the compiled laws' gain table, after KP, KV, KI (armdyn.dynamics.drives)
 
 
 def accepts(controller: object, keyword: str) -> bool:

@@ -24,7 +24,7 @@ and kept as its 21 upper-triangle entries. A pivot D_i not above the model's PIV
 M(q) is singular at that state: the state's qdd is then meaningless, and ``singular`` names the
 first such joint, leaves first (the joint aba.aba_core returns).
 
-A block's memory is one buffer with a slot of ROWS rows per joint and one for the base (pose the
+A block's memory is one buffer with a slot of ABA_BLOCK_ROWS rows per joint and one for the base (pose the
 identity, velocity zero, acceleration [0; -g]); a joint's step reads its parent's slot and
 writes its own.
 """
@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from armdyn.dynamics.friction import coulomb_law
+from armdyn.dynamics.friction import coulomb_torque
 from armdyn.dynamics.packed import (
     ARMATURE,
     COULOMB_NEG,
@@ -54,15 +54,15 @@ from armdyn.dynamics.packed import (
     VISCOUS,
 )
 from armdyn.dynamics.rnea import BATCH_CHUNKS
+from armdyn.dynamics.rnea_blocks import BLOCK  # one block size for both batch kernels
 from armdyn.dynamics.spatial import NUMBA_OPTIONS, sin_cos
 
-BLOCK = 32  # states per block: 16 measured slower on the UR5 and the Panda, 64 no faster with twice the memory
 # A slot's rows: world pose R (9) and p (3), v, S, c (6 each), I^A (21, upper triangle row by row),
 # p^A, U (6 each), D, u, a (6), the state's q, qd, tau, the result qdd, the pivot flag.
 R_, P_, V_, S_, C_, IA_, PA_, U_, D_, VALUE_, A_, Q_, QD_, TAU_, QDD_, FLAG_ = (
     0, 9, 12, 18, 24, 30, 51, 57, 63, 64, 65, 71, 72, 73, 74, 75,
 )  # fmt: skip
-ROWS = 76
+ABA_BLOCK_ROWS = 76
 
 # The per-joint steps below are compiled as functions of their own, not inlined: inlined, both
 # slots are offsets into one buffer, and LLVM, unable to group their accesses for its overlap
@@ -75,7 +75,7 @@ ROWS = 76
 @njit(inline="always", **NUMBA_OPTIONS)
 def _slot(x: np.ndarray, j: int) -> np.ndarray:
     """Joint j's slot in a block's buffer (j = n: the base's), a view."""
-    return x[j * ROWS * BLOCK : (j + 1) * ROWS * BLOCK]
+    return x[j * ABA_BLOCK_ROWS * BLOCK : (j + 1) * ABA_BLOCK_ROWS * BLOCK]
 
 
 @njit(**NUMBA_OPTIONS)
@@ -245,7 +245,7 @@ def _pivot_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
         u5 = a5 * s0 + a10 * s1 + a14 * s2 + a17 * s3 + a19 * s4 + a20 * s5
         D = s0 * u0 + s1 * u1 + s2 * u2 + s3 * u3 + s4 * u4 + s5 * u5 + armature
         rate = x[QD_ * BLOCK + s]
-        coulomb = coulomb_law(positive, negative, rate)
+        coulomb = coulomb_torque(positive, negative, rate)
         p0, p1, p2 = x[PA_ * BLOCK + s], x[(PA_ + 1) * BLOCK + s], x[(PA_ + 2) * BLOCK + s]
         p3, p4, p5 = x[(PA_ + 3) * BLOCK + s], x[(PA_ + 4) * BLOCK + s], x[(PA_ + 5) * BLOCK + s]
         spa = s0 * p0 + s1 * p1 + s2 * p2 + s3 * p3 + s4 * p4 + s5 * p5
@@ -341,7 +341,7 @@ def _base_slot(model: np.ndarray, x: np.ndarray) -> None:
     """The base's slot: pose the identity, velocity zero, acceleration [0; -g] (gravity as an
     acceleration of the base, Featherstone 5.3). Its other rows only collect what the root
     joints carry to their parent in pass 2, and are never read."""
-    for row in range(ROWS):
+    for row in range(ABA_BLOCK_ROWS):
         value = 0.0
         if row == R_ or row == R_ + 4 or row == R_ + 8:
             value = 1.0
@@ -358,7 +358,7 @@ def _aba_block(model: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray, 
     rows of a last, partial block's missing states repeat its first state, so that they stay finite."""
     n = int(model[N_JOINTS])
     for i in range(n):
-        o = i * ROWS * BLOCK
+        o = i * ABA_BLOCK_ROWS * BLOCK
         for s in range(BLOCK):
             e = first + (s if s < size else 0)
             x[o + Q_ * BLOCK + s] = q[e, i]
@@ -378,7 +378,7 @@ def _aba_block(model: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray, 
     for s in range(size):
         joint = -1
         for i in range(n):
-            o = i * ROWS * BLOCK
+            o = i * ABA_BLOCK_ROWS * BLOCK
             qdd[first + s, i] = x[o + QDD_ * BLOCK + s]
             if x[o + FLAG_ * BLOCK + s] != 0.0:
                 joint = i  # the last flagged is the first leaves first, where aba_core stops
@@ -397,7 +397,7 @@ def aba_blocks(
     blocks = (count + BLOCK - 1) // BLOCK
     chunks = min(blocks, BATCH_CHUNKS)
     for chunk in prange(chunks):
-        x = np.empty((n + 1) * ROWS * BLOCK)
+        x = np.empty((n + 1) * ABA_BLOCK_ROWS * BLOCK)
         _base_slot(model, _slot(x, n))
         for block in range(chunk * blocks // chunks, (chunk + 1) * blocks // chunks):
             first = block * BLOCK

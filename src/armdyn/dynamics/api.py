@@ -183,7 +183,7 @@ def _forward(
 
 
 @dataclass(frozen=True)
-class Row:
+class Entry:
     """How one public function computes: its compiled kernel pair and the shape of its result.
 
     The one-state kernel takes (model, *states, *options, result) and returns a status; the
@@ -202,19 +202,19 @@ class Row:
 
 
 TABLE = {
-    "inverse_dynamics": Row(inverse_dynamics_one, INVERSE_DYNAMICS, "n", _rnea, wrench=True),
-    "nonlinear_terms": Row(nonlinear_one, NONLINEAR, "n", _rnea),
-    "coriolis_vector": Row(coriolis_vector_one, CORIOLIS, "n", _rnea),
-    "gravity_vector": Row(gravity_one, GRAVITY_ONLY, "n", _rnea),
-    "friction": Row(friction_one, friction_batch, "n"),
-    "inertia_matrix": Row(crba_one, crba_batch, "n, n"),
-    "coriolis_matrix": Row(coriolis_one, coriolis_batch, "n, n"),
-    "forward_dynamics": Row(aba_one, aba_blocks, "n", _forward),
-    "energies": Row(energy_one, energy_batch, "2"),
-    "link_transforms": Row(transforms_one, frames.transforms_batch, "n, 4, 4"),
-    "tool_pose": Row(pose_one, _with_target(frames.pose_batch, TOOL), "4, 4", options="TOOL"),
-    "jacobian": Row(jacobian_one, frames.jacobian_batch, "6, n", target=True),
-    "jacobian_dot": Row(jacobian_dot_one, frames.jacobian_dot_batch, "6, n", target=True),
+    "inverse_dynamics": Entry(inverse_dynamics_one, INVERSE_DYNAMICS, "n", _rnea, wrench=True),
+    "nonlinear_terms": Entry(nonlinear_one, NONLINEAR, "n", _rnea),
+    "coriolis_vector": Entry(coriolis_vector_one, CORIOLIS, "n", _rnea),
+    "gravity_vector": Entry(gravity_one, GRAVITY_ONLY, "n", _rnea),
+    "friction": Entry(friction_one, friction_batch, "n"),
+    "inertia_matrix": Entry(crba_one, crba_batch, "n, n"),
+    "coriolis_matrix": Entry(coriolis_one, coriolis_batch, "n, n"),
+    "forward_dynamics": Entry(aba_one, aba_blocks, "n", _forward),
+    "energies": Entry(energy_one, energy_batch, "2"),
+    "link_transforms": Entry(transforms_one, frames.transforms_batch, "n, 4, 4"),
+    "tool_pose": Entry(pose_one, _with_target(frames.pose_batch, TOOL), "4, 4", options="TOOL"),
+    "jacobian": Entry(jacobian_one, frames.jacobian_batch, "6, n", target=True),
+    "jacobian_dot": Entry(jacobian_dot_one, frames.jacobian_dot_batch, "6, n", target=True),
 }
 """The public functions with a one-state fast path and a general path, by name (see _public)."""
 

@@ -36,20 +36,20 @@ from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.dynamics.status import OK
 from armdyn.trajectories import desired
 
-(KIND, RATIO, TORQUE_CONSTANT, BACK_EMF, RESISTANCE, INDUCTANCE, INPUT_LIMIT, CURRENT_LIMIT, ROTOR_INERTIA,
+(DRIVE_KIND, RATIO, TORQUE_CONSTANT, BACK_EMF, RESISTANCE, INDUCTANCE, INPUT_LIMIT, CURRENT_LIMIT, ROTOR_INERTIA,
  ROTOR_VISCOUS, COULOMB_POSITIVE, COULOMB_NEGATIVE, STIFFNESS, SHAFT_DAMPING, VALVE_TIME, VALVE_GAIN, FLOW_GAIN,
  PRESSURE_COEFFICIENT, AREA, LEAKAGE, CAPACITANCE, SUPPLY, SQRT_ORIFICE, SQRT_GAIN, STROKE, ANGLE_AT, SPEED_AT,
- CURRENT_AT, SPOOL_AT, PRESSURE_AT, ROWS) = range(31)  # fmt: skip
-"""The rows of the drives' parameter array, (ROWS, n); the *_AT rows hold each joint's index into x (-1: none)."""
+ CURRENT_AT, SPOOL_AT, PRESSURE_AT, DRIVE_ROWS) = range(31)  # fmt: skip
+"""The rows of the drives' parameter array, (DRIVE_ROWS, n); the *_AT rows hold each joint's index into x (-1: none)."""
 
 RIGID, FLEXIBLE, HYDRAULIC = 0, 1, 2
-"""The values of row KIND."""
+"""The values of row DRIVE_KIND."""
 
 DRIVE_PID, CURRENT_COMPUTED_TORQUE = 0, 1
 """The control laws."""
 
 KP, KV, KI, BANDWIDTH = range(4)
-"""The rows of the gains, (4, n)."""
+"""The rows of the gains, (4, n), of the drive laws and (KP, KV, KI) of the joint laws (armdyn.control.joint)."""
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -68,7 +68,7 @@ def joint_torques(drives: np.ndarray, x: np.ndarray, tau: np.ndarray) -> None:
     """tau_j = (K_M / r) i (rigid DC), K (r q_M - q) + B_s (r qd_M - qd) (flexible), A P_L (hydraulic)."""
     n = tau.shape[0]
     for j in range(n):
-        kind = drives[KIND, j]
+        kind = drives[DRIVE_KIND, j]
         if kind == RIGID:
             tau[j] = drives[TORQUE_CONSTANT, j] * x[int(drives[CURRENT_AT, j])] / drives[RATIO, j]
         elif kind == FLEXIBLE:
@@ -98,7 +98,7 @@ def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarr
     status = aba_one(model, x[:n], x[n : 2 * n], tau, out[n : 2 * n])
     for j in range(n):
         out[j] = x[n + j]
-        kind, r = drives[KIND, j], drives[RATIO, j]
+        kind, r = drives[DRIVE_KIND, j], drives[RATIO, j]
         u_j = clipped(u[j], drives[INPUT_LIMIT, j])
         if kind == HYDRAULIC:
             s, p = int(drives[SPOOL_AT, j]), int(drives[PRESSURE_AT, j])
@@ -127,7 +127,7 @@ def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarr
 def _drive_coordinate(drives: np.ndarray, reference: np.ndarray, x: np.ndarray, j: int, n: int) -> tuple:
     """(e, de/dt) of joint j's drive on its own coordinate: the motor angle of a DC drive (q / r, or
     q_M when flexible), the joint of a hydraulic one."""
-    kind, r = drives[KIND, j], drives[RATIO, j]
+    kind, r = drives[DRIVE_KIND, j], drives[RATIO, j]
     if kind == HYDRAULIC:
         return reference[0, j] - x[j], reference[1, j] - x[n + j]
     if kind == FLEXIBLE:

@@ -261,7 +261,7 @@ def jacobian_dot_core(
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def workspace_size(n: int) -> int:
+def frames_workspace_size(n: int) -> int:
     """Scratch values for one state: the body poses, two more poses and the body velocities."""
     return POSE * (n + 2) + 6 * n
 
@@ -282,7 +282,7 @@ def transforms_one(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> int:
     if status == OK and (out.shape[0] != n or out.shape[1] != 4 or out.shape[2] != 4):
         status = WRONG_SHAPE
     if status == OK:
-        transforms_core(model, q, scratch(workspace_size(n)), out)
+        transforms_core(model, q, scratch(frames_workspace_size(n)), out)
     return status
 
 
@@ -295,7 +295,7 @@ def pose_one(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -> 
     if status == OK and (out.shape[0] != 4 or out.shape[1] != 4):
         status = WRONG_SHAPE
     if status == OK:
-        pose_core(model, q, target, scratch(workspace_size(int(model[N_JOINTS]))), out)
+        pose_core(model, q, target, scratch(frames_workspace_size(int(model[N_JOINTS]))), out)
     return status
 
 
@@ -309,7 +309,7 @@ def jacobian_one(model: np.ndarray, q: np.ndarray, target: int, frame: int, out:
     if status == OK and (out.shape[0] != 6 or out.shape[1] != n):
         status = WRONG_SHAPE
     if status == OK:
-        jacobian_core(model, q, target, frame, scratch(workspace_size(n)), out)
+        jacobian_core(model, q, target, frame, scratch(frames_workspace_size(n)), out)
     return status
 
 
@@ -323,7 +323,7 @@ def jacobian_dot_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, target: i
     if status == OK and (out.shape[0] != 6 or out.shape[1] != n):
         status = WRONG_SHAPE
     if status == OK:
-        jacobian_dot_core(model, q, qd, target, frame, scratch(workspace_size(n)), np.empty((6, n)), out)
+        jacobian_dot_core(model, q, qd, target, frame, scratch(frames_workspace_size(n)), np.empty((6, n)), out)
     return status
 
 
@@ -333,7 +333,7 @@ def transforms_batch(model: np.ndarray, q: np.ndarray, out: np.ndarray) -> None:
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = np.empty(workspace_size(q.shape[1]))
+        work = np.empty(frames_workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             transforms_core(model, q[s], work, out[s])
 
@@ -344,7 +344,7 @@ def pose_batch(model: np.ndarray, q: np.ndarray, target: int, out: np.ndarray) -
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = np.empty(workspace_size(q.shape[1]))
+        work = np.empty(frames_workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             pose_core(model, q[s], target, work, out[s])
 
@@ -355,7 +355,7 @@ def jacobian_batch(model: np.ndarray, q: np.ndarray, target: int, frame: int, ou
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work = np.empty(workspace_size(q.shape[1]))
+        work = np.empty(frames_workspace_size(q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             jacobian_core(model, q[s], target, frame, work, out[s])
 
@@ -368,6 +368,6 @@ def jacobian_dot_batch(
     states = q.shape[0]
     chunks = min(TRANSFORMS_CHUNKS, states)
     for chunk in prange(chunks):
-        work, jac = np.empty(workspace_size(q.shape[1])), np.empty((6, q.shape[1]))
+        work, jac = np.empty(frames_workspace_size(q.shape[1])), np.empty((6, q.shape[1]))
         for s in range(chunk * states // chunks, (chunk + 1) * states // chunks):
             jacobian_dot_core(model, q[s], qd[s], target, frame, work, jac, out[s])

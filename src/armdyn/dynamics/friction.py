@@ -18,7 +18,7 @@ from armdyn.dynamics.status import OK, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def coulomb_law(positive: float, negative: float, rate: float) -> float:
+def coulomb_torque(positive: float, negative: float, rate: float) -> float:
     """Fd(qd) = Tc+ for qd > 0, Tc- for qd < 0, 0 at rest: the one compiled Coulomb law."""
     return positive if rate > 0.0 else (negative if rate < 0.0 else 0.0)
 
@@ -34,7 +34,7 @@ def smooth_sign(rate: float, eps: float) -> float:
 def coulomb(model: np.ndarray, j: int, rate: float) -> float:
     """Fd_j(qd_j) of the packed model."""
     b = HEADER + STRIDE * j
-    return coulomb_law(model[b + COULOMB_POS], model[b + COULOMB_NEG], rate)
+    return coulomb_torque(model[b + COULOMB_POS], model[b + COULOMB_NEG], rate)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -50,7 +50,7 @@ def smooth_coulomb(coulomb_table: np.ndarray, eps: np.ndarray, i: int, rate: flo
     if eps[i] > 0.0:
         smooth = smooth_sign(rate, eps[i])
         return smooth * coulomb_table[i, 0] if rate >= 0.0 else -smooth * coulomb_table[i, 1]
-    return coulomb_law(coulomb_table[i, 0], coulomb_table[i, 1], rate)
+    return coulomb_torque(coulomb_table[i, 0], coulomb_table[i, 1], rate)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)

@@ -30,7 +30,7 @@ from armdyn.dynamics.spatial import MATRIX, MODEL, NUMBA_OPTIONS, VECTOR, one_st
 from armdyn.dynamics.status import BAD_ROWS, NOT_FINITE, NOT_SQUARE, OK, TASK_SINGULAR, WRONG_LENGTH, WRONG_SHAPE
 from armdyn.inputs import LARGEST_STATE
 
-ROWS = types.int64[::1]
+ROW_INDICES = types.int64[::1]
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -110,7 +110,7 @@ def select_rows(full: np.ndarray, rows: np.ndarray, J: np.ndarray) -> None:
 
 # The kinematics and dynamics come from the public one-state kernels (compiled once, shared):
 # inlining them here would multiply the compilation time, for no measurable gain at run time.
-@one_state(types.int64(MODEL, VECTOR, types.int64, ROWS, types.float64, MATRIX))
+@one_state(types.int64(MODEL, VECTOR, types.int64, ROW_INDICES, types.float64, MATRIX))
 def lambda_one(
     model: np.ndarray, q: np.ndarray, target: int, rows: np.ndarray, limit: float, Lambda: np.ndarray
 ) -> int:
@@ -137,7 +137,9 @@ def lambda_one(
     return OK if lambda_from(J, M, limit, Y, B, Lambda) else TASK_SINGULAR
 
 
-@one_state(types.int64(MODEL, VECTOR, VECTOR, types.int64, ROWS, types.float64, *(MATRIX,) * 3, *(VECTOR,) * 3, MATRIX))
+@one_state(
+    types.int64(MODEL, VECTOR, VECTOR, types.int64, ROW_INDICES, types.float64, *(MATRIX,) * 3, *(VECTOR,) * 3, MATRIX)
+)
 def operational_one(
     model: np.ndarray,
     q: np.ndarray,
@@ -219,7 +221,9 @@ def operational_one(
 
 
 # ----- square outputs and the task-space forward dynamics, one kernel for each quantity's state --
-LAMBDA, GRAVITY, FRICTION, FORCE, NONLINEAR, INVERSE, CORIOLIS, FORWARD = range(8)
+TASK_LAMBDA, TASK_GRAVITY, TASK_FRICTION, TASK_FORCE, TASK_NONLINEAR, TASK_INVERSE, TASK_CORIOLIS, TASK_FORWARD = range(
+    8
+)
 """What ``task_one`` computes: Lambda (m <= n, out (m, m)); for m = n, J^-T times G, F(qd), v,
 N - M J^-1 Jdot qd, or the inverse dynamics at qdd = J^-1 (v - Jdot qd) (out (1, n)); Vmbar
 (out (n, n)); or yddot = J ABA(q, qd, J^T v) + Jdot qd (m <= n, out (1, m))."""
@@ -248,7 +252,7 @@ def task_core(
     out: np.ndarray,
     buffer: np.ndarray,
 ) -> int:
-    """One state of ``kind`` (see LAMBDA...) into out; a status. ``buffer``: task_size(n) values."""
+    """One state of ``kind`` (see TASK_LAMBDA...) into out; a status. ``buffer``: task_size(n) values."""
     n, m = int(model[N_JOINTS]), rows.shape[0]
     status = rows_status(model, rows)
     if status != OK:
@@ -267,10 +271,10 @@ def task_core(
     if status != OK:
         return status
     select_rows(full, rows, J)
-    if kind == LAMBDA:
+    if kind == TASK_LAMBDA:
         status = crba_one(model, q, M)
         return status if status != OK else OK if lambda_from(J, M, limit, Y, B, out) else TASK_SINGULAR
-    if kind == FORWARD:  # yddot = J qdd + Jdot qd at qdd = ABA(q, qd, J^T f): no inverse of J
+    if kind == TASK_FORWARD:  # yddot = J qdd + Jdot qd at qdd = ABA(q, qd, J^T f): no inverse of J
         for j in range(n):
             s = 0.0
             for r in range(m):
@@ -296,16 +300,16 @@ def task_core(
             A[r, c] = J[r, c]
     if not lu(A, pivots):
         return TASK_SINGULAR
-    if kind == GRAVITY:
+    if kind == TASK_GRAVITY:
         status = gravity_one(model, q, x)
-    elif kind == FRICTION:
+    elif kind == TASK_FRICTION:
         status = friction_one(model, qd, x)
-    elif kind == FORCE:
+    elif kind == TASK_FORCE:
         for i in range(n):
             if not abs(v[i]) < LARGEST_STATE:  # NaN, infinity or too large: the general path names it
                 return NOT_FINITE + 1
             x[i] = v[i]
-    elif kind == NONLINEAR:  # N - M J^-1 (Jdot qd)
+    elif kind == TASK_NONLINEAR:  # N - M J^-1 (Jdot qd)
         status = nonlinear_one(model, q, qd, x)
         if status == OK:
             status = crba_one(model, q, M)
@@ -319,7 +323,7 @@ def task_core(
                 for j in range(n):
                     s -= M[i, j] * y[j]
                 x[i] = s
-    elif kind == INVERSE:  # tau at qdd = J^-1 (v - Jdot qd)
+    elif kind == TASK_INVERSE:  # tau at qdd = J^-1 (v - Jdot qd)
         status = jacobian_dot_one(model, q, qd, target, axes, full)
         if status == OK:
             row_times(full, rows, qd, y)
@@ -327,7 +331,7 @@ def task_core(
                 y[r] = v[r] - y[r]
             lu_solve(A, pivots, y)
             status = inverse_dynamics_one(model, q, qd, y, x)
-    else:  # CORIOLIS: J^-T (Vm - M J^-1 Jdot) J^-1
+    else:  # TASK_CORIOLIS: J^-T (Vm - M J^-1 Jdot) J^-1
         status = coriolis_one(model, q, qd, K)
         if status == OK:
             status = crba_one(model, q, M)
@@ -369,7 +373,7 @@ def task_size(n: int, m: int) -> int:
     return 6 * n + 2 * m * n + 3 * n * n + m * m + 3 * n
 
 
-@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, types.int64, ROWS, types.float64, types.int64, MATRIX))
+@one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, types.int64, ROW_INDICES, types.float64, types.int64, MATRIX))
 def task_one(
     model: np.ndarray,
     q: np.ndarray,
@@ -381,8 +385,8 @@ def task_one(
     kind: int,
     out: np.ndarray,
 ) -> int:
-    """One state of ``kind`` (LAMBDA ... FORWARD) into out; a status (TASK_SINGULAR: the general path decides).
-    The caller gives out the kind's shape and v of n values (of which FORWARD reads m)."""
+    """One state of ``kind`` (TASK_LAMBDA ... TASK_FORWARD) into out; a status (TASK_SINGULAR: the general path
+    decides). The caller gives out the kind's shape and v of n values (of which TASK_FORWARD reads m)."""
     n = int(model[N_JOINTS])
     if qd.shape[0] != n or v.shape[0] != n:
         return WRONG_LENGTH + 1

@@ -32,7 +32,7 @@ from armdyn.dynamics.packed import (
 from armdyn.dynamics.rnea import WITH_FRICTION, WITH_GRAVITY, WITH_QDD, WITH_VELOCITY
 from armdyn.dynamics.spatial import NUMBA_OPTIONS, force_to_parent, newton_euler_step, sin_cos
 
-BLOCK = 32
+BLOCK = 32  # states per block of both batch kernels: 16 measured slower on the UR5 and the Panda, 64 no faster
 
 
 @njit(inline="always", **NUMBA_OPTIONS)

@@ -241,7 +241,7 @@ def task_inertia(
         except _NOT_ONE_STATE:
             if (states := inputs.thawed(q)) is not None:
                 return task_inertia(arm, output, *states, damping=damping, max_condition=max_condition, out=out)
-    result = _kernel(arm, output, kernels.LAMBDA, damping, max_condition, True, q)
+    result = _kernel(arm, output, kernels.TASK_LAMBDA, damping, max_condition, True, q)
     if result is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
@@ -289,7 +289,7 @@ def task_coriolis(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
-    result = _kernel(arm, output, kernels.CORIOLIS, damping, max_condition, True, q, qd)
+    result = _kernel(arm, output, kernels.TASK_CORIOLIS, damping, max_condition, True, q, qd)
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
@@ -335,7 +335,7 @@ def task_gravity(
     ModelError
         As for ``task_inertia``.
     """
-    result = _kernel(arm, output, kernels.GRAVITY, damping, max_condition, False, q)
+    result = _kernel(arm, output, kernels.TASK_GRAVITY, damping, max_condition, False, q)
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
@@ -382,7 +382,7 @@ def task_nonlinear(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
-    result = _kernel(arm, output, kernels.NONLINEAR, damping, max_condition, False, q, qd)
+    result = _kernel(arm, output, kernels.TASK_NONLINEAR, damping, max_condition, False, q, qd)
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
@@ -432,7 +432,7 @@ def task_friction(
     ModelError
         As for ``task_inertia``, and when qd is invalid.
     """
-    result = _kernel(arm, output, kernels.FRICTION, damping, max_condition, False, q, qd)
+    result = _kernel(arm, output, kernels.TASK_FRICTION, damping, max_condition, False, q, qd)
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=True)
@@ -525,7 +525,7 @@ def task_force(
     ModelError
         As for ``task_inertia``, and when tau is invalid.
     """
-    result = _kernel(arm, output, kernels.FORCE, damping, max_condition, False, q, None, tau, "tau")
+    result = _kernel(arm, output, kernels.TASK_FORCE, damping, max_condition, False, q, None, tau, "tau")
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "tau"), (q, tau), damping, max_condition, square=True)
@@ -568,7 +568,7 @@ def task_forward_dynamics(
         padded, result = np.zeros(arm.n), np.empty((1, arm.n))
         padded[: f.shape[0]] = f
         try:
-            if task_one(arm.packed, q, qd, padded, fast[0], fast[1], 1.0, kernels.FORWARD, result) == 0:
+            if task_one(arm.packed, q, qd, padded, fast[0], fast[1], 1.0, kernels.TASK_FORWARD, result) == 0:
                 return _into(out, result[0, : f.shape[0]])
         except _NOT_ONE_STATE:
             if (states := inputs.thawed(q, qd, f)) is not None:
@@ -632,7 +632,7 @@ def task_inverse_dynamics(
     ModelError
         As for ``task_inertia``, and when qd or yddot is invalid.
     """
-    result = _kernel(arm, output, kernels.INVERSE, damping, max_condition, False, q, qd, yddot, "yddot")
+    result = _kernel(arm, output, kernels.TASK_INVERSE, damping, max_condition, False, q, qd, yddot, "yddot")
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "qd", "yddot"), (q, qd, yddot), damping, max_condition, True)

@@ -9,6 +9,7 @@ which the compiled simulation loop runs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numba import njit
@@ -17,6 +18,8 @@ from armdyn import inputs
 from armdyn.dynamics.spatial import NUMBA_OPTIONS, sin_cos
 from armdyn.errors import ModelError
 from armdyn.inputs import LARGEST_STATE
+
+T = TypeVar("T", float, np.ndarray)
 
 HOLD, SINUSOID, QUINTIC = 0, 1, 2
 SHORTEST_SPAN = 1e-100  # a Quintic's t1 - t0 below this: span**2 would underflow (see Quintic.__call__)
@@ -107,6 +110,16 @@ def sinusoid_at(params: np.ndarray, i: int, t: float, out: np.ndarray) -> None:
     out[2, i] = -amplitude * omega * omega * sine
 
 
+def quintic_blend(u: T) -> tuple[T, T, T]:
+    """The quintic time law of a rest-to-rest move (Lewis, Dawson and Abdallah 2004, Section 4.2):
+    s(u) = 10 u^3 - 15 u^4 + 6 u^5 with ds/du and d^2s/du^2, for u in [0, 1] (a float or an array); the
+    one home of the law, compiled as ``compiled_quintic_blend``."""
+    return 10 * u**3 - 15 * u**4 + 6 * u**5, 30 * u**2 - 60 * u**3 + 30 * u**4, 60 * u - 180 * u**2 + 120 * u**3
+
+
+compiled_quintic_blend = njit(inline="always", **NUMBA_OPTIONS)(quintic_blend)
+
+
 @dataclass(frozen=True)
 class Quintic:
     """A point-to-point move from q0 at t0 to q1 at t1, at rest at both ends (a quintic in time)."""
@@ -134,10 +147,9 @@ class Quintic:
         span = t1 - t0
         if span[0] < SHORTEST_SPAN:
             return _short_move(q0, q1, times, t0, span)
-        s = np.clip((times - t0) / span, 0.0, 1.0)
-        shape = 10 * s**3 - 15 * s**4 + 6 * s**5
-        rate = (30 * s**2 - 60 * s**3 + 30 * s**4) / span
-        accel = (60 * s - 180 * s**2 + 120 * s**3) / span**2
+        shape, slope, curvature = quintic_blend(np.clip((times - t0) / span, 0.0, 1.0))
+        rate = slope / span
+        accel = curvature / span**2
         return q0 + (q1 - q0) * shape, (q1 - q0) * rate, (q1 - q0) * accel
 
 
@@ -146,10 +158,9 @@ def _short_move(q0: np.ndarray, q1: np.ndarray, times: np.ndarray, t0: np.ndarra
     polynomials divided by span twice, float overflow let through to infinity, then refused if any
     (the rates inside so brief a move exceed the float range); at rest outside it."""
     with np.errstate(over="ignore", invalid="ignore"):
-        s = np.clip((times - t0) / span, 0.0, 1.0)
-        shape = 10 * s**3 - 15 * s**4 + 6 * s**5
-        rate = (q1 - q0) * ((30 * s**2 - 60 * s**3 + 30 * s**4) / span)
-        accel = (q1 - q0) * ((60 * s - 180 * s**2 + 120 * s**3) / span / span)
+        shape, slope, curvature = quintic_blend(np.clip((times - t0) / span, 0.0, 1.0))
+        rate = (q1 - q0) * (slope / span)
+        accel = (q1 - q0) * (curvature / span / span)
     if not (np.all(np.isfinite(rate)) and np.all(np.isfinite(accel))):
         raise ModelError(
             f"t falls inside a Quintic move of only t1 - t0 = {span[0]:g} s: its velocity or acceleration "
@@ -163,10 +174,10 @@ def quintic_at(params: np.ndarray, i: int, t: float, out: np.ndarray) -> None:
     """Joint i of a Quintic packed by ``arrays``: out[:, i] = q_d, qd_d, qdd_d."""
     a, b, t0, t1 = params[0, i], params[1, i], params[2, i], params[3, i]
     span = t1 - t0
-    s = min(max((t - t0) / span, 0.0), 1.0)
-    out[0, i] = a + (b - a) * (10 * s**3 - 15 * s**4 + 6 * s**5)
-    out[1, i] = (b - a) * (30 * s**2 - 60 * s**3 + 30 * s**4) / span
-    out[2, i] = (b - a) * (60 * s - 180 * s**2 + 120 * s**3) / span**2
+    shape, slope, curvature = compiled_quintic_blend(min(max((t - t0) / span, 0.0), 1.0))
+    out[0, i] = a + (b - a) * shape
+    out[1, i] = (b - a) * slope / span
+    out[2, i] = (b - a) * curvature / span**2
 
 
 @dataclass(frozen=True)

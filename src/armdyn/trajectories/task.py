@@ -9,6 +9,7 @@ import numpy as np
 
 from armdyn import inputs
 from armdyn.errors import ModelError
+from armdyn.trajectories.joint import quintic_blend
 
 
 @dataclass(frozen=True)
@@ -68,10 +69,10 @@ class Circle:
 def _quintic(t: float, start_time: float, duration: float) -> tuple[float, float, float]:
     """s(t) = 10 u^3 - 15 u^4 + 6 u^5, u = (t - t0) / T held in [0, 1], with its first two rates."""
     u = min(max((t - start_time) / duration, 0.0), 1.0)
-    s = u**3 * (10.0 - 15.0 * u + 6.0 * u * u)
+    s, slope, curvature = quintic_blend(u)
     if u in (0.0, 1.0):
         return s, 0.0, 0.0
-    return s, 30.0 * u * u * (1.0 - u) ** 2 / duration, 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) / duration**2
+    return s, slope / duration, curvature / duration**2
 
 
 @dataclass(frozen=True)
