@@ -31,7 +31,7 @@ import numpy as np
 import sympy
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic import notebook
 
@@ -237,7 +237,7 @@ def _motor(drive: object, joint: str) -> SymbolicMotor:
         except TypeError:
             missing = sorted(key for key in known - {"coulomb", "name"} if key not in drive)
             raise ModelError(f"the drive of joint '{joint}' lacks the parameters {missing}") from None
-    raise ModelError(
+    raise ArgumentError(
         f"the drive of joint '{joint}' must be a DCMotor, a SymbolicMotor or a dict of a SymbolicMotor's "
         f"parameters, got {reprlib.repr(drive)}"
     )
@@ -273,7 +273,7 @@ def checked_motors(arm: Robot, drives: object) -> list[SymbolicMotor]:
             "robot.without_motors()"
         )
     if isinstance(drives, (str, bytes, Mapping)) or not isinstance(drives, Sequence):
-        raise ModelError(f"drives must be a sequence of drives, one per joint, got {reprlib.repr(drives)}")
+        raise ArgumentError(f"drives must be a sequence of drives, one per joint, got {reprlib.repr(drives)}")
     if len(drives) != arm.n:
         raise ModelError(f"{where} has {arm.n} joints {arm.joint_names}; {len(drives)} drives were given")
     return [_motor(drive, link.name) for link, drive in zip(arm.links, drives, strict=True)]
@@ -736,8 +736,8 @@ def derive_actuated(
         own, the number of drives is not the number of joints, a drive is hydraulic (closed forms
         of hydraulic drives are not supported), flexible, or not a drive, or ``derive`` refuses
         ``method``.
-    TypeError
-        When ``robot`` is neither a Robot nor an ActuatedArm.
+    armdyn.ArgumentError
+        When ``robot`` is neither a Robot nor an ActuatedArm (a ModelError and a TypeError).
     """
     from armdyn.actuators import ActuatedArm
 
@@ -750,7 +750,7 @@ def derive_actuated(
             raise ModelError("derive: an ActuatedArm carries its drives; drives=... is for a Robot")
         arm, drives = arm.robot, arm.drives
     elif not isinstance(arm, Robot):
-        raise TypeError(f"robot must be an armdyn Robot or ActuatedArm, got {type(arm).__name__}")
+        raise ArgumentError(f"robot must be an armdyn Robot or ActuatedArm, got {type(arm).__name__}")
     elif drives is None:
         raise ModelError(f"derive: robot '{arm.name}' needs drives=[...], one per joint")
     motors = checked_motors(arm, drives)
