@@ -25,7 +25,7 @@ from __future__ import annotations
 import reprlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import sympy
@@ -700,7 +700,7 @@ def derive_actuated(
     method: str = "auto",
     friction: str | bool = True,
     progress: Callable[[float, str], object] | None = None,
-    joint_space: Callable[..., ClosedForm] | None = None,
+    joint_space: Callable[..., object] | None = None,
 ) -> ActuatedClosedForm:
     """The arm-plus-actuator system in closed form: ``derive``'s route for drives (BOOK.md section 7).
 
@@ -748,10 +748,12 @@ def derive_actuated(
     if isinstance(arm, ActuatedArm):
         if drives is not None:
             raise ModelError("derive: an ActuatedArm carries its drives; drives=... is for a Robot")
-        arm, drives = arm.robot, arm.drives
+        drives = arm.drives
+        arm = arm.robot
     elif not isinstance(arm, Robot):
         raise ArgumentError(f"robot must be an armdyn Robot or ActuatedArm, got {type(arm).__name__}")
     elif drives is None:
         raise ModelError(f"derive: robot '{arm.name}' needs drives=[...], one per joint")
     motors = checked_motors(arm, drives)
-    return ActuatedClosedForm(joint_space(arm, method, friction, progress), motors)
+    form = cast("ClosedForm", joint_space(arm, method, friction, progress))  # a Robot's, in joint space
+    return ActuatedClosedForm(form, motors)

@@ -108,6 +108,7 @@ def _point(arm: _Arm, output: TaskOutput) -> tuple[list[se.Basic], se.Basic]:
         T = world[robot.tool_link] * transform(robot.tool)
     p = [T[r, 3] for r in range(3)]
     if not isinstance(output, Camera):
+        assert isinstance(output, (ToolPosition, LinkPoint, PlanarPosition))  # the outputs check_output lets pass
         return [p[r] for r in output._rows], se.Integer(1)
     pose, f = transform(output.pose), number(output.focal_length)
     pc = [sum(pose[r, k] * (p[r] - pose[r, 3]) for r in range(3)) for k in range(3)]  # R_c^T (p - o_c)
