@@ -27,7 +27,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn, SupportsFloat, cast
 
 import numpy as np
 import typer
@@ -39,6 +39,20 @@ from typer.core import TyperGroup
 from armdyn import models as catalog
 from armdyn.errors import MissingDependencyError, ModelError, SimulationError
 from armdyn.robot import Robot
+
+if TYPE_CHECKING:
+    from rich.console import JustifyMethod
+    from typer._click.core import Context as ClickContext  # typer's own click, the base of typer.Context
+
+    from armdyn.actuators.arm import ActuatedArm
+    from armdyn.actuators.stepping import DriveRecord
+    from armdyn.control.drives import CurrentComputedTorque, DrivePID
+    from armdyn.control.task import TaskComputedTorque, Tracking
+    from armdyn.excitation import FourierTrajectory
+    from armdyn.simulation import Result
+    from armdyn.symbolic.closed_form import ClosedForm
+    from armdyn.task_space import TaskOutput
+    from armdyn.trajectories import Circle, Line, PoseLine, Quintic, Sinusoid
 
 INPUT_ERROR = 2
 INTERNAL_ERROR = 1
@@ -186,7 +200,7 @@ class _Group(TyperGroup):
     """The app's command group: the one place where a command's failure becomes one line on
     stderr and an exit code (see the module docstring), unless ``--debug`` is given."""
 
-    def invoke(self, ctx: typer.Context) -> Any:
+    def invoke(self, ctx: ClickContext) -> Any:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
             try:
@@ -204,11 +218,20 @@ class _Group(TyperGroup):
                 _error_line(message)
                 raise typer.Exit(code) from None
 
-    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+    def main(
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        windows_expand_args: bool = True,
+        **kwargs: Any,
+    ) -> Any:
+        given = (args, prog_name, complete_var)
         if not standalone_mode:
-            return super().main(*args, standalone_mode=False, **kwargs)
+            return super().main(*given, standalone_mode=False, windows_expand_args=windows_expand_args, **kwargs)
         try:
-            code = super().main(*args, standalone_mode=False, **kwargs)
+            code = super().main(*given, standalone_mode=False, windows_expand_args=windows_expand_args, **kwargs)
         except typer.TyperException as error:  # a usage error: a bad option, a missing argument...
             if type(error).__name__ != "NoArgsIsHelpError":  # that one has printed the help already
                 ctx = getattr(error, "ctx", None)
@@ -360,7 +383,7 @@ class _Sheet:
     rows: list[list[str]]
     caption: str = ""
 
-    def rich(self, justify: str = "right") -> Table:
+    def rich(self, justify: JustifyMethod = "right") -> Table:
         table = Table(title=self.title, caption=self.caption or None)
         for column in self.columns:
             table.add_column(column, justify=justify, overflow="fold")
@@ -420,10 +443,10 @@ def _units(arm: Robot, revolute: str, prismatic: str) -> str:
 def _number(value: object, digits: int = 4) -> str:
     if hasattr(value, "free_symbols"):
         return str(value)
-    value = float(value)
-    if np.isinf(value):
-        return "inf" if value > 0 else "-inf"
-    return f"{value:.{digits}g}"
+    number = float(cast("SupportsFloat", value))
+    if np.isinf(number):
+        return "inf" if number > 0 else "-inf"
+    return f"{number:.{digits}g}"
 
 
 def _vector(values: object, digits: int = 4) -> str:
@@ -589,7 +612,7 @@ def show(
         console.print(f"wrote {draw}")
 
 
-def _actuated(arm: Robot, name: str, kind: str) -> object:
+def _actuated(arm: Robot, name: str, kind: str) -> ActuatedArm:
     """The arm with drives of ``kind`` (armdyn.actuators.representative_drives; the built-in PUMA 560's motors)."""
     from armdyn import actuators
 
@@ -601,7 +624,7 @@ def _actuated(arm: Robot, name: str, kind: str) -> object:
     return actuators.representative_drives(arm, kind)
 
 
-def _drive_sheets(driven: object) -> list[_Sheet]:
+def _drive_sheets(driven: ActuatedArm) -> list[_Sheet]:
     """The drives of an ActuatedArm as tables: DC motors with their electrical and mechanical time
     constants, hydraulic drives with their pressure pole and oil-column frequency."""
     from armdyn.actuators import DCMotor
@@ -631,12 +654,12 @@ def _drive_sheets(driven: object) -> list[_Sheet]:
         columns = ["joint", "drive", "A m^2 or D_m m^3", "K_q m^2/s", "K_c + C_tp m^3/(s Pa)", "V_t l", "P_s MPa",
                    "tau_v ms", "i max mA", "oil column Hz"]  # fmt: skip
         rows = []
-        for j, d in valves:
-            column = np.sqrt(d.area**2 / (d.capacitance * inertia[j])) / (2 * np.pi)
-            rows.append([joints[j], d.name, _number(d.area), _number(d.linearized_flow_gain),
-                         _number(d.total_coefficient), _number(1e3 * d.volume), _number(d.supply_pressure / 1e6),
-                         _number(1e3 * d.valve_time_constant), _number(1e3 * d.current_limit),
-                         _number(column)])  # fmt: skip
+        for j, valve in valves:
+            column = np.sqrt(valve.area**2 / (valve.capacitance * inertia[j])) / (2 * np.pi)
+            rows.append([joints[j], valve.name, _number(valve.area), _number(valve.linearized_flow_gain),
+                         _number(valve.total_coefficient), _number(1e3 * valve.volume),
+                         _number(valve.supply_pressure / 1e6), _number(1e3 * valve.valve_time_constant),
+                         _number(1e3 * valve.current_limit), _number(column)])  # fmt: skip
         sheets.append(_Sheet("Hydraulic drives (Merritt 1967; the oil column with the link's inertia at qz)", columns,
                              rows))  # fmt: skip
     return sheets
@@ -757,13 +780,14 @@ def derive(
     book = {"two_link_planar", "polar_rp", "cylindrical"}
     arm = getattr(catalog, name.lower())(symbolic=True) if symbolic and name.lower() in book else _arm(name, strict)
     progress = _activity.bar(f"deriving the closed form of {arm.name}")
-    options = {"method": method} | ({} if progress is None else {"progress": progress})
+    options: dict[str, Any] = {"method": method} | ({} if progress is None else {"progress": progress})
     form = derive_closed_form(arm, **options) if chosen is None else derive_closed_form(arm, output=chosen, **options)
     _activity.status(f"writing the equations of {arm.name}" + (f" as {code} code" if code else ""))
     if code is not None:
-        text = form.to_python() if code == "python" else form.to_c()
+        joint = cast("ClosedForm", form)  # the joint-space equation of a Robot: --code excludes --task
+        text = joint.to_python() if code == "python" else joint.to_c()
     elif latex:
-        text = form.latex_document() if target is not None and chosen is None else form.latex()
+        text = cast("ClosedForm", form).latex_document() if target is not None and chosen is None else form.latex()
     else:  # the terminal gets a summary of long entries; a file gets every entry in full
         text = form.pretty(limit=None) if target is not None else form.pretty()
     _activity.stop()
@@ -855,7 +879,7 @@ def check(
     arm = _arm(name, strict)
     ranges = _limits(limits, arm)
     chosen = None if task is None else _task_output(task)
-    options = {} if chosen is None else {"task": chosen, "max_condition": max_condition}
+    options: dict[str, Any] = {} if chosen is None else {"task": chosen, "max_condition": max_condition}
     where = "" if chosen is None else f" in task coordinates {chosen!r}"
     refined = "L-BFGS-B" if chosen is None else "SLSQP"
     _activity.status(f"checking Table 3.3.1 on {arm.name}{where} ({samples} samples, refined by {refined})")
@@ -885,7 +909,7 @@ def check(
         raise typer.Exit(1)
 
 
-def _task_output(coordinates: str, option: str = "--task") -> object:
+def _task_output(coordinates: str, option: str = "--task") -> TaskOutput:
     """The task output that ``check --task``, ``simulate --task`` and ``task --coordinates`` name (TASK_OUTPUTS)."""
     from armdyn import task_space
 
@@ -926,7 +950,7 @@ def _book_values(arm: Robot, ranges: Sequence[tuple[float, float]]) -> dict[str,
         return {}
     if not np.allclose(np.asarray(ranges, dtype=float), [(-np.pi / 2, np.pi / 2)] * 2, atol=1e-4):
         return {}
-    mass1, mass2 = (float(link.inertial.mass) for link in arm.links)
+    mass1, mass2 = (float(cast("SupportsFloat", link.inertial.mass)) for link in arm.links)  # numeric: checked
     a1, a2 = (float(row["a"]) for row in arm.dh["rows"])
     g = -float(arm.gravity[1])
     try:
@@ -999,6 +1023,7 @@ def identify(
     if generate:
         arrays, trajectory = _generated_samples(arm, noise, seed, period, harmonics, dt)
     else:
+        assert csv is not None  # checked above: a CSV file, or --generate
         arrays, trajectory = _read_samples(csv, arm.n), None
     _activity.status(f"identifying the base parameters of {arm.name} from {len(arrays['q'])} samples")
     result = identify_parameters(arm, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"],
@@ -1030,7 +1055,7 @@ def identify(
 
 def _generated_samples(
     arm: Robot, noise: float, seed: int, period: float, harmonics: int, dt: float
-) -> tuple[dict[str, np.ndarray], object]:
+) -> tuple[dict[str, np.ndarray], FourierTrajectory]:
     """``identify --generate``: an excitation trajectory optimized for the arm, and one period of samples
     simulated along it with torque noise (armdyn.excitation), as (q, qd, qdd, tau arrays, the trajectory)."""
     from armdyn.excitation import excitation_trajectory, identification_data
@@ -1122,7 +1147,9 @@ def _controller(kind: str, kp: object, kv: object, ki: object, period: float, li
     return controller
 
 
-def _trajectory(kind: str, arm: Robot, amplitude: float, frequency: float, start: np.ndarray | None = None) -> object:
+def _trajectory(
+    kind: str, arm: Robot, amplitude: float, frequency: float, start: np.ndarray | None = None
+) -> Sinusoid | Quintic | None:
     """The desired trajectory of ``simulate``, about ``start`` (default the arm's qz, or zeros)."""
     from armdyn import trajectories
 
@@ -1184,12 +1211,12 @@ def _three(text: str, option: str) -> np.ndarray:
 def _task_controller(
     arm: Robot, task: str, controller: str, kp: str, kv: str, trajectory: str, amplitude: float, frequency: float,
     start: np.ndarray, move: str, turn: str,
-) -> object:  # fmt: skip
+) -> TaskComputedTorque:  # fmt: skip
     """The task-space law of ``simulate --task``: the output, a path from the tool's start, and the law."""
     from armdyn import control, trajectories
 
     output = _task_output(task)
-    gains = [_one_number(value, option) for value, option in ((kp, "--kp"), (kv, "--kv"))]
+    gain_p, gain_v = (_one_number(value, option) for value, option in ((kp, "--kp"), (kv, "--kv")))
     y0 = output.value(arm, start)
     if not (np.isfinite(frequency) and frequency > 0):
         _fail(f"--frequency must be positive and finite for a task path (it lasts 1/frequency s), got {frequency}")
@@ -1202,9 +1229,9 @@ def _task_controller(
             end = begin.copy()
             end[:3, 3] += shift
             end[:3, :3] = Rotation.from_rotvec(_three(turn, "--turn")).as_matrix() @ begin[:3, :3]
-            path = trajectories.PoseLine(begin, end, 1.0 / frequency)
+            path: Line | Circle | PoseLine = trajectories.PoseLine(begin, end, 1.0 / frequency)
         else:
-            path = trajectories.Line(y0, y0 + shift[: len(y0)], 1.0 / frequency)
+            path = trajectories.Line(tuple(y0), tuple(y0 + shift[: len(y0)]), 1.0 / frequency)
     elif trajectory == "circle":
         if task == "pose":
             _fail("--trajectory circle takes --task position or planar (a pose follows a line)")
@@ -1212,23 +1239,23 @@ def _task_controller(
         centre[0] -= amplitude
         path = trajectories.Circle(tuple(centre), amplitude, 1.0 / frequency)
     elif trajectory == "none":
-        path = (
-            trajectories.Line(y0, y0, 1.0)
-            if task != "pose"
-            else trajectories.PoseLine(*[arm.tool_pose(start)] * 2, 1.0)
-        )
+        if task != "pose":
+            path = trajectories.Line(tuple(y0), tuple(y0), 1.0)
+        else:
+            pose = arm.tool_pose(start)
+            path = trajectories.PoseLine(pose, pose, 1.0)
     else:
         _fail(f"--trajectory with --task must be line, circle or none, got {trajectory!r}")
     if controller == "computed-torque":
-        return control.TaskComputedTorque(output, path, *gains)
+        return control.TaskComputedTorque(output, path, gain_p, gain_v)
     if controller == "operational-space":
-        return control.OperationalSpaceControl(output, path, *gains, start, gains[0] / 4, gains[1] / 2)
+        return control.OperationalSpaceControl(output, path, gain_p, gain_v, start, gain_p / 4, gain_v / 2)
     _fail(f"--controller with --task must be computed-torque or operational-space, got {controller!r}")
 
 
-def _task_report(result: object) -> _Sheet:
+def _task_report(result: Result) -> _Sheet:
     """Print the report of a task-space run (a row per task coordinate) and return it."""
-    task = result.task
+    task = cast("Tracking", result.task)
     unit = "m, rad" if task.output.startswith("ToolPose") else "m"
     labels = ["x", "y", "z", "rx", "ry", "rz"][: task.error.shape[1]]
     late = result.t >= min(1.0, result.t[-1])
@@ -1297,7 +1324,8 @@ def simulate(
     start = _joint_state(q0, "--q0", arm) if q0 is not None else None
     velocity = _joint_state(qd0, "--qd0", arm) if qd0 is not None else None
     tau_d = np.broadcast_to(_per_joint(disturbance, "--disturbance", arm.n), (arm.n,))
-    driven = None
+    driven: ActuatedArm | None = None
+    law: object  # the controller: joint-space, task-space or the drives'
     if actuators is not None:  # the arm through its drives' dynamics
         options = (("--task", task is not None), ("--period", period != 0), ("--torque-limit", torque_limit != "inf"),
                    ("--method", method != "rk4"), ("--disturbance", bool(np.any(tau_d))))  # fmt: skip
@@ -1320,8 +1348,8 @@ def simulate(
         desired = None
     else:
         named = (("100" if kp is None else kp, "--kp"), ("20" if kv is None else kv, "--kv"), (ki, "--ki"))
-        gains = [_per_joint(value, option, arm.n) for value, option in named]
-        law = _controller(controller, *gains, period, _per_joint(torque_limit, "--torque-limit", arm.n))
+        gain_p, gain_v, gain_i = (_per_joint(value, option, arm.n) for value, option in named)
+        law = _controller(controller, gain_p, gain_v, gain_i, period, _per_joint(torque_limit, "--torque-limit", arm.n))
         desired = _trajectory("sine" if trajectory is None else trajectory, arm, amplitude, frequency, start)
     if start is None and desired is not None and controller == "none":
         start = desired(0.0, arm.n)[0]
@@ -1354,7 +1382,9 @@ def simulate(
         console.print(f"wrote {animate}")
 
 
-def _drive_controller(driven: object, kind: str, controller: str, kp: str | None, kv: str | None, ki: str) -> object:
+def _drive_controller(
+    driven: ActuatedArm, kind: str, controller: str, kp: str | None, kv: str | None, ki: str
+) -> DrivePID | CurrentComputedTorque:
     """The drive-level law of ``simulate --actuators``."""
     from armdyn import control
 
@@ -1374,9 +1404,9 @@ def _drive_controller(driven: object, kind: str, controller: str, kp: str | None
     _fail(f"--controller with --actuators must be pid or computed-torque, got '{controller}'")
 
 
-def _drive_report(result: object, driven: object) -> _Sheet:
+def _drive_report(result: Result, driven: ActuatedArm) -> _Sheet:
     """Print what the drives did (peak input, current, load pressure) and return it as a sheet."""
-    record, joints = result.drives, driven.robot.joint_names
+    record, joints = cast("DriveRecord", result.drives), driven.robot.joint_names
     columns = ["joint", "drive", "max |input| (V or A)", "input limit", "max |i| (A)", "max |P_L| (MPa)"]
     sheet = _Sheet(f"{driven.name}: drives ({result.info['substeps']} RK4 steps per sample)", columns, [])
     names = record.names
@@ -1466,10 +1496,11 @@ def study(
     folder = _output_folder(output, "--out") if output else None
     arm = _arm(name, strict)
     start = _joint_state(q0, "--q0", arm) if q0 is not None else _default_start(arm)
-    gains = [_per_joint(value, option, arm.n) for value, option in ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))]
+    named = ((kp, "--kp"), (kv, "--kv"), (ki, "--ki"))
+    gain_p, gain_v, gain_i = (_per_joint(value, option, arm.n) for value, option in named)
     if controller not in ("computed-torque", "pd-gravity", "pid"):
         _fail(f"--controller must be computed-torque, pd-gravity or pid, got '{controller}'")
-    law = _controller(controller, *gains, 0.0, np.inf)
+    law = _controller(controller, gain_p, gain_v, gain_i, 0.0, np.inf)
     desired = _trajectory(trajectory, arm, amplitude, frequency, start)
     declared = Study(arm, law, desired, spec=spec, t_final=t_final, dt=dt, q0=start, block=block,
                      payload=_distribution(payload, "--payload"),
@@ -1486,7 +1517,7 @@ def study(
         console.print(f"Dask dashboard: {result.info['dashboard']} ({result.info['workers']} workers)")
     estimate = result.estimate
     sheet = _Sheet(f"{arm.name}: {spec}", ["quantity", "value"], [
-        ["runs (finished)", f"{estimate.runs} ({int(result.table['finished'].sum())})"],
+        ["runs (finished)", f"{estimate.runs} ({int(cast(Any, result.table)['finished'].sum())})"],
         ["P(spec holds)", f"{estimate.probability:.4f}"],
         [f"{estimate.confidence:.0%} interval (Clopper-Pearson)", f"[{estimate.low:.4f}, {estimate.high:.4f}]"],
         [f"runs for +-0.01 at {estimate.confidence:.0%} (Hoeffding)", str(runs_needed(0.01, estimate.confidence))],
@@ -1498,7 +1529,7 @@ def study(
         console.print(f"wrote {plot}")
 
 
-def _check_finite(result: object) -> None:
+def _check_finite(result: Result) -> None:
     """A ModelError when a run diverged (its state became NaN or infinite)."""
     finite = np.isfinite(result.q).all(axis=-1) & np.isfinite(result.qd).all(axis=-1)
     if not finite.all():
@@ -1508,7 +1539,7 @@ def _check_finite(result: object) -> None:
         )
 
 
-def _report(result: object) -> _Sheet:
+def _report(result: Result) -> _Sheet:
     """Print the report of a run (a table per joint, with units) and return it."""
     arm = result.arm
     position, torque = _units(arm, "rad", "m"), _units(arm, "N m", "N")
@@ -1575,7 +1606,9 @@ def demo(
     _activity.status("writing the animation of Example 4.4-1")
     result.animate(folder / "demo.gif", title="Example 4.4-1: PD computed-torque control of the two-link arm")
     console.print(f"wrote {folder / 'demo.png'}, {folder / 'demo.csv'} and {folder / 'demo.gif'} (the arm moving)")
-    final = np.abs(result.error[-1])
+    error = result.error
+    assert error is not None  # the run tracks the demo's trajectory
+    final = np.abs(error[-1])
     console.print(f"final tracking errors: e1 = {final[0]:.2e} rad, e2 = {final[1]:.2e} rad")
     _demo_task_space(arm)
     _demo_actuators(arm, desired, folder)
@@ -1594,7 +1627,7 @@ def _demo_task_space(arm: Robot) -> None:
         console.print(f"{label} ({unit}):\n{np.array2string(np.asarray(value), precision=4)}", highlight=False)
 
 
-def _demo_actuators(arm: Robot, desired: object, folder: Path) -> None:
+def _demo_actuators(arm: Robot, desired: Sinusoid | Quintic | None, folder: Path) -> None:
     """The demo's Section 3.6: Example 3.6-1's poles and the arm driven through DC motors with their electrics."""
     from armdyn import actuators, control
     from armdyn.simulation import simulate as run
@@ -1652,7 +1685,7 @@ def task(
     chosen = _task_output(coordinates, "--coordinates")
     start = _joint_state(q, "--q", arm) if q is not None else np.zeros(arm.n)
     rates = np.broadcast_to(_per_joint(qd, "--qd", arm.n), (arm.n,)).copy() if qd is not None else np.zeros(arm.n)
-    options = {} if damping is None else {"damping": damping}
+    options: dict[str, Any] = {} if damping is None else {"damping": damping}
     labels = {"position": ["x", "y", "z"], "pose": ["x", "y", "z", "wx", "wy", "wz"], "planar": ["x", "y"]}[coordinates]
     if len(labels) < arm.n:  # a redundant arm: Khatib's operational space
         space = task_space.operational_space(arm, chosen, start, rates, **options)

@@ -2,7 +2,7 @@
 animations of a run.
 
 The arm is read by duck typing (its ``link_transforms``, ``tool_pose``, ``links``, ``base``, ``tool_link``):
-this module imports no Robot, so armdyn.robot can draw itself through it.
+this module imports Robot for type checking only, so armdyn.robot can draw itself through it.
 """
 
 from __future__ import annotations
@@ -13,11 +13,28 @@ import textwrap
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
+from armdyn.model.arm import ArmModel
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.text import Text
+    from mpl_toolkits.mplot3d import Axes3D  # type: ignore[import-untyped]  # mplot3d ships no type hints
+    from mpl_toolkits.mplot3d.art3d import Line3D, Text3D  # type: ignore[import-untyped]
+
+    from armdyn.actuators.stepping import DriveRecord
+    from armdyn.control.task import Tracking
+    from armdyn.robot import Robot
+    from armdyn.simulation import Ensemble, Result
+    from armdyn.study import StudyResult
 
 TITLE_WIDTH = 100  # characters per title line: a 9 inch figure at 10 points holds about 110
 
@@ -28,7 +45,7 @@ def units(kinds: list[str], revolute: str, prismatic: str) -> str:
     return found.pop() if len(found) == 1 else f"{revolute} or {prismatic}"
 
 
-def plot_result(result: object, path: str | Path | None = None, title: str | None = None) -> object:
+def plot_result(result: Result, path: str | Path | None = None, title: str | None = None) -> Figure:
     """Joint values (solid) with their desired values (dashed), tracking errors, and torques.
 
     One colour per joint, named in a legend beside the plots (never over the data); the title
@@ -51,12 +68,13 @@ def plot_result(result: object, path: str | Path | None = None, title: str | Non
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     names = result.arm.joint_names
     torque_axis = axes[rows - 1 - len(drives)]
+    error = result.error  # None when q_d is
     for i in range(n):
         colour = colours[i % len(colours)]
         axes[0].plot(result.t, result.q[:, i], color=colour)
-        if result.q_d is not None:
+        if result.q_d is not None and error is not None:
             axes[0].plot(result.t, result.q_d[:, i], color=colour, linestyle="--", linewidth=1.0)
-            axes[1].plot(result.t, result.error[:, i], color=colour)
+            axes[1].plot(result.t, error[:, i], color=colour)
         torque_axis.plot(result.t, result.tau[:, i], color=colour)
     axes[0].set_ylabel(f"joint position ({position})")
     if result.q_d is not None:
@@ -84,10 +102,10 @@ def plot_result(result: object, path: str | Path | None = None, title: str | Non
     return fig
 
 
-def _drive_panels(result: object) -> list[tuple[str, list[int], object]]:
+def _drive_panels(result: Result) -> list[tuple[str, list[int], np.ndarray]]:
     """The drives' extra plots of a run with its actuators: (label, joint of each column, values) for the
     inputs, the armature currents and the load pressures."""
-    record = getattr(result, "drives", None)
+    record = cast("DriveRecord | None", getattr(result, "drives", None))
     if record is None:
         return []
     joints = result.arm.joint_names
@@ -101,11 +119,12 @@ def _drive_panels(result: object) -> list[tuple[str, list[int], object]]:
     if dc:
         panels.append(("armature current (A)", dc, record.i))
     if hydraulic:
+        assert record.pressure is not None  # recorded for every arm with hydraulic drives
         panels.append(("load pressure (MPa)", hydraulic, record.pressure / 1e6))
     return panels
 
 
-def _title(result: object) -> str:
+def _title(result: Result) -> str:
     info = result.info
     parts = [result.arm.name]
     if "controller" in info:
@@ -123,7 +142,7 @@ def _task_units(output: str) -> str:
     return "output units" if output.startswith("Output") else "m"
 
 
-def plot_task(result: object, path: str | Path | None = None, title: str | None = None) -> object:
+def plot_task(result: Result, path: str | Path | None = None, title: str | None = None) -> Figure:
     """The task-space path drawn over the desired one (the first two coordinates), and the size of
     the task error over time on a log scale (a pose task: its position and orientation parts apart)."""
     import matplotlib
@@ -132,7 +151,7 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    task = result.task
+    task = cast("Tracking", result.task)
     unit = _task_units(task.output)
     fig, (plane, error) = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
     plane.plot(task.y_d[:, 0], task.y_d[:, 1], "k--", lw=1, label="desired")
@@ -166,7 +185,7 @@ def plot_task(result: object, path: str | Path | None = None, title: str | None 
     return fig
 
 
-def plot_ensemble(ensemble: object, path: str | Path | None, quantity: str, row: int) -> object:
+def plot_ensemble(ensemble: Ensemble, path: str | Path | None, quantity: str, row: int) -> Figure:
     """Many runs at once: the tracking error's envelope over time (median, 25-75 % and 5-95 % bands of
     |q_d - q| per joint, when samples were kept) above histograms of one summary (``quantity``, row
     ``row`` of the summaries) per joint."""
@@ -219,7 +238,7 @@ def plot_ensemble(ensemble: object, path: str | Path | None, quantity: str, row:
     return fig
 
 
-def plot_study(result: object, path: str | Path | None = None) -> object:
+def plot_study(result: StudyResult, path: str | Path | None = None) -> Figure:
     """A study's runs: a histogram per clause of its spec (the bound marked, runs that fail in a second
     colour), titled with the estimate of P(spec holds) and its interval."""
     import matplotlib
@@ -231,9 +250,10 @@ def plot_study(result: object, path: str | Path | None = None) -> object:
     clauses = result.spec.clauses
     fig, axes = plt.subplots(1, len(clauses), figsize=(4.5 * len(clauses) + 1, 3.6), layout="constrained",
                              squeeze=False)  # fmt: skip
-    holds = np.asarray(result.table["holds"], dtype=bool)
+    table: Any = result.table  # a pandas DataFrame (pandas has no type stubs here)
+    holds = np.asarray(table["holds"], dtype=bool)
     for axis, (column, op, bound) in zip(axes[0], clauses, strict=True):
-        values = np.asarray(result.table[column], dtype=float)
+        values = np.asarray(table[column], dtype=float)
         finite = np.isfinite(values)
         bins = np.histogram_bin_edges(values[finite], bins=40) if finite.any() else 10
         axis.hist([values[finite & holds], values[finite & ~holds]], bins=bins, stacked=True,
@@ -255,15 +275,15 @@ def plot_study(result: object, path: str | Path | None = None) -> object:
 
 # ----- the arm as a stick figure (its forward kinematics, Appendix A) ------------------------------------
 FRAME_COLOURS = ("tab:red", "tab:green", "tab:blue")  # x, y, z of a frame
-LINK_STYLE = {"color": "0.25", "linewidth": 5.0, "solid_capstyle": "round", "solid_joinstyle": "round"}
-JOINT_STYLES = {
+LINK_STYLE: dict[str, Any] = {"color": "0.25", "linewidth": 5.0, "solid_capstyle": "round", "solid_joinstyle": "round"}
+JOINT_STYLES: dict[str, dict[str, Any]] = {
     "revolute": {"color": "tab:orange", "linewidth": 4.0, "marker": "o", "markersize": 9, "markevery": [1],
                  "markerfacecolor": "white", "markeredgewidth": 2.0, "solid_capstyle": "butt"},
     "prismatic": {"color": "tab:purple", "linewidth": 2.5, "linestyle": (0, (3, 1.5)), "marker": "s",
                   "markersize": 8, "markevery": [1], "markerfacecolor": "white", "markeredgewidth": 2.0},
 }  # fmt: skip
-DESIRED_PATH_STYLE = {"color": "0.45", "linestyle": "--", "linewidth": 1.2}
-ACTUAL_PATH_STYLE = {"color": "tab:cyan", "linewidth": 1.8}
+DESIRED_PATH_STYLE: dict[str, Any] = {"color": "0.45", "linestyle": "--", "linewidth": 1.2}
+ACTUAL_PATH_STYLE: dict[str, Any] = {"color": "tab:cyan", "linewidth": 1.8}
 PLANE_TOLERANCE = 1e-9  # m, and for the cosines between joint axes
 MAX_FRAMES = 150
 ANIMATION_FORMATS = (".gif", ".mp4")
@@ -291,7 +311,7 @@ class _Scene:
         return np.vstack([*self.links, self.base[None, :3, 3], self.tool[None, :3, 3]])
 
 
-def _scene(arm: object, q: np.ndarray) -> _Scene:
+def _scene(arm: Robot, q: np.ndarray) -> _Scene:
     """The stick figure of ``arm`` at q from the compiled forward kinematics (link_transforms, tool_pose)."""
     transforms = arm.link_transforms(q)
     base = np.asarray(arm.base, dtype=float)
@@ -339,20 +359,21 @@ def _plane_basis(normal: np.ndarray) -> tuple[np.ndarray, tuple[str, str]]:
     projected on the plane and the normal's cross product with it."""
     closest = int(np.argmax(np.abs(normal)))
     if abs(abs(normal[closest]) - 1.0) < PLANE_TOLERANCE:
-        kept = [axis for axis in range(3) if axis != closest]
-        return np.eye(3)[kept], tuple(f"{'xyz'[axis]} (m)" for axis in kept)
+        first_axis, second_axis = (axis for axis in range(3) if axis != closest)
+        return np.eye(3)[[first_axis, second_axis]], (f"{'xyz'[first_axis]} (m)", f"{'xyz'[second_axis]} (m)")
     first = np.eye(3)[0] if abs(normal[0]) < 0.9 else np.eye(3)[1]
     first = first - (first @ normal) * normal
     first /= np.linalg.norm(first)
     basis = np.array([first, np.cross(normal, first)])
-    return basis, tuple(f"along ({', '.join(f'{v:.3g}' for v in row)}) (m)" for row in basis)
+    first_name, second_name = (f"along ({', '.join(f'{v:.3g}' for v in row)}) (m)" for row in basis)
+    return basis, (first_name, second_name)
 
 
 class _ArmDrawing:
     """The artists of the stick figure on one axes (2-D in a planar arm's plane, else 3-D), made once
     and moved by ``show``: plot_arm draws one configuration with it, animate every frame."""
 
-    def __init__(self, ax: object, scene: _Scene, basis: np.ndarray | None, size: float) -> None:
+    def __init__(self, ax: Axes, scene: _Scene, basis: np.ndarray | None, size: float) -> None:
         self.ax, self.basis, self.size = ax, basis, size
         self.links = [self._line(gid=f"link {i}", zorder=3, **LINK_STYLE) for i in range(len(scene.links))]
         self.joints = [self._line(gid=f"joint {i}", zorder=4, **JOINT_STYLES[kind]) for i, kind in
@@ -360,8 +381,7 @@ class _ArmDrawing:
         self.tool_line = self._line(gid="tool", zorder=3, color="0.25", linewidth=2.0)
         self.frames = {name: [self._line(gid=f"{name} {'xyz'[k]}", zorder=5, color=FRAME_COLOURS[k], linewidth=2.0)
                               for k in range(3)] for name in ("base", "tool")}  # fmt: skip
-        self.labels = {name: ax.text(*self._coordinates(np.zeros((1, 3)))[:, 0], name, fontsize=8, zorder=6,
-                                     ha="right", va="top") for name in ("base", "tool")}  # fmt: skip
+        self.labels = {name: self._label(name) for name in ("base", "tool")}
         self.down = -(basis[1] if basis is not None else np.eye(3)[2])  # labels go below their frame's origin
         self.show(scene)
 
@@ -369,16 +389,23 @@ class _ArmDrawing:
         """Points (k, 3) as the axes' coordinates: (2, k) in the plane, else (3, k)."""
         return (points @ self.basis.T).T if self.basis is not None else points.T
 
-    def _line(self, **style: object) -> object:
+    def _label(self, name: str) -> Text:
+        """A frame's name, at the origin until ``show`` moves it."""
+        origin = self._coordinates(np.zeros((1, 3)))[:, 0]
+        if self.basis is not None:
+            return self.ax.text(origin[0], origin[1], name, fontsize=8, zorder=6, ha="right", va="top")
+        return cast("Axes3D", self.ax).text(*origin, name, fontsize=8, zorder=6, ha="right", va="top")
+
+    def _line(self, **style: Any) -> Line2D:
         (line,) = self.ax.plot(*np.zeros((2 if self.basis is not None else 3, 2)), **style)
         return line
 
-    def _put(self, artist: object, points: np.ndarray) -> None:
+    def _put(self, artist: Line2D, points: np.ndarray) -> None:
         coordinates = self._coordinates(points)
         if self.basis is not None:
             artist.set_data(*coordinates)
         else:
-            artist.set_data_3d(*coordinates)
+            cast("Line3D", artist).set_data_3d(*coordinates)
 
     def show(self, scene: _Scene) -> None:
         """Move every artist to the arm at ``scene``."""
@@ -394,17 +421,18 @@ class _ArmDrawing:
                 self._put(line, np.array([pose[:3, 3], pose[:3, 3] + self.size * pose[:3, k]]))
             corner = pose[:3, 3] + 0.3 * self.size * self.down
             if self.basis is not None:
-                self.labels[name].set_position(self._coordinates(corner[None])[:, 0])
+                x, y = self._coordinates(corner[None])[:, 0]
+                self.labels[name].set_position((x, y))
             else:
-                self.labels[name].set_position_3d(corner)
+                cast("Text3D", self.labels[name]).set_position_3d(corner)
 
-    def artists(self) -> list[object]:
+    def artists(self) -> list[Any]:
         """Every artist of the figure (for an animation's frame)."""
         frames = [line for lines in self.frames.values() for line in lines]
         return [*self.links, *self.joints, self.tool_line, *frames, *self.labels.values()]
 
 
-def _legend_handles(scene: _Scene, basis: np.ndarray | None) -> list[object]:
+def _legend_handles(scene: _Scene, basis: np.ndarray | None) -> list[Line2D]:
     """The legend's entries: links, the kinds of joint the arm has, and the frames' axes that show
     (in a plane, an axis along its normal is a point)."""
     from matplotlib.lines import Line2D
@@ -420,7 +448,7 @@ def _legend_handles(scene: _Scene, basis: np.ndarray | None) -> list[object]:
     return handles
 
 
-def _legend(ax: object, scene: _Scene, basis: np.ndarray | None) -> None:
+def _legend(ax: Axes, scene: _Scene, basis: np.ndarray | None) -> None:
     """The legend of the stick figure, below its axes (the arm moves everywhere inside them)."""
     ax.legend(handles=_legend_handles(scene, basis), loc="upper center", bbox_to_anchor=(0.5, -0.08), ncols=3,
               fontsize=8, frameon=False)  # fmt: skip
@@ -431,7 +459,7 @@ def _figure_size(scene: _Scene) -> float:
     return max(0.05, 0.12 * float(np.ptp(scene.points(), axis=0).max()))
 
 
-def _set_limits(ax: object, points: np.ndarray, basis: np.ndarray | None, pad: float) -> None:
+def _set_limits(ax: Axes, points: np.ndarray, basis: np.ndarray | None, pad: float) -> None:
     """Equal scales on every axis (an undistorted arm), the points inside with ``pad`` (m) to spare."""
     coordinates = (points @ basis.T) if basis is not None else points
     low, high = coordinates.min(axis=0), coordinates.max(axis=0)
@@ -441,24 +469,26 @@ def _set_limits(ax: object, points: np.ndarray, basis: np.ndarray | None, pad: f
         ax.set_ylim(centre[1] - half, centre[1] + half)
         ax.set_aspect("equal", adjustable="box")
     else:
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-        ax.set_box_aspect((1.0, 1.0, 1.0), zoom=1.1)
+        space = cast("Axes3D", ax)
+        space.set_xlim(centre[0] - half, centre[0] + half)
+        space.set_ylim(centre[1] - half, centre[1] + half)
+        space.set_zlim(centre[2] - half, centre[2] + half)
+        space.set_box_aspect((1.0, 1.0, 1.0), zoom=1.1)
 
 
-def _label_axes(ax: object, basis: np.ndarray | None, names: tuple[str, str] | None) -> None:
+def _label_axes(ax: Axes, basis: np.ndarray | None, names: tuple[str, str] | None) -> None:
     if basis is not None:
+        assert names is not None  # a plane comes with its axes' names
         ax.set_xlabel(names[0])
         ax.set_ylabel(names[1])
         ax.grid(True, alpha=0.3)
     else:
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
-        ax.set_zlabel("z (m)")
+        cast("Axes3D", ax).set_zlabel("z (m)")
 
 
-def _configuration(arm: object, q: object) -> tuple[np.ndarray, str | None]:
+def _configuration(arm: Robot, q: object) -> tuple[np.ndarray, str | None]:
     """q checked as one configuration of the arm (a name of one of its configurations, or n numbers),
     with its name; None gives the arm's qn, else its qz, else zeros."""
     named = getattr(arm, "configurations", {})
@@ -477,10 +507,11 @@ def _configuration(arm: object, q: object) -> tuple[np.ndarray, str | None]:
 
 
 def _checked_arm(arm: object) -> None:
+    """An arm that can be drawn, else an ArgumentError: a Robot (told by its compiled kinematics, as this module
+    cannot import Robot, which draws itself through it) with numeric parameters."""
     if not all(hasattr(arm, name) for name in ("link_transforms", "tool_pose", "links", "base", "kinds")):
-        raise TypeError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
-    if getattr(arm, "is_symbolic", False):
-        raise ModelError(f"robot '{arm.name}' has symbolic (SymPy) parameters; drawing it needs numbers")
+        raise ArgumentError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+    inputs.arm_argument(arm, ArmModel, numeric=True, why=" to draw it")
 
 
 def _checked_path(path: str | Path, suffixes: Sequence[str], what: str) -> Path:
@@ -520,15 +551,15 @@ def check_picture_path(path: str | Path) -> Path:
     return _checked_path(path, formats, "a picture")
 
 
-def _q_title(arm: object, q: np.ndarray, name: str | None) -> str:
+def _q_title(arm: Robot, q: np.ndarray, name: str | None) -> str:
     values = ", ".join(f"{value:.4g}" if abs(value) >= 5e-5 else "0" for value in q)
     unit = units(list(arm.kinds), "rad", "m") if len(set(arm.kinds)) == 1 else "(rad for R, m for P)"
     return f"{arm.name} at {name or 'q'} = ({values}) {unit}"
 
 
 def plot_arm(
-    arm: object, q: object = None, ax: object = None, path: str | Path | None = None, title: str | None = None
-) -> object:
+    arm: Robot, q: object = None, ax: Axes | None = None, path: str | Path | None = None, title: str | None = None
+) -> Figure:
     """The arm at one configuration as a stick figure: its forward kinematics (Appendix A) drawn.
 
     Each link is a thick line from its parent's link-frame origin (the base's for a root link)
@@ -561,11 +592,10 @@ def plot_arm(
     Raises
     ------
     armdyn.ModelError
-        When q is not n finite numbers or a configuration of the arm, the arm is symbolic, the
-        folder of ``path`` does not exist, its suffix is no image format, or ``ax`` is 2-D for a
-        spatial arm.
-    TypeError
-        When ``arm`` is not an armdyn arm.
+        When q is not n finite numbers or a configuration of the arm, the folder of ``path`` does
+        not exist, its suffix is no image format, or ``ax`` is 2-D for a spatial arm.
+    armdyn.ArgumentError
+        When ``arm`` is not an armdyn Robot, or has symbolic parameters (a ModelError and a TypeError).
     """
     _checked_arm(arm)
     q, name = _configuration(arm, q)
@@ -580,7 +610,7 @@ def plot_arm(
     plane = _plane(scene)
     basis, names = plane if plane is not None else (None, None)
     own = ax is None
-    if own:
+    if ax is None:
         fig = plt.figure(figsize=(7.0, 6.4), layout="constrained")
         ax = fig.add_subplot(projection=None if basis is not None else "3d")
     elif basis is None and getattr(ax, "name", "") != "3d":
@@ -591,7 +621,7 @@ def plot_arm(
     _label_axes(ax, basis, names)
     _legend(ax, scene, basis)
     ax.set_title(textwrap.fill(title or _q_title(arm, q, name), 70), fontsize=10)
-    fig = ax.figure
+    fig = cast("Figure", ax.figure)  # the axes of a figure (a subfigure's cannot save)
     if target is not None:
         fig.savefig(target, dpi=150)
         if own:
@@ -667,15 +697,15 @@ class _Panels:
     error's dots, with the run's numbers they are moved to."""
 
     drawing: _ArmDrawing
-    path: object  # the tool's path so far
-    cursor: object
-    dots: object
+    path: Line2D  # the tool's path so far
+    cursor: Line2D
+    dots: Line2D
     times: np.ndarray
     values: np.ndarray  # (samples, n): what the right panel plots
     actual: np.ndarray  # (k, 3): the tool's positions at ``samples``
     samples: np.ndarray
 
-    def show(self, scene: _Scene, index: int) -> list[object]:
+    def show(self, scene: _Scene, index: int) -> list[Any]:
         """Move everything to sample ``index`` (the arm at ``scene``); the artists moved."""
         self.drawing.show(scene)
         shown = self.actual[self.samples <= index]
@@ -687,17 +717,18 @@ class _Panels:
         return [*self.drawing.artists(), self.path, self.cursor, self.dots, self.drawing.ax.title]
 
 
-def _tool_paths(result: object, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+def _tool_paths(result: Result, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The tool's actual and desired positions (forward kinematics of q and q_d) at ``samples``, (k, 3)."""
     actual = result.arm.tool_pose(result.q[samples])[:, :3, 3]
     desired = None if result.q_d is None else result.arm.tool_pose(result.q_d[samples])[:, :3, 3]
     return actual, desired
 
 
-def _time_panel(ax: object, result: object) -> tuple[object, object]:
+def _time_panel(ax: Axes, result: Result) -> tuple[Line2D, Line2D]:
     """The tracking error per joint against time (the joint positions for a run without a desired
     trajectory), with a time cursor and a dot per joint that animate moves."""
-    values = result.error if result.q_d is not None else result.q
+    error = result.error  # None without a desired trajectory
+    values = result.q if error is None else error
     position = units(list(result.arm.kinds), "rad", "m")
     for i, name in enumerate(result.arm.joint_names):
         ax.plot(result.t, values[:, i], color=f"C{i % 10}", label=name)
@@ -716,8 +747,8 @@ def _time_panel(ax: object, result: object) -> tuple[object, object]:
 
 
 def _animation_figure(
-    result: object, scenes: list[_Scene], samples: np.ndarray, title: str | None, dpi: int
-) -> tuple[object, _Panels]:
+    result: Result, scenes: list[_Scene], samples: np.ndarray, title: str | None, dpi: int
+) -> tuple[Figure, _Panels]:
     """The figure of an animation at its first frame: the arm (left), the error against time (right)."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
@@ -745,12 +776,13 @@ def _animation_figure(
     left.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncols=3, fontsize=7, frameon=False)
     cursor, dots = _time_panel(right, result)
     fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
-    values = result.error if result.q_d is not None else result.q
+    error = result.error
+    values = result.q if error is None else error
     return fig, _Panels(drawing, path, cursor, dots, result.t, values, actual, samples)
 
 
 def animate(
-    result: object,
+    result: Result,
     path: str | Path,
     fps: float | None = None,
     frames: int = MAX_FRAMES,
@@ -815,10 +847,10 @@ def animate(
     return target
 
 
-def _blitted_frames(fig: object, panels: _Panels, scenes: list[_Scene], indices: np.ndarray) -> Iterator[np.ndarray]:
+def _blitted_frames(fig: Figure, panels: _Panels, scenes: list[_Scene], indices: np.ndarray) -> Iterator[np.ndarray]:
     """The frames as RGBA arrays: the still parts (axes, ticks, legends, the error curves) drawn once,
     then per frame only the moving artists over them (blitting): a frame costs a few milliseconds."""
-    canvas = fig.canvas
+    canvas = cast("FigureCanvasAgg", fig.canvas)  # animate selects the Agg backend
     moving = panels.show(scenes[0], indices[0])
     canvas.draw()  # the layout once, with the first frame's labels; then kept, so that nothing jumps
     fig.set_layout_engine("none")
@@ -845,19 +877,19 @@ def _write_gif(target: Path, frames: Iterator[np.ndarray], fps: float) -> None:
     images[0].save(target, save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0)
 
 
-def _write_mp4(target: Path, fig: object, panels: _Panels, scenes: list[_Scene], indices: np.ndarray,
+def _write_mp4(target: Path, fig: Figure, panels: _Panels, scenes: list[_Scene], indices: np.ndarray,
                fps: float) -> None:  # fmt: skip
     """An MP4 through matplotlib's FFMpegWriter: every frame drawn in full."""
     from matplotlib import animation
 
-    writer = animation.FFMpegWriter(fps=fps)
+    writer = animation.FFMpegWriter(fps=fps)  # type: ignore[arg-type]  # the stub says int; ffmpeg takes -r 12.5
     with writer.saving(fig, target, fig.dpi):
         for scene, index in zip(scenes, indices, strict=True):
             panels.show(scene, index)
             writer.grab_frame()
 
 
-def png_bytes(fig: object) -> bytes:
+def png_bytes(fig: Figure) -> bytes:
     """A figure as PNG bytes (for Jupyter's display), the figure closed afterwards.
 
     Parameters

@@ -25,13 +25,13 @@ from __future__ import annotations
 import reprlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import sympy
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic import notebook
 
@@ -237,7 +237,7 @@ def _motor(drive: object, joint: str) -> SymbolicMotor:
         except TypeError:
             missing = sorted(key for key in known - {"coulomb", "name"} if key not in drive)
             raise ModelError(f"the drive of joint '{joint}' lacks the parameters {missing}") from None
-    raise ModelError(
+    raise ArgumentError(
         f"the drive of joint '{joint}' must be a DCMotor, a SymbolicMotor or a dict of a SymbolicMotor's "
         f"parameters, got {reprlib.repr(drive)}"
     )
@@ -273,7 +273,7 @@ def checked_motors(arm: Robot, drives: object) -> list[SymbolicMotor]:
             "robot.without_motors()"
         )
     if isinstance(drives, (str, bytes, Mapping)) or not isinstance(drives, Sequence):
-        raise ModelError(f"drives must be a sequence of drives, one per joint, got {reprlib.repr(drives)}")
+        raise ArgumentError(f"drives must be a sequence of drives, one per joint, got {reprlib.repr(drives)}")
     if len(drives) != arm.n:
         raise ModelError(f"{where} has {arm.n} joints {arm.joint_names}; {len(drives)} drives were given")
     return [_motor(drive, link.name) for link, drive in zip(arm.links, drives, strict=True)]
@@ -700,7 +700,7 @@ def derive_actuated(
     method: str = "auto",
     friction: str | bool = True,
     progress: Callable[[float, str], object] | None = None,
-    joint_space: Callable[..., ClosedForm] | None = None,
+    joint_space: Callable[..., object] | None = None,
 ) -> ActuatedClosedForm:
     """The arm-plus-actuator system in closed form: ``derive``'s route for drives (BOOK.md section 7).
 
@@ -736,8 +736,8 @@ def derive_actuated(
         own, the number of drives is not the number of joints, a drive is hydraulic (closed forms
         of hydraulic drives are not supported), flexible, or not a drive, or ``derive`` refuses
         ``method``.
-    TypeError
-        When ``robot`` is neither a Robot nor an ActuatedArm.
+    armdyn.ArgumentError
+        When ``robot`` is neither a Robot nor an ActuatedArm (a ModelError and a TypeError).
     """
     from armdyn.actuators import ActuatedArm
 
@@ -748,10 +748,12 @@ def derive_actuated(
     if isinstance(arm, ActuatedArm):
         if drives is not None:
             raise ModelError("derive: an ActuatedArm carries its drives; drives=... is for a Robot")
-        arm, drives = arm.robot, arm.drives
+        drives = arm.drives
+        arm = arm.robot
     elif not isinstance(arm, Robot):
-        raise TypeError(f"robot must be an armdyn Robot or ActuatedArm, got {type(arm).__name__}")
+        raise ArgumentError(f"robot must be an armdyn Robot or ActuatedArm, got {type(arm).__name__}")
     elif drives is None:
         raise ModelError(f"derive: robot '{arm.name}' needs drives=[...], one per joint")
     motors = checked_motors(arm, drives)
-    return ActuatedClosedForm(joint_space(arm, method, friction, progress), motors)
+    form = cast("ClosedForm", joint_space(arm, method, friction, progress))  # a Robot's, in joint space
+    return ActuatedClosedForm(form, motors)

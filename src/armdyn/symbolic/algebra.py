@@ -95,16 +95,16 @@ def _exact(value: object, geometric: bool = False) -> object:
     """A SymPy expression with its floats made exact (1.0*a1, from object-array products, is a1; 0.5*m is m/2)."""
     import sympy
 
-    value = sympy.sympify(value)
-    floats = value.atoms(sympy.Float)
+    expr = sympy.sympify(value)
+    floats = expr.atoms(sympy.Float)
     if not floats:
-        return value
+        return expr
     replacements = {}
     for f in floats:
         exact = exact_float(float(f), geometric)
         if not isinstance(exact, se.RealDouble):
             replacements[f] = sympy.sympify(exact)
-    return value.xreplace(replacements)
+    return expr.xreplace(replacements)
 
 
 def matrix(values: object, geometric: bool = False) -> se.DenseMatrix:

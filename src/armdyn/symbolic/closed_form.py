@@ -43,7 +43,7 @@ def robot_symbols(arm: Robot) -> dict[str, sympy.Symbol]:
         Each symbol found, by name.
     """
     found: dict[str, sympy.Symbol] = {}
-    values = [arm.gravity]
+    values: list[object] = [arm.gravity]
     for link in arm.links:
         values += [link.inertial.mass, link.inertial.com, link.inertial.inertia]
         values += [link.joint.placement, link.joint.frame_offset]
@@ -88,6 +88,13 @@ class ClosedForm:
         The joint symbols, (n, 1).
     """
 
+    M: sympy.Matrix
+    Vm: sympy.Matrix
+    V: sympy.Matrix
+    G: sympy.Matrix
+    F: sympy.Matrix
+    tau: sympy.Matrix
+
     def __init__(
         self,
         robot: Robot,
@@ -105,7 +112,7 @@ class ClosedForm:
         self.q = sympy.Matrix([sympy.Symbol(f"q{i + 1}") for i in range(n)])
         self.qd = sympy.Matrix([sympy.Symbol(f"qd{i + 1}") for i in range(n)])
         self.qdd = sympy.Matrix([sympy.Symbol(f"qdd{i + 1}") for i in range(n)])
-        self._trig_kind = {}
+        self._trig_kind: dict[str, tuple[str | None, tuple[int, ...]]] = {}
         for i, (c, s) in raw.trig.items():
             self._trig_kind[c.name], self._trig_kind[s.name] = ("c", (i,)), ("s", (i,))
         parts = [("M", raw.M), ("Vm", raw.Vm), ("V", [[x] for x in raw.V]), ("G", [[x] for x in raw.G])]
@@ -190,7 +197,7 @@ class ClosedForm:
         for f in expr.atoms(sympy.cos, sympy.sin):
             terms = sympy.Add.make_args(f.args[0])
             if all(t in index for t in terms):
-                label = separator.join(str(index[t]) for t in sorted(terms, key=index.get))
+                label = separator.join(str(index[t]) for t in sorted(terms, key=lambda t: index[t]))
                 replacements[f] = sympy.Symbol(("c" if isinstance(f, sympy.cos) else "s") + f"_{{{label}}}")
         return expr.xreplace(replacements)
 

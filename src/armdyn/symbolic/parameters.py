@@ -11,7 +11,7 @@ Coulomb Tc+ and Tc- and the reflected motor inertia Ia; phi_values holds their v
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import symengine as se
@@ -22,6 +22,7 @@ from armdyn.model.inertial import _trusted
 from armdyn.symbolic.derive import derive_raw
 
 if TYPE_CHECKING:
+    from armdyn.robot import Robot
     from armdyn.symbolic.closed_form import ClosedForm
 
 INERTIAL_NAMES = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
@@ -75,7 +76,7 @@ def _numeric(form: ClosedForm) -> tuple[sympy.Matrix, sympy.Matrix, list[float]]
         names += symbols
         values += [own.mass, *own.first_moment, inertia[0, 0], inertia[0, 1], inertia[1, 1], inertia[0, 2]]
         values += [inertia[1, 2], inertia[2, 2]]
-    twin = robot.replace(links)
+    twin = cast("Robot", robot.replace(links))  # replace keeps the class
     raw = derive_raw(twin, "recursive", False)
     drives, drive_values = [], []
     viscous, coulomb, armature = robot.viscous_friction, robot.coulomb_friction, robot.reflected_inertia

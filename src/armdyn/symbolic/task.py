@@ -35,7 +35,7 @@ import symengine as se
 import sympy
 
 from armdyn import inputs, kinematics
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError, SingularError
 from armdyn.robot import Robot
 from armdyn.symbolic import notebook
 from armdyn.symbolic.algebra import number, transform
@@ -73,17 +73,21 @@ def check_output(arm: Robot, output: object) -> TaskOutput:
     Raises
     ------
     armdyn.ModelError
-        When ``output`` is not one of the supported outputs, is a ToolPose, has a number
-        of rows other than ``robot.n``, or (LinkPoint) names no link of the arm.
+        When ``output`` has a number of rows other than ``robot.n``, or (LinkPoint) names no
+        link of the arm.
+    armdyn.ArgumentError
+        When ``output`` is not one of the supported outputs, or is a ToolPose.
     """
     if isinstance(output, ToolPose):
-        raise ModelError(
+        raise ArgumentError(
             f"closed-form task dynamics support {_SUPPORTED}; ToolPose is not supported (its rate [v; w] "
             "holds the angular velocity, the derivative of no h(q))"
         )
     if not isinstance(output, POINT_OUTPUTS):
         kind = repr(output) if isinstance(output, TaskOutput) else type(output).__name__
-        raise ModelError(f"closed-form task dynamics support the outputs of armdyn.task_space {_SUPPORTED}; got {kind}")
+        raise ArgumentError(
+            f"closed-form task dynamics support the outputs of armdyn.task_space {_SUPPORTED}; got {kind}"
+        )
     if isinstance(output, LinkPoint):
         kinematics.link_index(arm, output.link)
     m = 2 if isinstance(output, Camera) else len(output._rows)
@@ -104,6 +108,7 @@ def _point(arm: _Arm, output: TaskOutput) -> tuple[list[se.Basic], se.Basic]:
         T = world[robot.tool_link] * transform(robot.tool)
     p = [T[r, 3] for r in range(3)]
     if not isinstance(output, Camera):
+        assert isinstance(output, (ToolPosition, LinkPoint, PlanarPosition))  # the outputs check_output lets pass
         return [p[r] for r in output._rows], se.Integer(1)
     pose, f = transform(output.pose), number(output.focal_length)
     pc = [sum(pose[r, k] * (p[r] - pose[r, 3]) for r in range(3)) for k in range(3)]  # R_c^T (p - o_c)
@@ -162,8 +167,9 @@ class TaskClosedForm:
     Raises
     ------
     armdyn.ModelError
-        When ``output`` is not supported (see ``check_output``) or J is singular at
-        every q (det J = 0).
+        When ``output`` is not supported (see ``check_output``).
+    armdyn.SingularError
+        When J is singular at every q (det J = 0).
     """
 
     def __init__(self, form: ClosedForm, output: TaskOutput) -> None:
@@ -182,7 +188,9 @@ class TaskClosedForm:
         w = reduce(z * z)
         D = reduce(Jn.det())
         if D == 0:
-            raise ModelError(f"output {output!r} has a singular J at every q of arm '{robot.name}' (det J = 0)")
+            raise SingularError(
+                f"output {output!r} has a singular J at every q of arm '{robot.name}' (det J = 0)", condition=np.inf
+            )
         A = _adjugate(Jn).applyfunc(reduce)
         M, Vm = se.DenseMatrix(raw.M), se.DenseMatrix(raw.Vm)
         G, F = se.DenseMatrix(n, 1, raw.G), se.DenseMatrix(n, 1, raw.F)
