@@ -34,6 +34,7 @@ import typer
 from numba.core import event as numba_events
 from rich.console import Console
 from rich.table import Table
+from typer._click.exceptions import NoArgsIsHelpError  # typer's own click names it nowhere public
 from typer.core import TyperGroup
 
 from armdyn import models as catalog
@@ -233,7 +234,7 @@ class _Group(TyperGroup):
         try:
             code = super().main(*given, standalone_mode=False, windows_expand_args=windows_expand_args, **kwargs)
         except typer.TyperException as error:  # a usage error: a bad option, a missing argument...
-            if type(error).__name__ != "NoArgsIsHelpError":  # that one has printed the help already
+            if not isinstance(error, NoArgsIsHelpError):  # that one has printed the help already
                 ctx = getattr(error, "ctx", None)
                 hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
                 _error_line(error.format_message() + hint)
