@@ -137,8 +137,8 @@ def test_check_only_unknown_name_is_an_error_and_a_bare_string_is_one_name() -> 
 @pytest.mark.parametrize(
     ("call", "error", "message"),
     [
-        (lambda arm: check("puma560"), TypeError, "robot must be an armdyn Robot"),
-        (lambda arm: check(None), TypeError, "robot must be an armdyn Robot"),
+        (lambda arm: check("puma560"), TypeError, "arm must be an armdyn Robot"),
+        (lambda arm: check(None), TypeError, "arm must be an armdyn Robot"),
         (lambda arm: check(arm, samples="300"), TypeError, "samples must be an integer"),
         (lambda arm: check(arm, samples=30.5), TypeError, "samples must be an integer"),
         (lambda arm: check(arm, samples=None), TypeError, "samples must be an integer"),
@@ -155,10 +155,10 @@ def test_check_only_unknown_name_is_an_error_and_a_bare_string_is_one_name() -> 
         (lambda arm: check(arm, limits=[(1, 0), (0, 1)]), ad.ModelError, "lower <= upper"),
         (lambda arm: check(arm, limits=[(0, np.nan), (0, 1)]), ad.ModelError, "limits must be finite"),
         (lambda arm: inertia_bounds(arm, samples="many"), TypeError, "samples must be an integer"),
-        (lambda arm: inertia_bounds([1, 2]), TypeError, "robot must be an armdyn Robot"),
+        (lambda arm: inertia_bounds([1, 2]), TypeError, "arm must be an armdyn Robot"),
         (lambda arm: joint_ranges(arm, prismatic_span="x"), ad.ModelError, "prismatic_span must be"),
         (lambda arm: joint_ranges(arm, prismatic_span=0), ad.ModelError, "prismatic_span must be one positive"),
-        (lambda arm: joint_ranges({}, None), TypeError, "robot must be an armdyn Robot"),
+        (lambda arm: joint_ranges({}, None), TypeError, "arm must be an armdyn Robot"),
     ],
 )
 def test_properties_wrong_types_name_the_argument(call: object, error: type, message: str) -> None:

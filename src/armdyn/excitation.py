@@ -33,12 +33,13 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
 from armdyn import inputs
 from armdyn.dynamics.regressor import BaseParameters, base_parameters, regressor
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.model import ArmModel
 from armdyn.robot import Robot
 
@@ -223,7 +224,7 @@ def _positive(value: object, name: str) -> float:
 
 def _count(value: object, name: str, minimum: int) -> int:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise ModelError(f"{name} must be an integer, got {value!r}")
+        raise ArgumentError(f"{name} must be an integer, got {value!r}")
     if value < minimum:
         raise ModelError(f"{name} must be at least {minimum}, got {value}")
     return int(value)
@@ -242,11 +243,8 @@ def _per_joint(value: object, name: str, n: int, positive: bool) -> np.ndarray:
 
 
 def _numeric_arm(arm: object, name: str = "arm") -> ArmModel:
-    if not isinstance(arm, ArmModel):
-        raise ModelError(f"{name} must be an armdyn arm (a Robot), got {type(arm).__name__}")
-    if arm.is_symbolic:
-        raise ModelError(f"{name} '{arm.name}' has symbolic (SymPy) parameters; numbers are needed here")
-    return arm
+    inputs.arm_argument(arm, ArmModel, name=name, numeric=True)
+    return cast(ArmModel, arm)
 
 
 def excitation_ranges(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
@@ -265,8 +263,8 @@ def excitation_ranges(arm: ArmModel) -> tuple[np.ndarray, np.ndarray]:
 
     Raises
     ------
-    armdyn.ModelError
-        When ``arm`` is not an armdyn arm.
+    armdyn.ArgumentError
+        When ``arm`` is not an armdyn arm, or has symbolic parameters (an ArgumentError is a ModelError).
     """
     arm = _numeric_arm(arm)
     lower, upper = arm.qlim
@@ -493,10 +491,13 @@ def excitation_trajectory(
     Raises
     ------
     armdyn.ModelError
-        When ``arm`` is not a numeric armdyn arm, period is not a positive number, harmonics,
-        samples, seed or iterations is not an integer in range (samples too few to determine
-        the base parameters), velocity_limits is not positive, or ``start`` does not match
-        the arm, period and harmonics.
+        When period is not a positive number, harmonics, samples, seed or iterations is not in
+        range (samples too few to determine the base parameters), velocity_limits is not
+        positive, or ``start`` does not match the arm, period and harmonics.
+    armdyn.ArgumentError
+        When ``arm`` is not a numeric armdyn arm, harmonics, samples, seed or iterations is not
+        an integer, drives is not a bool, or ``start`` is not a FourierTrajectory (an
+        ArgumentError is a ModelError and a TypeError).
     """
     from scipy.optimize import minimize
 
@@ -508,7 +509,7 @@ def excitation_trajectory(
     seed = _count(seed, "seed", 0)
     iterations = _count(iterations, "iterations", 1)
     if not isinstance(drives, (bool, np.bool_)):
-        raise ModelError(f"drives must be True or False, got {drives!r}")
+        raise ArgumentError(f"drives must be True or False, got {drives!r}")
     base = base_parameters(arm, drives=bool(drives))
     if samples * n <= len(base):
         raise ModelError(
@@ -518,7 +519,7 @@ def excitation_trajectory(
     lower, upper, speed = _limits_of(arm, velocity_limits)
     if start is not None:
         if not isinstance(start, FourierTrajectory):
-            raise ModelError(f"start must be a FourierTrajectory, got {type(start).__name__}")
+            raise ArgumentError(f"start must be a FourierTrajectory, got {type(start).__name__}")
         if (start.n, start.harmonics) != (n, harmonics) or not np.isclose(start.period, period):
             raise ModelError(
                 f"start has {start.n} joints, {start.harmonics} harmonics and period {start.period:g} s; "
@@ -616,21 +617,22 @@ def identification_data(
     Raises
     ------
     armdyn.ModelError
-        When ``arm`` is not a numeric armdyn Robot, ``trajectory`` is not callable, t_final is
-        missing (a trajectory without a period) or not positive, dt is not positive, noise or
-        position_noise is negative, seed is not an integer >= 0, method is unknown, a
-        controller is given with "inverse_dynamics", or the simulation fails
-        (armdyn.simulation.SimulationError).
+        When t_final is missing (a trajectory without a period) or not positive, dt is not
+        positive, noise or position_noise is negative, seed is below 0, method is unknown, or a
+        controller is given with "inverse_dynamics".
+    armdyn.ArgumentError
+        When ``arm`` is not a numeric armdyn Robot, ``trajectory`` is not callable, or seed is
+        not an integer (an ArgumentError is a ModelError and a TypeError).
+    armdyn.SimulationError
+        When the simulation stops.
     """
     from armdyn import control
     from armdyn.simulation import PythonLoopWarning, simulate
 
-    if not isinstance(arm, Robot):
-        raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
-    arm = _numeric_arm(arm)
+    inputs.arm_argument(arm, Robot, name="arm", numeric=True)
     n = arm.n
     if not callable(trajectory):
-        raise ModelError(f"trajectory must be callable, t -> (q_d, qd_d, qdd_d), got {type(trajectory).__name__}")
+        raise ArgumentError(f"trajectory must be callable, t -> (q_d, qd_d, qdd_d), got {type(trajectory).__name__}")
     if t_final is None:
         if not hasattr(trajectory, "period"):
             raise ModelError("t_final is needed for a trajectory without a period")

@@ -2,13 +2,14 @@
 
 Every function takes one state q of shape (n,) or a batch (..., n) and works on the
 whole batch at once with NumPy; the loop runs over the joints, never over states. Arguments
-are checked first: a wrong type or shape is a ModelError (TypeError for an arm that is not
-an ArmModel) that names the argument.
+are checked first: a wrong type or shape is a ModelError (an ArgumentError, also a TypeError, for an arm
+that is not an ArmModel) that names the argument.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from armdyn import inputs
 from armdyn.errors import ModelError
@@ -17,9 +18,9 @@ from armdyn.model import ArmModel
 FRAMES = ("base", "tool")
 
 
-def check_arm(arm: object, numeric: bool = True, hint: str = "") -> None:
-    """A TypeError naming ``robot`` unless it is an arm (an ArmModel, e.g. a Robot), with numbers
-    for parameters when ``numeric``.
+def check_arm(arm: object, numeric: bool = True, hint: str = "", name: str = "robot") -> None:
+    """An ArgumentError naming the argument ``name`` unless ``arm`` is an arm (an ArmModel, e.g. a Robot), with
+    numbers for parameters when ``numeric``.
 
     Parameters
     ----------
@@ -29,19 +30,18 @@ def check_arm(arm: object, numeric: bool = True, hint: str = "") -> None:
         Whether the arm's parameters must be numbers (default True): symbolic ones are refused.
     hint : str, optional
         Added to the message for a symbolic arm (where to go instead).
+    name : str, optional
+        The caller's name for the argument, for the message (default "robot").
 
     Raises
     ------
-    TypeError
-        When ``robot`` is not an ArmModel, or is symbolic where numbers are needed.
+    armdyn.ArgumentError
+        When ``arm`` is not an ArmModel, or is symbolic where numbers are needed (a ModelError and a TypeError).
     """
-    if not isinstance(arm, ArmModel):
-        raise TypeError(f"robot must be an armdyn arm (a Robot or ArmModel), got {type(arm).__name__}")
-    if numeric and arm.is_symbolic:
-        raise TypeError(f"robot '{arm.name}' has symbolic (SymPy) parameters; numbers are needed here{hint}")
+    inputs.arm_argument(arm, ArmModel, name=name, numeric=numeric, why=hint)
 
 
-def _numbers(value: object, name: str) -> np.ndarray:
+def _numbers(value: ArrayLike, name: str) -> np.ndarray:
     """A finite float (or complex) array of any shape, or a ModelError naming the argument."""
     if value is None or isinstance(value, (str, bytes, dict)):
         raise ModelError(f"{name} must be a number or an array of numbers, got {value!r}")
@@ -125,10 +125,10 @@ def as_state(arm: ArmModel, value: object, name: str = "q") -> np.ndarray:
     ------
     armdyn.ModelError
         When ``value`` is not numbers, does not end in n, or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
-    check_arm(arm)
+    check_arm(arm, name="arm")
     return inputs.state(value, arm.n, name, f" for '{arm.name}'", complex_ok=True)
 
 
@@ -267,8 +267,8 @@ def joint_frames(arm: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ------
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     q = as_state(arm, q)
@@ -301,8 +301,8 @@ def link_transforms(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     ------
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     return joint_frames(arm, q)[0]
@@ -327,8 +327,8 @@ def tool_pose(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     ------
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     return link_transforms(arm, q)[..., arm.tool_link, :, :] @ arm.tool
@@ -355,10 +355,10 @@ def joint_axes(arm: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarra
     ------
     armdyn.ModelError
         When ``joints`` is not numbers of shape (..., n, 4, 4) or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters.
     """
-    check_arm(arm)
+    check_arm(arm, name="arm")
     joints = _numbers(joints, "joints")
     if joints.ndim < 3 or joints.shape[-3:] != (arm.n, 4, 4):
         raise ModelError(f"joints must have shape (..., {arm.n}, 4, 4) for '{arm.name}', got {joints.shape}")
@@ -422,8 +422,8 @@ def jacobian(arm: ArmModel, q: np.ndarray, frame: str = "base", link: int | None
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity, when ``link``
         is not None or an integer index of a link (a float or a bool is refused), or when ``frame``
         is not "base" or "tool".
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     check_frame(frame)
@@ -468,8 +468,8 @@ def jacobian_dot(
         When ``q`` or ``qd`` is not numbers of shape (..., n) or holds NaN or infinity, when
         ``link`` is not None or an integer index of a link (a float or a bool is refused), or when ``frame``
         is not "base" or "tool".
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     check_frame(frame)
@@ -526,8 +526,8 @@ def twist_generators(arm: ArmModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarr
     ------
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     links, joints = joint_frames(arm, q)
@@ -562,8 +562,8 @@ def link_transform_derivatives(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     ------
     armdyn.ModelError
         When ``q`` is not numbers of shape (..., n) or holds NaN or infinity.
-    TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
+    armdyn.ArgumentError
+        When ``arm`` is not an arm (an ArmModel), or when it has symbolic (SymPy) parameters;
         numeric kinematics need numbers.
     """
     generators, links = twist_generators(arm, q)

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from armdyn import actuators, inputs, task_space
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.robot import Robot
 
 TOLERANCE = 1e-9
@@ -35,8 +35,7 @@ GROUPS = ("inertia", "coriolis", "skew", "friction", "gravity", "linearity", "pa
 
 
 def _check_robot(arm: object) -> None:
-    if not isinstance(arm, Robot):
-        raise TypeError(f"robot must be an armdyn Robot, got {type(arm).__name__}")
+    inputs.arm_argument(arm, Robot, name="arm")
 
 
 def _groups(only: object) -> set[str]:
@@ -47,7 +46,7 @@ def _groups(only: object) -> set[str]:
     if isinstance(only, str):
         names = [only]
     elif isinstance(only, (bytes, Mapping)) or not isinstance(only, Iterable):
-        raise TypeError(f"only must be a group name or a sequence of group names ({valid}), got {only!r}")
+        raise ArgumentError(f"only must be a group name or a sequence of group names ({valid}), got {only!r}")
     else:
         names = list(only)
     if not names:
@@ -340,8 +339,8 @@ def joint_ranges(
     armdyn.ModelError
         When ``limits`` is not n finite (lower, upper) pairs with lower <= upper, or when
         ``prismatic_span`` is not one positive finite number.
-    TypeError
-        When ``robot`` is not a Robot.
+    armdyn.ArgumentError
+        When ``arm`` is not a Robot.
     """
     _check_robot(arm)
     span = inputs.vector(prismatic_span, "prismatic_span")
@@ -418,8 +417,10 @@ def inertia_bounds(arm: Robot, samples: int = 400, seed: int = 0, limits: Sequen
     armdyn.ModelError
         When ``samples`` is below 4, ``seed`` is negative or ``limits`` is invalid (see
         ``joint_ranges``), or when the arm has symbolic parameters.
+    armdyn.ArgumentError
+        When ``arm`` is not a Robot.
     TypeError
-        When ``robot`` is not a Robot, or ``samples`` or ``seed`` is not an integer.
+        When ``samples`` or ``seed`` is not an integer.
     """
     report = check(arm, samples=samples, seed=seed, limits=limits, only=("inertia",))
     return report.bounds["mu1"], report.bounds["mu2"]
@@ -520,11 +521,13 @@ def check(
         ranges are singular or nearly so almost everywhere), or when the output cannot give what
         a row needs (an Output without ``jacobian_dot`` for the Coriolis and skew rows, a Camera
         the tool point passes behind). For an ActuatedArm, when a drive is flexible (no reduced model).
+    armdyn.ArgumentError
+        When ``arm`` is not a Robot (or ActuatedArm), ``only`` is neither a string nor a sequence of them, or
+        ``task`` is not a task output (an ArgumentError is a ModelError and a TypeError).
     TypeError
-        When ``robot`` is not a Robot (or ActuatedArm), ``samples`` or ``seed`` is not an integer, or ``only``
-        is neither a string nor a sequence of them.
+        When ``samples`` or ``seed`` is not an integer.
     """
-    notes = []
+    notes: list[str] = []
     if isinstance(arm, actuators.ActuatedArm):
         notes.append(
             "evaluated on the reduced arm-plus-actuator model (BOOK.md section 7, inductance neglected) in joint "
@@ -729,7 +732,7 @@ _TINY = 1e-300
 
 def _task_output(task: object) -> task_space.TaskOutput:
     if not isinstance(task, task_space.TaskOutput):
-        raise ModelError(
+        raise ArgumentError(
             "task must be a task output of armdyn.task_space (ToolPosition, ToolPose, LinkPoint, PlanarPosition, "
             f"Camera or Output), got {type(task).__name__}"
         )

@@ -14,26 +14,27 @@
 
 Every function but ``linearize`` takes one state or a batch (leading axes (...)) and returns
 the matching shape. Arguments are checked first (armdyn.inputs): a wrong type or shape is a
-ModelError naming the argument, a wrong kind of arm or callable a TypeError.
+ModelError naming the argument, a wrong kind of arm or callable an ArgumentError (a ModelError and a TypeError).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from armdyn import inputs
 from armdyn.dynamics.api import smoothing_per_joint
 from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb_vector
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, MissingDependencyError, ModelError
 from armdyn.robot import Robot
 
 
 def _check_arm(arm: object) -> None:
-    if not isinstance(arm, Robot):
-        raise TypeError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+    inputs.arm_argument(arm, Robot, name="arm")
 
 
 def _where(arm: Robot) -> str:
@@ -70,7 +71,7 @@ def _split(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
     return x[..., : arm.n], x[..., arm.n :]
 
 
-def state_derivative(arm: Robot, x: object, tau: object) -> np.ndarray:
+def state_derivative(arm: Robot, x: ArrayLike, tau: ArrayLike) -> np.ndarray:
     """xdot = [qd; M^-1 (tau - N)] in the position/velocity form, batched (BOOK.md section 5).
 
     Parameters
@@ -93,7 +94,7 @@ def state_derivative(arm: Robot, x: object, tau: object) -> np.ndarray:
         When ``x`` is not numbers of shape (..., 2 n) or holds NaN or infinity, when ``tau``
         is not numbers of shape (..., n) or holds NaN or infinity, when the batch shapes of x
         and tau do not broadcast, or when the arm has symbolic parameters.
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot.
     """
     x = _x(arm, x)
@@ -128,7 +129,7 @@ def drift_and_input(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
     armdyn.ModelError
         When ``x`` is not numbers of shape (..., 2 n) or holds NaN or infinity, or the arm
         has symbolic parameters.
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot.
     """
     q, qd = _split(arm, x)
@@ -162,11 +163,11 @@ def brunovsky(n: int) -> tuple[np.ndarray, np.ndarray]:
     ------
     armdyn.ModelError
         When ``n`` is below 1, or so large that A would need more than 2 GiB.
-    TypeError
+    armdyn.ArgumentError
         When ``n`` is not an integer (a bool is not one).
     """
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
-        raise TypeError(f"n must be an integer number of joints, got {n!r} ({type(n).__name__})")
+        raise ArgumentError(f"n must be an integer number of joints, got {n!r} ({type(n).__name__})")
     if n < 1:
         raise ModelError(f"n must be at least 1, got {n}")
     n = int(n)
@@ -219,13 +220,13 @@ def linearizing_torque(
         infinity, when their batch shapes do not broadcast, when an output callable returns
         an array of the wrong shape or non-finite values, when ``output_jacobian_dot_qd`` is
         given without ``output_jacobian``, or when the arm has symbolic parameters.
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot, or an output argument is neither None nor callable.
     """
     q, qd = _states(arm, ("q", "qd"), (q, qd))
     for name, function in (("output_jacobian", output_jacobian), ("output_jacobian_dot_qd", output_jacobian_dot_qd)):
         if function is not None and not callable(function):
-            raise TypeError(f"{name} must be a callable or None, got {type(function).__name__}")
+            raise ArgumentError(f"{name} must be a callable or None, got {type(function).__name__}")
     if output_jacobian is None and output_jacobian_dot_qd is not None:
         raise ModelError("output_jacobian_dot_qd needs output_jacobian (without it the output is y = q)")
     M, N = arm.inertia_matrix(q), arm.nonlinear_terms(q, qd)
@@ -268,7 +269,7 @@ def hamiltonian(arm: Robot, q: object, p: object) -> float:
     armdyn.ModelError
         When ``q`` or ``p`` is not numbers of shape (..., n) or holds NaN or infinity, when
         their batch shapes do not broadcast, or when the arm has symbolic parameters.
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot.
     """
     q, p = _states(arm, ("q", "p"), (q, p))
@@ -308,7 +309,7 @@ def hamiltonian_rates(arm: Robot, q: object, p: object, tau: object) -> tuple[np
         When ``q``, ``p`` or ``tau`` is not numbers of shape (..., n) or holds NaN or
         infinity, when their batch shapes do not broadcast, or when the arm has symbolic
         parameters.
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot.
     """
     q, p, tau = _states(arm, ("q", "p", "tau"), (q, p, tau))
@@ -352,13 +353,13 @@ class Linearization:
 
         Raises
         ------
-        armdyn.ModelError
-            When python-control is not installed.
+        armdyn.MissingDependencyError
+            When python-control is not installed (the ``control`` extra).
         """
         try:
             import control
         except ImportError:
-            raise ModelError("to_control() needs python-control: pip install 'armdyn[control]'") from None
+            raise MissingDependencyError("control", "control", "Linearization.to_control") from None
         return control.ss(self.A, self.B, np.eye(self.A.shape[0]), np.zeros(self.B.shape))
 
 
@@ -390,7 +391,7 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object, coulomb_smoothi
         When q0, qd0 or tau0 is not n finite numbers (one state, not a batch), or when a
         joint with Coulomb friction and no smoothing has zero velocity in qd0 (the exact law
         is not differentiable there).
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot.
     """
     names = ("q0", "qd0", "tau0")
@@ -473,7 +474,7 @@ def rk4_step(
     armdyn.ModelError
         When an argument is not one finite state of n values or dt is not positive, or M(q)
         is singular at a stage.
-    TypeError
+    armdyn.ArgumentError
         When ``arm`` is not a Robot.
     """
     _check_arm(arm)
@@ -488,7 +489,9 @@ def rk4_step(
     if coulomb_smoothing is not None:
         coulomb_smoothing = smoothing_per_joint(arm, coulomb_smoothing)
     identity = np.eye(2 * n)
-    slopes, d_x, d_tau = [], [], []
+    slopes: list[np.ndarray] = []
+    d_x: list[np.ndarray] = []
+    d_tau: list[np.ndarray] = []
     for fraction in (0.0, 0.5, 0.5, 1.0):
         if slopes:
             point = x + fraction * dt * slopes[-1]
@@ -503,5 +506,5 @@ def rk4_step(
     weights = (1.0, 2.0, 2.0, 1.0)
     step = x + dt / 6 * sum(w * k for w, k in zip(weights, slopes, strict=True))
     A_d = identity + dt / 6 * sum(w * k for w, k in zip(weights, d_x, strict=True))
-    B_d = dt / 6 * sum(w * k for w, k in zip(weights, d_tau, strict=True))
+    B_d = cast(np.ndarray, dt / 6 * sum(w * k for w, k in zip(weights, d_tau, strict=True)))  # a sum of 4 arrays
     return step, A_d, B_d

@@ -1,4 +1,5 @@
-"""Checks of drive parameters: each a number of the right sign, or a ModelError naming it."""
+"""Checks of drive parameters: each a number of the right sign, or a ModelError naming it (an ArgumentError
+for a name that is not a str)."""
 
 from __future__ import annotations
 
@@ -8,12 +9,13 @@ import reprlib
 import numpy as np
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 
 
 def _drive_name(name: object) -> str:
     if not isinstance(name, str) or not name:
-        raise ModelError(f"a drive's name must be a non-empty str, got {reprlib.repr(name)}")
+        error = ModelError if isinstance(name, str) else ArgumentError  # an empty name, or no str at all
+        raise error(f"a drive's name must be a non-empty str, got {reprlib.repr(name)}")
     return name
 
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armdyn.actuators.checks import _drive_name, _limit, _non_negative, _positive
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 
 
 @dataclass(frozen=True)
@@ -73,6 +73,8 @@ class Hydraulic:
         rule (tau_v, K_v, K_q, A, V_t, beta_e, P_s, C_d, w, rho and the limits > 0; K_c, C_tp >= 0),
         when ``orifice`` is neither "linear" nor "sqrt", when the square-root orifice lacks C_d, w
         or rho, or the linear one lacks K_q; the message names the drive and the rule.
+    armdyn.ArgumentError
+        When ``rotary`` is not a bool (a ModelError and a TypeError).
     """
 
     valve_time_constant: float
@@ -96,7 +98,7 @@ class Hydraulic:
     def __post_init__(self) -> None:
         where = f"drive '{_drive_name(self.name)}'"
         if not isinstance(self.rotary, (bool, np.bool_)):
-            raise ModelError(f"{where}: rotary must be True or False, got {reprlib.repr(self.rotary)}")
+            raise ArgumentError(f"{where}: rotary must be True or False, got {reprlib.repr(self.rotary)}")
         if self.orifice not in ("linear", "sqrt"):
             raise ModelError(f"{where}: orifice must be 'linear' or 'sqrt', got {reprlib.repr(self.orifice)}")
         checked: dict[str, object] = {
@@ -135,7 +137,9 @@ class Hydraulic:
         C_d w sqrt(P_s / rho) (Merritt 1967)."""
         if self.flow_gain is not None:
             return self.flow_gain
-        return self.discharge_coefficient * self.orifice_width * math.sqrt(self.supply_pressure / self.density)
+        C_d, w, rho = self.discharge_coefficient, self.orifice_width, self.density
+        assert C_d is not None and w is not None and rho is not None  # the square-root orifice has them (checked)
+        return C_d * w * math.sqrt(self.supply_pressure / rho)
 
     @property
     def capacitance(self) -> float:

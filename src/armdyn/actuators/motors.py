@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armdyn.actuators.checks import _coulomb, _drive_name, _limit, _non_negative, _positive, _value
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 
 
 @dataclass(frozen=True)
@@ -144,10 +144,12 @@ def transfer_function(motor: DCMotor, load_inertia: float, load_damping: float =
     Raises
     ------
     armdyn.ModelError
-        When ``motor`` is not a DCMotor, or the load's inertia is not positive or its damping negative.
+        When the load's inertia is not positive or its damping negative.
+    armdyn.ArgumentError
+        When ``motor`` is not a DCMotor (a ModelError and a TypeError).
     """
     if not isinstance(motor, DCMotor):
-        raise ModelError(f"motor must be a DCMotor, got {reprlib.repr(motor)}")
+        raise ArgumentError(f"motor must be a DCMotor, got {reprlib.repr(motor)}")
     J_L = _positive(load_inertia, "load inertia J_L", f"load of drive '{motor.name}'")
     b_L = _non_negative(load_damping, "load damping b_L", f"load of drive '{motor.name}'")
     r, J_M, B_M, K_M, K_b = motor.gear_ratio, motor.rotor_inertia, motor.viscous, motor.torque_constant, motor.back_emf

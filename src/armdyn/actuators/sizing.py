@@ -9,6 +9,7 @@ import reprlib
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.actuators.arm import ActuatedArm, _joint_sense, with_actuators
 from armdyn.actuators.hydraulics import Hydraulic
 from armdyn.actuators.motors import DCMotor
@@ -101,11 +102,10 @@ def representative_drives(arm: Robot, kind: str = "dc") -> ActuatedArm:
     ------
     armdyn.ModelError
         When ``kind`` is not one of the three, or the arm has symbolic parameters.
-    TypeError
-        When ``robot`` is not a Robot.
+    armdyn.ArgumentError
+        When ``arm`` is not a Robot (a ModelError and a TypeError).
     """
-    if not isinstance(arm, Robot):
-        raise TypeError(f"robot must be an armdyn Robot, got {type(arm).__name__}")
+    inputs.arm_argument(arm, Robot, name="arm")
     if kind not in _KINDS:
         raise ModelError(f"kind must be one of {', '.join(_KINDS)}, got {reprlib.repr(kind)}")
     samples = _configurations(arm)
@@ -116,9 +116,9 @@ def representative_drives(arm: Robot, kind: str = "dc") -> ActuatedArm:
         bare_robot = arm.replace([dataclasses.replace(link, motor_inertia=0.0, gear_ratio=1.0)
                                     for link in arm.links])  # fmt: skip
         inertia = np.diagonal(bare_robot.inertia_matrix(samples), axis1=-2, axis2=-1).mean(axis=0)
-        drives = [_representative_valve(revolute[j], loads[j], max(inertia[j], 1e-3), f"valve {names[j]}")
+        valves = [_representative_valve(revolute[j], loads[j], max(inertia[j], 1e-3), f"valve {names[j]}")
                   for j in range(arm.n)]  # fmt: skip
-        return with_actuators(bare_robot, drives)
+        return with_actuators(bare_robot, valves)
     drives = [_representative_motor(link, revolute[j], loads[j], f"motor {names[j]}")
               for j, link in enumerate(arm.links)]  # fmt: skip
     bare = [

@@ -20,11 +20,13 @@ from __future__ import annotations
 import inspect
 import math
 import reprlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TypeGuard, cast
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from armdyn import inputs
 from armdyn.dynamics.crba import mass_matrix_and_bias
@@ -32,7 +34,7 @@ from armdyn.dynamics.drives import KI, KP, KV
 from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.rnea import gravity_core
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 
@@ -40,7 +42,7 @@ NO_CONTROL, COMPUTED_TORQUE, PD_GRAVITY, PID_JOINT = 0, 1, 2, 3
 LIMIT = 3  # the torque limit's row of the compiled laws' gain table, after KP, KV, KI (armdyn.dynamics.drives)
 
 
-def accepts(controller: object, keyword: str) -> bool:
+def accepts(controller: Callable[..., object], keyword: str) -> bool:
     """True when ``controller`` takes the keyword (by name, or any keyword)."""
     try:
         parameters = inspect.signature(controller).parameters.values()
@@ -49,9 +51,11 @@ def accepts(controller: object, keyword: str) -> bool:
     return any(p.name == keyword or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
 
 
-def call(controller: object, args: tuple, plant: Robot | None, coulomb_smoothing: object) -> np.ndarray:
+def call(
+    controller: Callable[..., np.ndarray], args: tuple, plant: Robot | None, coulomb_smoothing: object
+) -> np.ndarray:
     """controller(*args), with ``plant`` and ``coulomb_smoothing`` for a controller that takes them."""
-    extra = {}
+    extra: dict[str, object] = {}
     if plant is not None and accepts(controller, "plant"):
         extra["plant"] = plant
     if coulomb_smoothing is not None and accepts(controller, "coulomb_smoothing"):
@@ -64,18 +68,20 @@ def _states(names: Sequence[str], values: Sequence[object], n: int, where: str) 
     (..., n); an error names the argument. One state of float64 arrays, as simulate's Python loop
     passes them, is taken as it is after one vectorized test (NaN fails it), since the full check
     costs more than the law itself."""
-    if all(_plain(v, n) for v in values) and np.abs(np.concatenate(values)).max() < LARGEST_STATE:
-        return list(values)
+    if all(_plain(v, n) for v in values):
+        plain = cast("list[np.ndarray]", list(values))
+        if np.abs(np.concatenate(plain)).max() < LARGEST_STATE:
+            return plain
     batch, flat = inputs.batch_states(names, values, n, where)
     return [a.reshape(*batch, n) for a in flat]
 
 
-def _plain(value: object, n: int) -> bool:
+def _plain(value: object, n: int) -> TypeGuard[np.ndarray]:
     """Whether ``value`` is a plain float64 array of shape (n,) (not a subclass, native order)."""
     return type(value) is np.ndarray and value.shape == (n,) and value.dtype == np.float64
 
 
-def _joints(names: Sequence[str], values: Sequence[object]) -> int:
+def _joints(names: Sequence[str], values: Sequence[ArrayLike]) -> int:
     """n for a law without an arm (PID): the last axis its states share, or a ModelError naming
     their shapes (an argument that is no array at all is named by ``_states``)."""
     shapes = {}
@@ -102,15 +108,14 @@ def _gain(value: object, name: str, n: int) -> float | np.ndarray:
     return inputs.gains(value, name, n)
 
 
-def _arm_of(controller: object, plant: object) -> Robot:
+def _arm_of(controller: ComputedTorque | PDGravity, plant: object) -> Robot:
     """The arm a model-based law computes with: its own model, else the plant simulate gives."""
     name, arm = ("model", controller.model) if controller.model is not None else ("plant", plant)
     kind = type(controller).__name__
     if arm is None:
         raise ModelError(f"{kind} needs a model of the arm (model=...) outside simulate()")
-    if not isinstance(arm, Robot):
-        raise TypeError(f"{kind}'s {name} must be an armdyn Robot, got {type(arm).__name__}")
-    return arm
+    inputs.arm_argument(arm, Robot, name=f"{kind}'s {name}")
+    return cast(Robot, arm)
 
 
 def _smoothing(value: object, n: int) -> np.ndarray:
@@ -280,7 +285,7 @@ def pid_law(
 class Digital:
     """A controller run once per sample ``period`` with its torque held in between (Section 4.5)."""
 
-    controller: object
+    controller: Callable[..., np.ndarray]
     period: float
 
     def __post_init__(self) -> None:
@@ -289,7 +294,7 @@ class Digital:
             raise ModelError(f"a Digital controller needs a positive sample period, got period = {period!r}")
         self.period = period  # a float, whatever number was given (simulate divides it by dt)
         if not callable(self.controller):
-            raise ModelError(f"Digital needs a controller (a callable), got {type(self.controller).__name__}")
+            raise ArgumentError(f"Digital needs a controller (a callable), got {type(self.controller).__name__}")
 
     def spec(self) -> Spec | None:
         inner = getattr(self.controller, "spec", None)
@@ -309,13 +314,13 @@ class Digital:
 class Saturated:
     """A controller whose torques are clipped to +-limit (scalar or per joint, > 0; inf for none)."""
 
-    controller: object
-    limit: object = field(default=np.inf)
+    controller: Callable[..., np.ndarray]
+    limit: ArrayLike = field(default=np.inf)
 
     def __post_init__(self) -> None:
         _torque_limit(self.limit)
         if not callable(self.controller):
-            raise ModelError(f"Saturated needs a controller (a callable), got {type(self.controller).__name__}")
+            raise ArgumentError(f"Saturated needs a controller (a callable), got {type(self.controller).__name__}")
 
     def spec(self) -> Spec | None:
         inner = getattr(self.controller, "spec", None)
@@ -335,7 +340,7 @@ class Saturated:
         return np.clip(tau, -limit, limit)
 
 
-def _torque_limit(value: object) -> np.ndarray:
+def _torque_limit(value: ArrayLike) -> np.ndarray:
     """A Saturated limit as a float array: a positive number or one per joint (inf for none)."""
     try:
         if np.iscomplexobj(value):

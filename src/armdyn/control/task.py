@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.robot import Robot
 from armdyn.task_space.operational import OperationalSpace, operational_space
 from armdyn.task_space.outputs import TaskOutput, _check_arm, _check_output
@@ -23,8 +23,9 @@ def _desired(path: Callable, t: float, m: int) -> tuple[np.ndarray, np.ndarray, 
         raise ModelError(f"path(t) must return (y_d, yd_d, ydd_d): {error}") from None
     if len(parts) != 3:
         raise ModelError(f"path(t) must return three arrays (y_d, yd_d, ydd_d), got {len(parts)} items at t = {t:g}")
-    return tuple(inputs.numbers(part, name, (m,), f" from path(t) at t = {t:g}")
-                 for part, name in zip(parts, ("y_d", "yd_d", "ydd_d"), strict=True))  # fmt: skip
+    y_d, yd_d, ydd_d = (inputs.numbers(part, name, (m,), f" from path(t) at t = {t:g}")
+                        for part, name in zip(parts, ("y_d", "yd_d", "ydd_d"), strict=True))  # fmt: skip
+    return y_d, yd_d, ydd_d
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,7 @@ class TaskComputedTorque:
     def __init__(self, output: TaskOutput, path: Callable, kp: float, kv: float, model: Robot | None = None) -> None:
         self.output = _check_output(output)
         if not callable(path) or isinstance(path, type):
-            raise ModelError(f"path must be a callable t -> (y_d, yd_d, ydd_d), got {path!r}")
+            raise ArgumentError(f"path must be a callable t -> (y_d, yd_d, ydd_d), got {path!r}")
         self.path = path
         self.kp = inputs.number(kp, "kp", minimum=0.0)
         self.kv = inputs.number(kv, "kv", minimum=0.0)

@@ -170,8 +170,11 @@ def operational_space(
     Raises
     ------
     ModelError
-        When an argument is invalid, m > n, or J is ill-conditioned at a state and no
-        damping is given (the message names the state and the condition number).
+        When an argument is invalid or m > n (an ArgumentError, also a TypeError, when ``arm``
+        is not a numeric Robot or ``output`` not a task output).
+    armdyn.SingularError
+        When J is ill-conditioned at a state and no damping is given (the message names the
+        state and the condition number; so do its ``state`` and ``condition``).
     """
     fast = _compiled(arm, output, None, damping, max_condition)
     if fast is not None:

@@ -9,13 +9,13 @@ PlanarPosition, Camera, and Output for user callables.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from armdyn import inputs, kinematics
 from armdyn.dynamics.frames import TOOL
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.robot import Robot
 
 if TYPE_CHECKING:
@@ -28,16 +28,13 @@ DEFAULT_MAX_CONDITION = 1e8
 
 # ----- argument checks ----------------------------------------------------------------------------
 def _check_arm(arm: object) -> Robot:
-    if not isinstance(arm, Robot):
-        raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
-    if arm.packed is None:
-        raise ModelError(f"arm '{arm.name}' has symbolic parameters; task-space dynamics need numbers")
-    return arm
+    inputs.arm_argument(arm, Robot, name="arm", numeric=True, why=" (task-space dynamics)")
+    return cast(Robot, arm)
 
 
 def _check_output(output: object) -> TaskOutput:
     if not isinstance(output, TaskOutput):
-        raise ModelError(
+        raise ArgumentError(
             "output must be a task output of armdyn.task_space (ToolPosition, ToolPose, LinkPoint, "
             f"PlanarPosition, Camera or Output), got {type(output).__name__}"
         )
@@ -467,8 +464,8 @@ class Output(TaskOutput):
 
     Raises
     ------
-    ModelError
-        When an argument given is not callable.
+    armdyn.ArgumentError
+        When an argument given is not callable (a ModelError and a TypeError).
     """
 
     def __init__(
@@ -480,9 +477,9 @@ class Output(TaskOutput):
     ) -> None:
         for name, function, optional in (("h", h, False), ("J", J, False), ("bias", bias, True)):
             if not (callable(function) or (optional and function is None)):
-                raise ModelError(f"{name} must be a callable, got {type(function).__name__}")
+                raise ArgumentError(f"{name} must be a callable, got {type(function).__name__}")
         if not (jacobian_dot is None or callable(jacobian_dot)):
-            raise ModelError(f"jacobian_dot must be a callable or None, got {type(jacobian_dot).__name__}")
+            raise ArgumentError(f"jacobian_dot must be a callable or None, got {type(jacobian_dot).__name__}")
         self.h, self.J, self._bias_function, self._jacobian_dot_function = h, J, bias, jacobian_dot
 
     def __repr__(self) -> str:

@@ -32,7 +32,7 @@ PlanarPosition, Camera, and Output for user callables.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 from numba.core.errors import NumbaError
@@ -41,7 +41,7 @@ from armdyn import inputs
 from armdyn.dynamics import operational as kernels
 from armdyn.dynamics.api import _launch
 from armdyn.dynamics.operational import lambda_one, task_batch, task_one
-from armdyn.errors import ModelError
+from armdyn.errors import ModelError, SingularError
 from armdyn.robot import Robot
 from armdyn.task_space.outputs import (
     _ROW_OUTPUTS,
@@ -53,6 +53,7 @@ from armdyn.task_space.outputs import (
     _damping,
     _into,
     _mv,
+    _Rows,
     _rows,
     _shaped,
     _states,
@@ -119,11 +120,13 @@ def _task(
     damped = ~(cond <= limit)
     if damped.any() and lam is None:
         index = int(np.flatnonzero(damped)[0])
-        raise ModelError(
+        raise SingularError(
             f"J(q) of output {output!r} on arm '{arm.name}' is singular or ill-conditioned "
             f"{_where(batch, index)}(q = {np.array2string(flat[0][index], precision=4)}): its condition number "
             f"{cond[index]:.3g} exceeds max_condition = {limit:.3g}. Move away from the singularity, raise "
-            "max_condition, or pass damping=... for a damped least-squares inverse"
+            "max_condition, or pass damping=... for a damped least-squares inverse",
+            state=flat[0][index].copy(),
+            condition=float(cond[index]),
         )
     return arm, output, _Task(batch, flat, J, damped, 0.0 if lam is None else lam)
 
@@ -134,13 +137,15 @@ def _task(
 _NOT_ONE_STATE = (TypeError, ValueError, NumbaError)
 
 
-def _compiled(arm: object, output: object, m: int | None, damping: object, limit: object) -> tuple | None:
+def _compiled(
+    arm: object, output: object, m: int | None, damping: object, limit: object
+) -> tuple[int, np.ndarray] | None:
     """(target, rows) when the compiled one-state kernels may take the call (with m rows if given)."""
     if type(output) not in _ROW_OUTPUTS or not isinstance(arm, Robot) or type(limit) is not float:
         return None
     if damping is not None and not (type(damping) is float and damping > 0):
         return None
-    spec = output._compiled()
+    spec = cast(_Rows, output)._compiled()  # one of _ROW_OUTPUTS
     return None if m is not None and spec[1].shape[0] != m else spec
 
 
@@ -162,6 +167,7 @@ def _kernel(
     fast = _compiled(arm, output, getattr(arm, "n", None), damping, limit)
     if fast is None:
         return None
+    arm = cast(Robot, arm)  # _compiled takes a Robot only
     n = arm.n
     result = np.empty((n, n) if matrix else (1, n))
     try:
@@ -170,7 +176,8 @@ def _kernel(
             return result if matrix else result[0]
     except _NOT_ONE_STATE:
         if (states := inputs.thawed(q, qd, v)) is not None:
-            return _kernel(arm, output, kind, damping, limit, matrix, *states, v_name)
+            q, qd, v = states
+            return _kernel(arm, output, kind, damping, limit, matrix, q, qd, v, v_name)
     if arm.packed is None:
         return None
     named = [("q", q)] + ([("qd", qd)] if qd is not None else []) + ([(v_name, v)] if v is not None else [])
@@ -229,8 +236,11 @@ def task_inertia(
     Raises
     ------
     ModelError
-        When an argument is invalid, m != n, or J is ill-conditioned at a state and no
-        damping is given (the message names the state and the condition number).
+        When an argument is invalid or m != n (an ArgumentError, also a TypeError, when ``arm``
+        is not a numeric Robot or ``output`` not a task output).
+    armdyn.SingularError
+        When J is ill-conditioned at a state and no damping is given (the message names the
+        state and the condition number; so do its ``state`` and ``condition``).
     """
     fast = _compiled(arm, output, getattr(arm, "n", None), damping, max_condition)
     if fast is not None:  # one state through the leaner kernel of Lambda
@@ -241,9 +251,9 @@ def task_inertia(
         except _NOT_ONE_STATE:
             if (states := inputs.thawed(q)) is not None:
                 return task_inertia(arm, output, *states, damping=damping, max_condition=max_condition, out=out)
-    result = _kernel(arm, output, kernels.TASK_LAMBDA, damping, max_condition, True, q)
-    if result is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
-        return _into(out, result)
+    computed = _kernel(arm, output, kernels.TASK_LAMBDA, damping, max_condition, True, q)
+    if computed is not None:  # at a regular state Mbar = Lambda = (J M^-1 J^T)^-1
+        return _into(out, computed)
     arm, output, task = _task(arm, output, ("q",), (q,), damping, max_condition, square=True)
     M = arm.inertia_matrix(task.states[0])
     Mbar = task.inverse_transpose(_T(task.inverse_transpose(M), 1, 2))  # J^-T (J^-T M)^T, M symmetric

@@ -3,7 +3,8 @@ a straight line and a tool-pose line, each with a quintic time law (BOOK.md sect
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -164,6 +165,8 @@ class PoseLine:
     end: np.ndarray
     duration: float
     start_time: float = 0.0
+    if TYPE_CHECKING:  # at run time no field: the rotation vector of R_b R_a^T, set by __post_init__
+        _axis: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         from scipy.spatial.transform import Rotation
