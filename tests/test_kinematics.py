@@ -489,7 +489,7 @@ def test_numpy_integer_link_index_is_a_link_index() -> None:
         (lambda arm: ad.kinematics.link_transforms(None, np.zeros(6)), TypeError, "arm must be an armdyn ArmModel"),
         (lambda arm: ad.kinematics.as_state({}, np.zeros(6)), TypeError, "arm must be an armdyn ArmModel"),
         (lambda arm: ad.models.two_link_planar(symbolic=True).jacobian([0, 0]), ModelError,
-         "robot 'two_link_planar' has symbolic parameters; numeric dynamics and kinematics need numbers"),
+         "arm 'two_link_planar' has symbolic parameters; numeric dynamics and kinematics need numbers"),
         (lambda arm: ad.kinematics.jacobian(ad.models.two_link_planar(symbolic=True), [0, 0]), TypeError,
          "arm 'two_link_planar' has symbolic"),
         (lambda arm: ad.kinematics.joint_motion(True, [0, 0, 1], 10**400), ModelError, "q must be a number"),

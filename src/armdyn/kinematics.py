@@ -18,7 +18,7 @@ from armdyn.model import ArmModel
 FRAMES = ("base", "tool")
 
 
-def check_arm(arm: object, numeric: bool = True, hint: str = "", name: str = "robot") -> None:
+def check_arm(arm: object, numeric: bool = True, hint: str = "", name: str = "arm") -> None:
     """An ArgumentError naming the argument ``name`` unless ``arm`` is an arm (an ArmModel, e.g. a Robot), with
     numbers for parameters when ``numeric``.
 

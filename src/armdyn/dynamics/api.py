@@ -57,7 +57,7 @@ from armdyn.dynamics.rnea import (
 )
 from armdyn.dynamics.rnea_blocks import rnea_blocks
 from armdyn.dynamics.status import OK
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -101,7 +101,7 @@ def _where(arm: Robot) -> str:
 
 def _model(arm: Robot) -> np.ndarray:
     if arm.packed is None:
-        raise ModelError(f"robot '{arm.name}' has symbolic parameters; numeric dynamics and kinematics need numbers")
+        raise ArgumentError(f"arm '{arm.name}' has symbolic parameters; numeric dynamics and kinematics need numbers")
     return arm.packed
 
 

@@ -15,12 +15,12 @@ from armdyn.kinematics import as_state, as_states, check_arm, link_transform_der
 from armdyn.model import ArmModel
 
 
-def pseudo_inertias(robot: ArmModel) -> np.ndarray:
+def pseudo_inertias(arm: ArmModel) -> np.ndarray:
     """The pseudo-inertia matrices J_i of all links, in their link frames, (n, 4, 4) (3.2.27).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
 
     Returns
@@ -31,23 +31,23 @@ def pseudo_inertias(robot: ArmModel) -> np.ndarray:
     Raises
     ------
     TypeError
-        When ``robot`` is not an arm, or has symbolic (SymPy) parameters; numeric dynamics need numbers.
+        When ``arm`` is not an armdyn arm, or has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    check_arm(robot)
-    return np.stack([link.inertial.pseudo_inertia() for link in robot.links]).astype(float)
+    check_arm(arm)
+    return np.stack([link.inertial.pseudo_inertia() for link in arm.links]).astype(float)
 
 
-def _homogeneous_gravity(robot: ArmModel) -> np.ndarray:
+def _homogeneous_gravity(arm: ArmModel) -> np.ndarray:
     """g = [gx gy gz 0] (3.2.33): a direction, so the translation of T_i does not act on it."""
-    return np.append(robot.gravity.astype(float), 0.0)
+    return np.append(arm.gravity.astype(float), 0.0)
 
 
-def inertia_matrix(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def inertia_matrix(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """M(q): m_jk = sum_i trace(dT_i/dq_j J_i (dT_i/dq_k)^T) (3.2.30), plus diag(G^2 Jm).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q : array_like
         Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
@@ -65,12 +65,12 @@ def inertia_matrix(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    dT = link_transform_derivatives(robot, q)
-    M = np.einsum("...ijab,ibc,...ikac->...jk", dT, pseudo_inertias(robot), dT)
-    return M + np.diag(robot.reflected_inertia)
+    dT = link_transform_derivatives(arm, q)
+    M = np.einsum("...ijab,ibc,...ikac->...jk", dT, pseudo_inertias(arm), dT)
+    return M + np.diag(arm.reflected_inertia)
 
 
-def second_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def second_derivatives(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """d2T_i/(dq_j dq_l) = S_a S_b T_i, a the joint nearer the root of (j, l), b the other.
 
     Shape (..., n, n, n, 4, 4) indexed [i, j, l]; zero unless both j and l move link i.
@@ -78,7 +78,7 @@ def second_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q : array_like
         Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
@@ -96,22 +96,22 @@ def second_derivatives(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    S, T = twist_generators(robot, q)
-    n = robot.n
+    S, T = twist_generators(arm, q)
+    n = arm.n
     index = np.arange(n)
     first = np.minimum(index[:, None], index[None, :])
     second = np.maximum(index[:, None], index[None, :])
     pairs = S[..., first, :, :] @ S[..., second, :, :]  # (..., j, l, 4, 4)
-    both = robot.ancestors[:, :, None] & robot.ancestors[:, None, :]
+    both = arm.ancestors[:, :, None] & arm.ancestors[:, None, :]
     return pairs[..., None, :, :, :, :] @ T[..., :, None, None, :, :] * both[..., None, None]
 
 
-def inertia_matrix_partials(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def inertia_matrix_partials(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """dM/dq_l, shape (..., n, n, n) indexed [l, j, k] (differentiating 3.2.30).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q : array_like
         Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
@@ -130,19 +130,19 @@ def inertia_matrix_partials(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    dT = link_transform_derivatives(robot, q)
-    d2T = second_derivatives(robot, q)
-    J = pseudo_inertias(robot)
+    dT = link_transform_derivatives(arm, q)
+    d2T = second_derivatives(arm, q)
+    J = pseudo_inertias(arm)
     half = np.einsum("...ijlab,ibc,...ikac->...ljk", d2T, J, dT)
     return half + np.swapaxes(half, -1, -2)
 
 
-def inertia_matrix_dot(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def inertia_matrix_dot(arm: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """Mdot = sum_l dM/dq_l qd_l.
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q, qd : array_like
         Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
@@ -161,16 +161,16 @@ def inertia_matrix_dot(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.nda
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    q, qd = as_states(robot, q, qd=qd)
-    return np.einsum("...ljk,...l->...jk", inertia_matrix_partials(robot, q), qd)
+    q, qd = as_states(arm, q, qd=qd)
+    return np.einsum("...ljk,...l->...jk", inertia_matrix_partials(arm, q), qd)
 
 
-def christoffel_symbols(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def christoffel_symbols(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """v_ijk = 1/2 (dm_kj/dq_i + dm_ki/dq_j - dm_ij/dq_k) (3.3.47), shape (..., n, n, n).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q : array_like
         Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
@@ -188,16 +188,16 @@ def christoffel_symbols(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    dM = inertia_matrix_partials(robot, q)  # [l, j, k] = dm_jk/dq_l
+    dM = inertia_matrix_partials(arm, q)  # [l, j, k] = dm_jk/dq_l
     return 0.5 * (np.einsum("...ikj->...ijk", dM) + np.einsum("...jki->...ijk", dM) - np.einsum("...kij->...ijk", dM))
 
 
-def coriolis_matrix(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def coriolis_matrix(arm: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """The Christoffel form Vm(q, qd): (Vm)_kj = sum_i v_ijk qd_i (3.3.48).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q, qd : array_like
         Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
@@ -216,16 +216,16 @@ def coriolis_matrix(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarra
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    q, qd = as_states(robot, q, qd=qd)
-    return np.einsum("...ijk,...i->...kj", christoffel_symbols(robot, q), qd)
+    q, qd = as_states(arm, q, qd=qd)
+    return np.einsum("...ijk,...i->...kj", christoffel_symbols(arm, q), qd)
 
 
-def coriolis_vector(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def coriolis_vector(arm: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """V(q, qd) = Vm(q, qd) qd = Mdot qd - 1/2 d/dq (qd^T M qd) (3.2.42).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q, qd : array_like
         Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
@@ -244,16 +244,16 @@ def coriolis_vector(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarra
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    q, qd = as_states(robot, q, qd=qd)
-    return np.einsum("...kj,...j->...k", coriolis_matrix(robot, q, qd), qd)
+    q, qd = as_states(arm, q, qd=qd)
+    return np.einsum("...kj,...j->...k", coriolis_matrix(arm, q, qd), qd)
 
 
-def potential_energy(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def potential_energy(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """P(q) = -sum_i g^T T_i J_i e4 = -sum_i m_i g^T T_i r_i (3.2.35, 3.2.36).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q : array_like
         Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
@@ -271,17 +271,17 @@ def potential_energy(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    T = twist_generators(robot, q)[1]
-    first_moments = pseudo_inertias(robot)[:, :, 3]  # J_i e4 = [m r; m]
-    return -np.einsum("a,...iab,ib->...", _homogeneous_gravity(robot), T, first_moments)
+    T = twist_generators(arm, q)[1]
+    first_moments = pseudo_inertias(arm)[:, :, 3]  # J_i e4 = [m r; m]
+    return -np.einsum("a,...iab,ib->...", _homogeneous_gravity(arm), T, first_moments)
 
 
-def gravity_vector(robot: ArmModel, q: np.ndarray) -> np.ndarray:
+def gravity_vector(arm: ArmModel, q: np.ndarray) -> np.ndarray:
     """G_j(q) = dP/dq_j = -sum_i g^T (dT_i/dq_j) J_i e4 (3.2.43).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q : array_like
         Joint positions, (n,) or a batch (..., n); complex values are kept (complex-step
@@ -299,17 +299,17 @@ def gravity_vector(robot: ArmModel, q: np.ndarray) -> np.ndarray:
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    dT = link_transform_derivatives(robot, q)
-    first_moments = pseudo_inertias(robot)[:, :, 3]
-    return -np.einsum("a,...ijab,ib->...j", _homogeneous_gravity(robot), dT, first_moments)
+    dT = link_transform_derivatives(arm, q)
+    first_moments = pseudo_inertias(arm)[:, :, 3]
+    return -np.einsum("a,...ijab,ib->...j", _homogeneous_gravity(arm), dT, first_moments)
 
 
-def kinetic_energy(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def kinetic_energy(arm: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """K = 1/2 qd^T M(q) qd (3.2.29).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q, qd : array_like
         Joint positions and velocities, (n,) or a batch (..., n); the batch shapes broadcast
@@ -329,18 +329,18 @@ def kinetic_energy(robot: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    q, qd = as_states(robot, q, qd=qd)
-    return 0.5 * np.einsum("...j,...jk,...k->...", qd, inertia_matrix(robot, q), qd)
+    q, qd = as_states(arm, q, qd=qd)
+    return 0.5 * np.einsum("...j,...jk,...k->...", qd, inertia_matrix(arm, q), qd)
 
 
-def friction(robot: ArmModel, qd: np.ndarray) -> np.ndarray:
+def friction(arm: ArmModel, qd: np.ndarray) -> np.ndarray:
     """F(qd) = Fv qd + Fd(qd) (3.3.2): viscous G^2 B qd plus Coulomb |G| Tc+ or |G| Tc-.
 
     At qd_i = 0 the Coulomb term is zero (sgn 0 = 0).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     qd : array_like
         Joint velocities, (n,) or a batch (..., n). Complex values are kept, the Coulomb branch
@@ -357,17 +357,17 @@ def friction(robot: ArmModel, qd: np.ndarray) -> np.ndarray:
     armdyn.ModelError
         When ``qd`` is not numbers of shape (..., n) or holds NaN or infinity.
     """
-    qd = as_state(robot, qd, "qd")
-    coulomb = robot.coulomb_friction
-    return robot.viscous_friction * qd + np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
+    qd = as_state(arm, qd, "qd")
+    coulomb = arm.coulomb_friction
+    return arm.viscous_friction * qd + np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
 
 
-def inverse_dynamics(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+def inverse_dynamics(arm: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     """tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (3.3.1 without disturbance).
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm (an ArmModel or a Robot); only its model data is used, never the compiled kernels.
     q, qd, qdd : array_like
         Joint positions, velocities and accelerations, (n,) or a batch (..., n); the batch
@@ -388,10 +388,10 @@ def inverse_dynamics(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.nda
     TypeError
         When the arm has symbolic (SymPy) parameters; numeric dynamics need numbers.
     """
-    q, qd, qdd = as_states(robot, q, qd=qd, qdd=qdd)
+    q, qd, qdd = as_states(arm, q, qd=qd, qdd=qdd)
     return (
-        np.einsum("...jk,...k->...j", inertia_matrix(robot, q), qdd)
-        + coriolis_vector(robot, q, qd)
-        + friction(robot, qd)
-        + gravity_vector(robot, q)
+        np.einsum("...jk,...k->...j", inertia_matrix(arm, q), qdd)
+        + coriolis_vector(arm, q, qd)
+        + friction(arm, qd)
+        + gravity_vector(arm, q)
     )

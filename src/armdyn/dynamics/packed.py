@@ -97,33 +97,33 @@ def _homogeneous(rotation: np.ndarray) -> np.ndarray:
     return transform
 
 
-def body_frames(robot: ArmModel) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def body_frames(arm: ArmModel) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """(placement of each joint frame in its parent's body frame, pose of each link frame in its body frame)."""
-    align = [_homogeneous(_rotation_onto(link.joint.axis)) for link in robot.links]
+    align = [_homogeneous(_rotation_onto(link.joint.axis)) for link in arm.links]
     placements: list[np.ndarray] = []
     link_in_body: list[np.ndarray] = []
-    for i, link in enumerate(robot.links):
-        before = robot.base if link.parent < 0 else link_in_body[link.parent]
+    for i, link in enumerate(arm.links):
+        before = arm.base if link.parent < 0 else link_in_body[link.parent]
         placements.append(before @ link.joint.placement @ align[i])
         link_in_body.append(np.linalg.inv(align[i]) @ link.joint.frame_offset)
     return placements, link_in_body
 
 
-def pack(robot: ArmModel) -> np.ndarray:
+def pack(arm: ArmModel) -> np.ndarray:
     """The model array of a numeric arm (the layout constants above describe it)."""
-    if robot.is_symbolic:
-        raise ModelError(f"robot '{robot.name}' has symbolic parameters; numeric kernels need numbers")
-    n = robot.n
+    if arm.is_symbolic:
+        raise ModelError(f"arm '{arm.name}' has symbolic parameters; numeric kernels need numbers")
+    n = arm.n
     buffer = np.zeros(HEADER + STRIDE * n)
-    placements, link_in_body = body_frames(robot)
-    tool = link_in_body[robot.tool_link] @ robot.tool
+    placements, link_in_body = body_frames(arm)
+    tool = link_in_body[arm.tool_link] @ arm.tool
     buffer[N_JOINTS] = n
-    buffer[GRAVITY : GRAVITY + 3] = robot.gravity
-    buffer[TOOL_LINK] = robot.tool_link
+    buffer[GRAVITY : GRAVITY + 3] = arm.gravity
+    buffer[TOOL_LINK] = arm.tool_link
     buffer[TOOL_ROTATION : TOOL_ROTATION + 9] = tool[:3, :3].ravel()
     buffer[TOOL_POSITION : TOOL_POSITION + 3] = tool[:3, 3]
-    armature, viscous, coulomb = robot.reflected_inertia, robot.viscous_friction, robot.coulomb_friction
-    for i, link in enumerate(robot.links):
+    armature, viscous, coulomb = arm.reflected_inertia, arm.viscous_friction, arm.coulomb_friction
+    for i, link in enumerate(arm.links):
         record = buffer[HEADER + STRIDE * i : HEADER + STRIDE * (i + 1)]
         record[PARENT] = link.parent
         record[KIND] = REVOLUTE_KIND if link.joint.is_revolute else PRISMATIC_KIND
@@ -139,18 +139,18 @@ def pack(robot: ArmModel) -> np.ndarray:
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
         record[LINK_ROTATION : LINK_ROTATION + 9] = link_in_body[i][:3, :3].ravel()
         record[LINK_POSITION : LINK_POSITION + 3] = link_in_body[i][:3, 3]
-    buffer[PIVOT_FLOOR] = PIVOT_RELATIVE * inertia_scale(robot)
+    buffer[PIVOT_FLOOR] = PIVOT_RELATIVE * inertia_scale(arm)
     return buffer
 
 
-def inertia_scale(robot: ArmModel) -> float:
+def inertia_scale(arm: ArmModel) -> float:
     """A size of the arm's inertia, kg m^2: each link's inertia about its centre of mass, its
     mass at the arm's reach, and the reflected motor inertias, summed (1 for a massless arm).
     Forward dynamics calls an articulated inertia below PIVOT_RELATIVE times this zero."""
     reach = sum(np.linalg.norm(link.joint.placement[:3, 3]) + np.linalg.norm(link.joint.frame_offset[:3, 3])
-                for link in robot.links)  # fmt: skip
-    total = float(np.sum(robot.reflected_inertia))
-    for link in robot.links:
+                for link in arm.links)  # fmt: skip
+    total = float(np.sum(arm.reflected_inertia))
+    for link in arm.links:
         body = link.inertial
         total += float(np.trace(body.inertia)) + float(body.mass * (reach + np.linalg.norm(body.com)) ** 2)
     return total if total > 0 else 1.0

@@ -83,8 +83,8 @@ MAX_BASE_SAMPLES = 100_000
 """The most random states ``base_parameters`` stacks (for a 7-joint arm, 0.7 GB of regressor)."""
 
 
-def _check_arm(robot: object, numeric: bool = True) -> None:
-    check_arm(robot, numeric, " (ClosedForm.W and ClosedForm.phi give the parameterization symbolically)")
+def _check_arm(arm: object, numeric: bool = True) -> None:
+    check_arm(arm, numeric, " (ClosedForm.W and ClosedForm.phi give the parameterization symbolically)")
 
 
 def _flag(value: object, name: str) -> bool:
@@ -106,12 +106,12 @@ def _size(size: float) -> str:
     return f"{size / 2**30:.3g} GiB" if size >= 2**30 else f"{size / 2**20:.3g} MiB"
 
 
-def parameter_names(robot: ArmModel) -> list[str]:
+def parameter_names(arm: ArmModel) -> list[str]:
     """Names of phi: m1, mx1, ..., Izz1, ..., then Fv1, Fc+1, Fc-1, Ia1, ...
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
 
     Returns
@@ -122,14 +122,14 @@ def parameter_names(robot: ArmModel) -> list[str]:
     Raises
     ------
     TypeError
-        When ``robot`` is not an arm (an ArmModel).
+        When ``arm`` is not an armdyn arm (an ArmModel).
     """
-    _check_arm(robot, numeric=False)
-    bodies = [f"{name}{i + 1}" for i in range(robot.n) for name in BODY_PARAMETERS]
-    return bodies + [f"{name}{i + 1}" for i in range(robot.n) for name in JOINT_PARAMETERS]
+    _check_arm(arm, numeric=False)
+    bodies = [f"{name}{i + 1}" for i in range(arm.n) for name in BODY_PARAMETERS]
+    return bodies + [f"{name}{i + 1}" for i in range(arm.n) for name in JOINT_PARAMETERS]
 
 
-def parameters(robot: ArmModel) -> np.ndarray:
+def parameters(arm: ArmModel) -> np.ndarray:
     """phi, the parameter vector with W(q, qd, qdd) phi = inverse_dynamics(q, qd, qdd).
 
     The linear parameterization of Table 3.3.1, property 9. Per link [m, m cx, m cy, m cz,
@@ -139,7 +139,7 @@ def parameters(robot: ArmModel) -> np.ndarray:
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
 
     Returns
@@ -150,19 +150,19 @@ def parameters(robot: ArmModel) -> np.ndarray:
     Raises
     ------
     TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy)
+        When ``arm`` is not an armdyn arm (an ArmModel), or when it has symbolic (SymPy)
         parameters; ClosedForm.phi gives them symbolically.
     """
-    _check_arm(robot)
+    _check_arm(arm)
     values = []
-    for link in robot.links:
+    for link in arm.links:
         body = link.inertial
         inertia = body.inertia_about_origin()
         values += [body.mass, *body.first_moment]
         values += [inertia[0, 0], inertia[0, 1], inertia[1, 1], inertia[0, 2], inertia[1, 2], inertia[2, 2]]
-    coulomb = robot.coulomb_friction
-    for i in range(robot.n):
-        values += [robot.viscous_friction[i], coulomb[i, 0], coulomb[i, 1], robot.reflected_inertia[i]]
+    coulomb = arm.coulomb_friction
+    for i in range(arm.n):
+        values += [arm.viscous_friction[i], coulomb[i, 0], coulomb[i, 1], arm.reflected_inertia[i]]
     return np.array(values, dtype=float)
 
 
@@ -230,17 +230,17 @@ def _body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarr
     return Y
 
 
-def regressor(robot: ArmModel, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
+def regressor(arm: ArmModel, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
     """W(q, qd, qdd), shape (..., n, 14 n), with W phi = tau (Table 3.3.1, property 9).
 
-    Friction and motors included: W ``parameters(robot)`` equals the inverse dynamics.
+    Friction and motors included: W ``parameters(arm)`` equals the inverse dynamics.
     Computed recursively, O(n d) for depth d (Atkeson, An and Hollerbach 1986), batched
     over any leading shape, a block of states at a time (see the module docstring): the
     peak memory is W's own size plus a few times CHUNK_BYTES.
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     q, qd, qdd : array_like
         Joint positions, velocities and accelerations, (n,) or a batch (..., n); the batch
@@ -262,59 +262,59 @@ def regressor(robot: ArmModel, q: object, qd: object, qdd: object, out: np.ndarr
         float64 array of W's shape, or when ``out`` is None and W would need more than
         MEMORY_LIMIT bytes (the message says how much).
     TypeError
-        When ``robot`` is not an arm (an ArmModel), or when it has symbolic (SymPy)
+        When ``arm`` is not an armdyn arm (an ArmModel), or when it has symbolic (SymPy)
         parameters; ClosedForm.W gives W symbolically.
     """
-    return _stacked(robot, q, qd, qdd, None, out)
+    return _stacked(arm, q, qd, qdd, None, out)
 
 
 def _stacked(
-    robot: ArmModel, q: object, qd: object, qdd: object, columns: np.ndarray | None, out: object
+    arm: ArmModel, q: object, qd: object, qdd: object, columns: np.ndarray | None, out: object
 ) -> np.ndarray:
     """W[..., columns] (all columns for None), a block of states at a time into one result."""
-    _check_arm(robot)
-    n = robot.n
-    batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, f" for '{robot.name}'")
+    _check_arm(arm)
+    n = arm.n
+    batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, f" for '{arm.name}'")
     width = 14 * n if columns is None else len(columns)
     shape = (*batch, n, width)
     if out is None:
         needed = 8 * int(np.prod(shape, dtype=float))
         if needed > _memory_limit():
             raise ModelError(
-                f"the regressor of {int(np.prod(batch))} states of '{robot.name}' needs {_size(needed)} for its "
+                f"the regressor of {int(np.prod(batch))} states of '{arm.name}' needs {_size(needed)} for its "
                 f"result of shape {shape} (float64), more than the limit of {_size(_memory_limit())} "
                 "(armdyn.dynamics.regressor.MEMORY_LIMIT, default half the machine's memory): compute it over "
                 "fewer states at a time, or pass out= (a numpy.memmap, for instance)"
             )
     result = inputs.result(out, shape)
     if not batch:  # one state: the block without a batch axis (faster for NumPy's small arrays)
-        W = _regressor_block(robot, flat[0][0], flat[1][0], flat[2][0])
+        W = _regressor_block(arm, flat[0][0], flat[1][0], flat[2][0])
         result[...] = W if columns is None else W[..., columns]
         return result
     target = result.reshape(-1, n, width)
     step = max(1, CHUNK_BYTES // (8 * n * 14 * n))
     for start in range(0, target.shape[0], step):
         block = slice(start, start + step)
-        W = _regressor_block(robot, flat[0][block], flat[1][block], flat[2][block])
+        W = _regressor_block(arm, flat[0][block], flat[1][block], flat[2][block])
         target[block] = W if columns is None else W[..., columns]
     return result
 
 
-def _regressor_block(robot: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+def _regressor_block(arm: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     """W of a block of states, each (B, n) (or one state (n,)) float64, as (B, n, 14 n) (or (n, 14 n))."""
     batch = q.shape[:-1]
-    n = robot.n
-    links, joints = joint_frames(robot, q)
-    z, o = joint_axes(robot, joints)
-    revolute = np.array([kind == "revolute" for kind in robot.kinds])
+    n = arm.n
+    links, joints = joint_frames(arm, q)
+    z, o = joint_axes(arm, joints)
+    revolute = np.array([kind == "revolute" for kind in arm.kinds])
     S = np.concatenate([np.where(revolute[:, None], z, 0.0), np.where(revolute[:, None], _cross(o, z), z)], -1)
-    ancestors = robot.ancestors.astype(float)  # [i, j]: joint j moves link i
+    ancestors = arm.ancestors.astype(float)  # [i, j]: joint j moves link i
     # world spatial velocity of each link (at the world origin): v_i = sum_j S_j qd_j
     v = np.einsum("ij,...jk,...j->...ik", ancestors, S, qd)
     # each joint's Sdot = v_j x S_j (v_j the velocity of the link the joint moves)
     w_, u_ = v[..., :3], v[..., 3:]
     Sdot = np.concatenate([_cross(w_, S[..., :3]), _cross(w_, S[..., 3:]) + _cross(u_, S[..., :3])], -1)
-    gravity = np.concatenate([np.zeros(3), -robot.gravity.astype(float)])
+    gravity = np.concatenate([np.zeros(3), -arm.gravity.astype(float)])
     a = gravity + np.einsum("ij,...jk->...ik", ancestors, S * qdd[..., None] + Sdot * qd[..., None])
     # into each link's frame: w_L = R^T w, v_L = R^T (v + w x p), likewise for the acceleration
     R, p = links[..., :3, :3], links[..., :3, 3]
@@ -347,7 +347,7 @@ class BaseParameters:
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     columns : numpy.ndarray
         The indices of the r columns of W kept, in increasing order.
@@ -359,7 +359,7 @@ class BaseParameters:
         phi_base of the arm's own parameters, (r,).
     """
 
-    robot: ArmModel
+    arm: ArmModel
     columns: np.ndarray
     regrouping: np.ndarray
     names: list[str]
@@ -385,7 +385,7 @@ class BaseParameters:
             the batch shapes do not broadcast together, or when W_base would need more than
             MEMORY_LIMIT bytes.
         """
-        return _stacked(self.robot, q, qd, qdd, self.columns, None)
+        return _stacked(self.arm, q, qd, qdd, self.columns, None)
 
     def __len__(self) -> int:
         return len(self.columns)
@@ -400,7 +400,7 @@ def _term(coefficient: float, name: str) -> str:
 
 
 def base_parameters(
-    robot: ArmModel,
+    arm: ArmModel,
     samples: int = 200,
     seed: int = 0,
     tolerance: float = 1e-9,
@@ -421,7 +421,7 @@ def base_parameters(
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm.
     samples : int, optional
         Number of random states stacked (default 200, from 1 to MAX_BASE_SAMPLES = 100,000:
@@ -449,12 +449,12 @@ def base_parameters(
         When ``samples`` is below 1 or above MAX_BASE_SAMPLES, ``seed`` is negative, or ``tolerance`` is not a number
         in (0, 1).
     TypeError
-        When ``robot`` is not an arm (an ArmModel) or has symbolic (SymPy) parameters, when
+        When ``arm`` is not an armdyn arm (an ArmModel) or has symbolic (SymPy) parameters, when
         ``samples`` or ``seed`` is not an integer, or when ``drives`` or ``at_rest`` is not a bool.
     """
     from scipy.linalg import qr
 
-    _check_arm(robot)
+    _check_arm(arm)
     samples = inputs.integer(
         samples, "samples", 1, MAX_BASE_SAMPLES, " (the stacked regressor grows with it; a few hundred suffice)"
     )
@@ -466,15 +466,15 @@ def base_parameters(
         raise ModelError(f"tolerance must be one number in (0, 1), got {given.tolist()}")
     tolerance = float(given[0])
     rng = np.random.default_rng(seed)
-    lower, upper = robot.qlim
+    lower, upper = arm.qlim
     low = np.where(np.isfinite(lower), lower, -np.pi)
     high = np.where(np.isfinite(upper), upper, np.pi)
-    q = rng.uniform(low, high, (samples, robot.n))
-    qd, qdd = rng.uniform(-2, 2, (2, samples, robot.n))
+    q = rng.uniform(low, high, (samples, arm.n))
+    qd, qdd = rng.uniform(-2, 2, (2, samples, arm.n))
     if at_rest:
         qd[rng.random(qd.shape) < 0.25] = 0.0
-    width = 14 * robot.n if drives else 10 * robot.n
-    stacked = regressor(robot, q, qd, qdd)[..., :width].reshape(-1, width)
+    width = 14 * arm.n if drives else 10 * arm.n
+    stacked = regressor(arm, q, qd, qdd)[..., :width].reshape(-1, width)
     _, R, pivots = qr(stacked, mode="economic", pivoting=True)
     diagonal = np.abs(np.diag(R))
     rank = int(np.sum(diagonal > tolerance * diagonal[0]))
@@ -486,12 +486,12 @@ def base_parameters(
     regrouping[:, dependent] = beta
     order = np.argsort(independent)
     independent, regrouping = independent[order], regrouping[order]
-    names_all = parameter_names(robot)
+    names_all = parameter_names(arm)
     names = []
     for row in regrouping:
         terms = [_term(row[k], names_all[k]) for k in np.flatnonzero(row)]
         names.append(" + ".join(terms).replace("+ -", "- "))
-    return BaseParameters(robot, independent, regrouping, names, regrouping @ parameters(robot)[:width])
+    return BaseParameters(arm, independent, regrouping, names, regrouping @ parameters(arm)[:width])
 
 
 @dataclass
@@ -567,7 +567,7 @@ class Identification:
 
 
 def identify(
-    robot: ArmModel,
+    arm: ArmModel,
     q: object,
     qd: object,
     qdd: object,
@@ -605,7 +605,7 @@ def identify(
 
     Parameters
     ----------
-    robot : ArmModel
+    arm : ArmModel
         The arm whose base parameters are estimated (its structure; its own values are
         reported alongside for comparison).
     q, qd, qdd : array_like
@@ -642,22 +642,22 @@ def identify(
         of the stacked base regressor below r, or condition number above MAX_CONDITION); the
         message gives the rank and condition number.
     TypeError
-        When ``robot`` is not an arm (an ArmModel) or has symbolic (SymPy) parameters, or
+        When ``arm`` is not an armdyn arm (an ArmModel) or has symbolic (SymPy) parameters, or
         when ``drives`` is not a bool.
     """
     from scipy.linalg import solve_triangular
 
-    _check_arm(robot)
-    where = f" for '{robot.name}'"
+    _check_arm(arm)
+    where = f" for '{arm.name}'"
     names = ("q", "qd", "qdd", "tau")
-    arrays = [inputs.state(value, robot.n, name, where) for name, value in zip(names, (q, qd, qdd, tau), strict=True)]
+    arrays = [inputs.state(value, arm.n, name, where) for name, value in zip(names, (q, qd, qdd, tau), strict=True)]
     if len({a.shape for a in arrays}) > 1:
         shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(names, arrays, strict=True))
-        raise ModelError(f"q, qd, qdd and tau must hold the same samples, each (N, {robot.n}); got {shapes}")
+        raise ModelError(f"q, qd, qdd and tau must hold the same samples, each (N, {arm.n}); got {shapes}")
     drives = _flag(drives, "drives")
     band = _band(velocity_band)
-    base = base_parameters(robot, drives=drives)
-    r, n = len(base), robot.n
+    base = base_parameters(arm, drives=drives)
+    r, n = len(base), arm.n
     samples = int(np.prod(arrays[0].shape[:-1]))
     speed = np.abs(arrays[1]).reshape(-1)
     keep = speed >= band if band > 0 else np.ones(speed.shape, dtype=bool)
@@ -677,13 +677,13 @@ def identify(
     rank = int(np.sum(singular > singular[0] * max(W.shape) * np.finfo(float).eps)) if singular[0] > 0 else 0
     if rank < r or condition > MAX_CONDITION:
         raise ModelError(
-            f"the samples do not excite the {r} base parameters of '{robot.name}': the stacked base regressor "
+            f"the samples do not excite the {r} base parameters of '{arm.name}': the stacked base regressor "
             f"has rank {rank} of {r} and condition number {condition:.3g} (the limit is {MAX_CONDITION:.0e}); "
             "move every joint over a wide range with varied velocities and accelerations"
         )
     if condition > POOR_CONDITION:
         warnings.warn(
-            f"the samples excite the base parameters of '{robot.name}' poorly: the stacked base regressor has "
+            f"the samples excite the base parameters of '{arm.name}' poorly: the stacked base regressor has "
             f"condition number {condition:.3g} (above {POOR_CONDITION:.0e}); the estimates are sensitive to "
             "noise (see their standard errors)",
             PoorExcitationWarning,
@@ -694,7 +694,7 @@ def identify(
     inverse = solve_triangular(R[:r, :r], np.eye(r))  # (W^T W)^-1 = R^-1 R^-T
     standard_errors = _standard_errors(W, R[:r, :r], inverse, residual, joint, n)
     if drives:
-        _check_friction(robot, speed[keep], residual, joint, y)
+        _check_friction(arm, speed[keep], residual, joint, y)
     residual_rms = abs(float(R[r, r])) / np.sqrt(W.shape[0])
     return Identification(
         base, phi, standard_errors, condition, residual_rms, samples, int(speed.size - np.count_nonzero(keep))
@@ -732,10 +732,10 @@ def _standard_errors(
     return np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", inverse, middle, inverse), 0.0))
 
 
-def _check_friction(robot: ArmModel, speed: np.ndarray, residual: np.ndarray, joint: np.ndarray, y: np.ndarray) -> None:
+def _check_friction(arm: ArmModel, speed: np.ndarray, residual: np.ndarray, joint: np.ndarray, y: np.ndarray) -> None:
     """A FrictionMisfitWarning naming the joints whose slow samples fit much worse than the rest."""
     found = []
-    for j in range(robot.n):
+    for j in range(arm.n):
         mine = joint == j
         if not mine.any():
             continue
@@ -747,12 +747,12 @@ def _check_friction(robot: ArmModel, speed: np.ndarray, residual: np.ndarray, jo
         scale = 1e-9 * (1.0 + np.sqrt(np.mean(y[mine] ** 2)))  # rounding alone never warns
         if inside > MISFIT_RATIO * outside and np.sqrt(inside) > scale:
             found.append(
-                f"'{robot.joint_names[j]}' {np.sqrt(inside):.3g} against {np.sqrt(outside):.3g} N m at "
+                f"'{arm.joint_names[j]}' {np.sqrt(inside):.3g} against {np.sqrt(outside):.3g} N m at "
                 f"|qd| < {MISFIT_BAND * speeds.max():.3g}"
             )
     if found:
         warnings.warn(
-            f"the torques of '{robot.name}' near zero velocity do not follow the Coulomb sign law of the "
+            f"the torques of '{arm.name}' near zero velocity do not follow the Coulomb sign law of the "
             f"regressor (residual rms {'; '.join(found)}): friction there follows another law (simulate's "
             "smoothed Coulomb friction, or stiction) and every estimate is biased; leave those samples out with "
             "velocity_band (0.1 rad/s is 12 times simulate's default smoothing at dt = 1 ms), or simulate "
