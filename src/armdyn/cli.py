@@ -46,7 +46,7 @@ if TYPE_CHECKING:
     from typer._click.core import Context as ClickContext  # typer's own click, the base of typer.Context
 
     from armdyn.actuators.arm import ActuatedArm
-    from armdyn.actuators.stepping import DriveRecord
+    from armdyn.actuators.packing import DriveRecord
     from armdyn.control.drives import CurrentComputedTorque, DrivePID
     from armdyn.control.task import TaskComputedTorque, Tracking
     from armdyn.excitation import FourierTrajectory
@@ -1356,11 +1356,12 @@ def simulate(
         start = desired(0.0, arm.n)[0]
     if driven is not None:
         _activity.status(f"simulating {t_final:g} s of {arm.name} with its drives (compiled RK4)")
-        result = run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity)
+        result = cast("Result", run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity))
     else:
         progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
-        result = run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
-                     disturbance=None if not np.any(tau_d) else tau_d.copy(), progress=progress)  # fmt: skip
+        tau_d_run = None if not np.any(tau_d) else tau_d.copy()
+        result = cast("Result", run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
+                                    disturbance=tau_d_run, progress=progress))  # fmt: skip
     _check_finite(result)
     report = _report(result) if result.task is None else _task_report(result)
     reports = [report] + ([_drive_report(result, driven)] if driven is not None else [])
@@ -1599,7 +1600,9 @@ def demo(
     console.rule("[bold]Example 4.4-1: PD computed-torque control, kp = 100, kv = 20, RK4 with a 1 ms step")
     desired = trajectories.Sinusoid([0.1, 0.1], [0.5, 0.5], phase=[0.0, np.pi / 2])
     progress = _activity.bar("simulating Example 4.4-1")
-    result = run(arm, control.ComputedTorque(100.0, 20.0), desired, t_final=5.0, dt=1e-3, progress=progress)
+    result = cast(
+        "Result", run(arm, control.ComputedTorque(100.0, 20.0), desired, t_final=5.0, dt=1e-3, progress=progress)
+    )
     _report(result)
     folder.mkdir(exist_ok=True)
     result.plot(folder / "demo.png", title="Example 4.4-1: PD computed-torque control of the two-link arm")
@@ -1640,7 +1643,7 @@ def _demo_actuators(arm: Robot, desired: Sinusoid | Quintic | None, folder: Path
     console.print(f"Example 3.6-1: {formula}, poles {poles} (the book: -2.3, -8.7)")
     driven = actuators.representative_drives(arm, "dc")
     _activity.status("simulating the arm through its motors (compiled RK4 with the electrics)")
-    result = run(driven, control.DrivePID(20.0, 0.5, 20.0), desired, t_final=5.0, dt=1e-3)
+    result = cast("Result", run(driven, control.DrivePID(20.0, 0.5, 20.0), desired, t_final=5.0, dt=1e-3))
     _report(result)
     _drive_report(result, driven)
     result.plot(folder / "demo-drives.png", title="The two-link arm through DC motors: independent joint PID on "

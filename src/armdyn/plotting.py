@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     from mpl_toolkits.mplot3d import Axes3D  # type: ignore[import-untyped]  # mplot3d ships no type hints
     from mpl_toolkits.mplot3d.art3d import Line3D, Text3D  # type: ignore[import-untyped]
 
-    from armdyn.actuators.stepping import DriveRecord
+    from armdyn.actuators.packing import DriveRecord
     from armdyn.control.task import Tracking
     from armdyn.robot import Robot
     from armdyn.simulation import Ensemble, Result

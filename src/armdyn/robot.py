@@ -9,7 +9,7 @@ compiled kernels once, when it is made, and never changes afterwards.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +18,10 @@ from armdyn.dynamics import api
 from armdyn.dynamics import regressor as parameterization
 from armdyn.dynamics.packed import pack
 from armdyn.model.arm import ArmModel
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 
 class Robot(ArmModel):
@@ -69,8 +73,8 @@ class Robot(ArmModel):
     link_transform_derivatives = kinematics.link_transform_derivatives
 
     def plot(
-        self, q: object = None, ax: object = None, path: str | Path | None = None, title: str | None = None
-    ) -> object:
+        self, q: object = None, ax: Axes | None = None, path: str | Path | None = None, title: str | None = None
+    ) -> Figure:
         """The arm at one configuration as a stick figure: links, joint axes, base and tool frames
         (armdyn.plotting.plot_arm; the forward kinematics of Appendix A). A planar arm is drawn in 2-D, any
         other in 3-D, with equal scales in metres.

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import cast
 
 import numba
 import numpy as np
@@ -274,16 +275,18 @@ def _compiled(substituted: Derivation, n: int) -> CompiledClosedForm:
     namespace: dict[str, object] = {"cos": math.cos, "sin": math.sin, "sign": np.sign}
     exec(compile(python_source(substituted, [], returns=False), "<armdyn closed form>", "exec"), namespace)
     vector, matrix = "float64[::1]", "float64[:, ::1]"
-    one, batch = {}, {}
+    one: dict[str, Callable[..., int]] = {}
+    batch: dict[str, Callable[..., None]] = {}
     for name, (args, kind) in FUNCTIONS.items():
         result = matrix if kind == "matrix" else vector
         signature = f"({', '.join([vector] * len(args))}, {result})"
-        inner = numba.njit("void" + signature, fastmath={"contract"}, error_model="numpy")(namespace[name])
+        generated = cast(Callable[..., None], namespace[name])  # defined by the exec above
+        inner = numba.njit("void" + signature, fastmath={"contract"}, error_model="numpy")(generated)
         batch[name] = batch_loop(inner, len(args))
         checked = _checked_source(name, args, kind, n)
         scope = {"inner": inner, "LARGEST": inputs.LARGEST_STATE}
         exec(compile(checked, f"<armdyn closed form {name}, checked>", "exec"), scope)
-        one[name] = numba.njit("int64" + signature, error_model="numpy")(scope["checked"])
+        one[name] = numba.njit("int64" + signature, error_model="numpy")(cast(Callable[..., int], scope["checked"]))
     return CompiledClosedForm(n, one, batch)
 
 

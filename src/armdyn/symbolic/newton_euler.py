@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TypeAlias, cast
 
 import numpy as np
 
@@ -87,7 +88,7 @@ class Graph:
         return self.node(("in", name, None))
 
 
-Value = "Trace | float"
+Value: TypeAlias = "Trace | float"  # a scalar of the recursion: traced, or a constant folded
 
 
 @dataclass(frozen=True)
@@ -98,23 +99,23 @@ class Trace:
     graph: Graph = field(repr=False, compare=False)
     index: int
 
-    def __add__(self, other: object) -> Trace | float:
+    def __add__(self, other: Value) -> Value:
         return add(self, other)
 
     __radd__ = __add__
 
-    def __sub__(self, other: object) -> Trace | float:
+    def __sub__(self, other: Value) -> Value:
         return add(self, neg(other))
 
-    def __rsub__(self, other: object) -> Trace | float:
+    def __rsub__(self, other: Value) -> Value:
         return add(other, neg(self))
 
-    def __mul__(self, other: object) -> Trace | float:
+    def __mul__(self, other: Value) -> Value:
         return mul(self, other)
 
     __rmul__ = __mul__
 
-    def __neg__(self) -> Trace | float:
+    def __neg__(self) -> Value:
         return neg(self)
 
 
@@ -122,7 +123,7 @@ def _op(value: Trace) -> tuple:
     return value.graph.nodes[value.index]
 
 
-def neg(x: Trace | float) -> Trace | float:
+def neg(x: Value) -> Value:
     """-x: a constant folds, -(-y) is y, -(a - b) is b - a."""
     if not isinstance(x, Trace):
         return -x
@@ -134,13 +135,13 @@ def neg(x: Trace | float) -> Trace | float:
     return x.graph.node(("neg", x.index, None))
 
 
-def add(x: Trace | float, y: Trace | float) -> Trace | float:
+def add(x: Value, y: Value) -> Value:
     """x + y: 0 + y is y; x + (-y) is x - y (0 where y is x); operands in a fixed order so that x + y and
     y + x are one node."""
     if not isinstance(x, Trace) and not isinstance(y, Trace):
         return x + y
     if not isinstance(x, Trace):
-        x, y = y, x
+        return add(y, x)
     if not isinstance(y, Trace):
         if y == 0.0:
             return x
@@ -157,12 +158,12 @@ def add(x: Trace | float, y: Trace | float) -> Trace | float:
     return graph.node(("+", a, b))
 
 
-def mul(x: Trace | float, y: Trace | float) -> Trace | float:
+def mul(x: Value, y: Value) -> Value:
     """x y: 0 y is 0, 1 y is y, -1 y is -y, (-a) c is a (-c); operands in a fixed order."""
     if not isinstance(x, Trace) and not isinstance(y, Trace):
         return x * y
     if not isinstance(x, Trace):
-        x, y = y, x
+        return mul(y, x)
     if not isinstance(y, Trace):
         if y == 0.0:
             return 0.0
@@ -193,7 +194,7 @@ def snap(x: float) -> float:
     return float(x)
 
 
-def snap_relative(values: Sequence[float]) -> tuple[float, ...]:
+def snap_relative(values: Sequence[float] | np.ndarray) -> tuple[float, ...]:
     """The values with those below SNAP times the largest set to exactly 0: rotating a body's mass
     properties into its joint frame leaves rounding noise (6e-20 for a product of inertia that is 0)."""
     scale = max((abs(float(v)) for v in values), default=0.0)
@@ -203,34 +204,34 @@ def snap_relative(values: Sequence[float]) -> tuple[float, ...]:
 # ----- spatial algebra on lists of scalars (Featherstone 2008, chapter 2) -----------------------------
 
 
-def cross(a: Sequence, b: Sequence) -> list:
+def cross(a: Sequence[Value], b: Sequence[Value]) -> list[Value]:
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def rotate_transposed(R: Sequence, u: Sequence) -> list:
+def rotate_transposed(R: Sequence[Sequence[Value]], u: Sequence[Value]) -> list[Value]:
     """R^T u for R given by rows."""
     return [R[0][c] * u[0] + R[1][c] * u[1] + R[2][c] * u[2] for c in range(3)]
 
 
-def rotate(R: Sequence, u: Sequence) -> list:
+def rotate(R: Sequence[Sequence[Value]], u: Sequence[Value]) -> list[Value]:
     return [R[r][0] * u[0] + R[r][1] * u[1] + R[r][2] * u[2] for r in range(3)]
 
 
-def motion_to_child(R: Sequence, p: Sequence, m: Sequence) -> list:
+def motion_to_child(R: Sequence[Sequence[Value]], p: Sequence[Value], m: Sequence[Value]) -> list[Value]:
     """X m = [R^T w; R^T (u - p x w)] for a motion m = [w; u] in the parent's axes."""
     w, u = m[:3], m[3:]
     moved = [u[k] - c for k, c in enumerate(cross(p, w))]
     return rotate_transposed(R, w) + rotate_transposed(R, moved)
 
 
-def force_to_parent(R: Sequence, p: Sequence, f: Sequence) -> list:
+def force_to_parent(R: Sequence[Sequence[Value]], p: Sequence[Value], f: Sequence[Value]) -> list[Value]:
     """X^T f = [R n + p x (R g); R g] for a force f = [n; g] in the child's axes."""
     g = rotate(R, f[3:])
     n = rotate(R, f[:3])
     return [n[k] + c for k, c in enumerate(cross(p, g))] + g
 
 
-def motion_cross_axis(m: Sequence, axis: int) -> list:
+def motion_cross_axis(m: Sequence[Value], axis: int) -> list[Value]:
     """m x e_axis for a motion m = [w; u] and e_axis a unit motion vector (index 0..5)."""
     e = [0.0] * 6
     e[axis] = 1.0
@@ -238,7 +239,7 @@ def motion_cross_axis(m: Sequence, axis: int) -> list:
     return cross(w, ew) + [a + b for a, b in zip(cross(w, eu), cross(u, ew), strict=True)]
 
 
-def force_cross(v: Sequence, f: Sequence) -> list:
+def force_cross(v: Sequence[Value], f: Sequence[Value]) -> list[Value]:
     """v x* f = [w x n + u x g; w x g] for v = [w; u], f = [n; g]."""
     w, u, n, g = v[:3], v[3:], f[:3], f[3:]
     return [a + b for a, b in zip(cross(w, n), cross(u, g), strict=True)] + cross(w, g)
@@ -252,14 +253,14 @@ class Body:
     revolute: bool
     placement: tuple
     position: tuple
-    mass: float
+    mass: Value
     first_moment: tuple
     inertia: tuple  # Ixx Ixy Ixz Iyy Iyz Izz about the body origin
     armature: float
     viscous: float
     coulomb: tuple
 
-    def inertia_times(self, m: Sequence) -> list:
+    def inertia_times(self, m: Sequence[Value]) -> list[Value]:
         """I m = [I_O w + h x u; m u - h x w] for m = [w; u]."""
         i0, i1, i2, i3, i4, i5 = self.inertia
         w, u, h = m[:3], m[3:], self.first_moment
@@ -286,7 +287,10 @@ def bodies(model: np.ndarray) -> list[Body]:
     return out
 
 
-def joint_transform(graph: Graph, body: Body, i: int) -> tuple[list, list]:
+Frame: TypeAlias = "tuple[list[list[Value]], list[Value]]"  # (R by rows, p) of a joint in its parent's frame
+
+
+def joint_transform(graph: Graph, body: Body, i: int) -> Frame:
     """(R, p) of joint i in its parent's frame: R = P_R Rz(q_i), p = P_p (revolute); R = P_R, p = P_p + q_i P_R e_z."""
     P, p = body.placement, list(body.position)
     if body.revolute:
@@ -301,14 +305,16 @@ def joint_transform(graph: Graph, body: Body, i: int) -> tuple[list, list]:
 
 
 def motions(graph: Graph, arm: list[Body], g: Sequence[float], velocity: bool, acceleration: bool,
-            gravity: bool) -> tuple[list, list, list]:  # fmt: skip
+            gravity: bool) -> tuple[list[Frame], list[list[Value]], list[list[Value]]]:  # fmt: skip
     """The forward pass of the recursive Newton-Euler algorithm on traced inputs: each joint's (R, p), and
     each body's velocity v_i = X v_p + S qd_i and acceleration a_i = X a_p + S qdd_i + (v_i x S) qd_i, in
     its own frame, gravity entering as the base's upward acceleration (the parts selected by the flags)."""
-    n = len(arm)
-    v, a, frames = [None] * n, [None] * n, [None] * n
+    v: list[list[Value]] = []
+    a: list[list[Value]] = []
+    frames: list[Frame] = []
     for i, body in enumerate(arm):
-        R, p = frames[i] = joint_transform(graph, body, i)
+        R, p = joint_transform(graph, body, i)
+        frames.append((R, p))
         axis = 2 if body.revolute else 5
         parent_v = v[body.parent] if body.parent >= 0 else [0.0] * 6
         parent_a = a[body.parent] if body.parent >= 0 else [0.0, 0.0, 0.0] + [-x if gravity else 0.0 for x in g]
@@ -317,13 +323,13 @@ def motions(graph: Graph, arm: list[Body], g: Sequence[float], velocity: bool, a
         rate = graph.input(f"qd[{i}]") if velocity else 0.0
         accel = graph.input(f"qdd[{i}]") if acceleration else 0.0
         push = motion_cross_axis(Xv, axis)
-        v[i] = [Xv[k] + (rate if k == axis else 0.0) for k in range(6)]
-        a[i] = [Xa[k] + (accel if k == axis else 0.0) + push[k] * rate for k in range(6)]
+        v.append([Xv[k] + (rate if k == axis else 0.0) for k in range(6)])
+        a.append([Xa[k] + (accel if k == axis else 0.0) + push[k] * rate for k in range(6)])
     return frames, v, a
 
 
 def newton_euler(graph: Graph, model: np.ndarray, velocity: bool, acceleration: bool, gravity: bool,
-                 friction: bool) -> list:  # fmt: skip
+                 friction: bool) -> list[Value]:  # fmt: skip
     """tau of the recursive Newton-Euler algorithm on traced inputs q[i] (qd[i], qdd[i] where used), the
     parts selected by the flags, in its classical form (Luh, Walker and Paul 1980; customized as Khalil and
     Kleinfinger 1987): each body's angular velocity w, angular acceleration wd and origin acceleration a
@@ -333,9 +339,15 @@ def newton_euler(graph: Graph, model: np.ndarray, velocity: bool, acceleration: 
     arm = bodies(model)
     n = len(arm)
     g = [snap(model[GRAVITY + k]) for k in range(3)]
-    frames, w, wd, a, U, f = [None] * n, [None] * n, [None] * n, [None] * n, [None] * n, [None] * n
+    frames: list[Frame] = []
+    w: list[list[Value]] = []
+    wd: list[list[Value]] = []
+    a: list[list[Value]] = []
+    U: list[list[list[Value]]] = []
+    f: list[list[Value]] = []
     for i, body in enumerate(arm):
-        R, p = frames[i] = joint_transform(graph, body, i)
+        R, p = joint_transform(graph, body, i)
+        frames.append((R, p))
         if body.parent >= 0:
             parent = body.parent
             origin = [a[parent][r] + U[parent][r][0] * p[0] + U[parent][r][1] * p[1] + U[parent][r][2] * p[2]
@@ -347,19 +359,20 @@ def newton_euler(graph: Graph, model: np.ndarray, velocity: bool, acceleration: 
         rate = graph.input(f"qd[{i}]") if velocity else 0.0
         accel = graph.input(f"qdd[{i}]") if acceleration else 0.0
         if body.revolute:
-            w[i] = [w_in[0], w_in[1], w_in[2] + rate]
-            wd[i] = [wd_in[0] + w_in[1] * rate, wd_in[1] - w_in[0] * rate, wd_in[2] + accel]
-            a[i] = a_in
+            w.append([w_in[0], w_in[1], w_in[2] + rate])
+            wd.append([wd_in[0] + w_in[1] * rate, wd_in[1] - w_in[0] * rate, wd_in[2] + accel])
+            a.append(a_in)
         else:
-            w[i], wd[i] = w_in, wd_in
-            a[i] = [a_in[0] + 2.0 * w_in[1] * rate, a_in[1] - 2.0 * w_in[0] * rate, a_in[2] + accel]
-        U[i] = angular_operator(w[i], wd[i])
+            w.append(w_in)
+            wd.append(wd_in)
+            a.append([a_in[0] + 2.0 * w_in[1] * rate, a_in[1] - 2.0 * w_in[0] * rate, a_in[2] + accel])
+        U.append(angular_operator(w[i], wd[i]))
         h = body.first_moment
         force = [body.mass * a[i][r] + U[i][r][0] * h[0] + U[i][r][1] * h[1] + U[i][r][2] * h[2] for r in range(3)]
         spin = body.inertia_times(w[i] + [0.0] * 3)[:3]
         turn = body.inertia_times(wd[i] + [0.0] * 3)[:3]
-        f[i] = [t + c + m for t, c, m in zip(turn, cross(w[i], spin), cross(h, a[i]), strict=True)] + force
-    tau = [0.0] * n
+        f.append([t + c + m for t, c, m in zip(turn, cross(w[i], spin), cross(h, a[i]), strict=True)] + force)
+    tau: list[Value] = [0.0] * n
     for i in range(n - 1, -1, -1):
         body = arm[i]
         axis = 2 if body.revolute else 5
@@ -378,7 +391,7 @@ def newton_euler(graph: Graph, model: np.ndarray, velocity: bool, acceleration: 
     return tau
 
 
-def angular_operator(w: Sequence, wd: Sequence) -> list:
+def angular_operator(w: Sequence[Value], wd: Sequence[Value]) -> list[list[Value]]:
     """U = [wd]x + [w]x[w]x = [wd]x + w w^T - (w . w) 1 by rows: U r = wd x r + w x (w x r)."""
     wx, wy, wz = w
     xy, xz, yz = wx * wy, wx * wz, wy * wz
@@ -390,13 +403,13 @@ def angular_operator(w: Sequence, wd: Sequence) -> list:
     ]
 
 
-def rigid_body(mass: Value, first_moment: Sequence, inertia: Sequence) -> Body:
+def rigid_body(mass: Value, first_moment: Sequence[Value], inertia: Sequence[Value]) -> Body:
     """A body of the given mass properties (m, h, I_O in packed order) in its own frame, no joint."""
     return Body(-1, True, ((1, 0, 0), (0, 1, 0), (0, 0, 1)), (0, 0, 0), mass, tuple(first_moment), tuple(inertia), 0,
                 0, (0.0, 0.0))  # fmt: skip
 
 
-def body_regressor(v: Sequence, a: Sequence) -> list:
+def body_regressor(v: Sequence[Value], a: Sequence[Value]) -> list[list[Value]]:
     """The ten columns of Y with f = I a + v x* (I v) = Y phi, phi = (m, h, I_O in packed order): column k is
     f of a body whose one nonzero mass property is parameter k, equal to 1 (regressor.body_regressor)."""
     columns = []
@@ -408,7 +421,7 @@ def body_regressor(v: Sequence, a: Sequence) -> list:
     return columns
 
 
-def link_to_body(model: np.ndarray, i: int) -> list:
+def link_to_body(model: np.ndarray, i: int) -> list[list[Value]]:
     """T with phi_body = T phi_link for joint i (10 x 10, by rows): the link's ten parameters (about the link
     frame's origin, in its axes, in the regressor's order) carried into the body frame the recursion uses."""
     b = HEADER + STRIDE * i
@@ -418,7 +431,7 @@ def link_to_body(model: np.ndarray, i: int) -> list:
     return [[columns[c][k] for c in range(10)] for k in range(10)]
 
 
-def base_regressor(graph: Graph, model: np.ndarray, columns: Sequence[int]) -> list:
+def base_regressor(graph: Graph, model: np.ndarray, columns: Sequence[int]) -> list[Value]:
     """W(q, qd, qdd)[:, columns] by rows, W phi = tau (regressor.regressor; Atkeson, An and Hollerbach 1986):
     W[j, 10 i + c] = (X_i<-j S_j) . (Y_i T_i)[:, c] for each joint j that moves body i, with joint j's axis
     carried down the tree into body i's frame; the drive columns of joint j are qd_j, [qd_j > 0], [qd_j < 0]
@@ -426,7 +439,7 @@ def base_regressor(graph: Graph, model: np.ndarray, columns: Sequence[int]) -> l
     arm = bodies(model)
     n = len(arm)
     frames, v, a = motions(graph, arm, [snap(model[GRAVITY + k]) for k in range(3)], True, True, True)
-    W = [[0.0] * (14 * n) for _ in range(n)]
+    W: list[list[Value]] = [[0.0] * (14 * n) for _ in range(n)]
     axes: list[dict] = []  # axes[i][j]: joint j's motion axis in body i's frame
     for i, body in enumerate(arm):
         own = [1.0 if k == (2 if body.revolute else 5) else 0.0 for k in range(6)]
@@ -443,7 +456,7 @@ def base_regressor(graph: Graph, model: np.ndarray, columns: Sequence[int]) -> l
     return [W[j][c] for j in range(n) for c in columns]
 
 
-def composite_inertia_matrix(graph: Graph, model: np.ndarray) -> list:
+def composite_inertia_matrix(graph: Graph, model: np.ndarray) -> list[Value]:
     """M(q) by the composite-rigid-body algorithm (Featherstone 6.2) on traced q[i]: composite inertias
     (m, h, I_O) carried to each parent, M_ii = S^T I^c S + armature, then the column carried up the tree."""
     arm = bodies(model)
@@ -455,7 +468,7 @@ def composite_inertia_matrix(graph: Graph, model: np.ndarray) -> list:
         if parent >= 0:
             moved = carried_inertia(*frames[i], composite[i])
             composite[parent] = [x + y for x, y in zip(composite[parent], moved, strict=True)]
-    M = [[0.0] * n for _ in range(n)]
+    M: list[list[Value]] = [[0.0] * n for _ in range(n)]
     for i, body in enumerate(arm):
         mass, h, inertia = composite[i][0], composite[i][1:4], composite[i][4:]
         rigid = rigid_body(mass, h, inertia)
@@ -471,7 +484,7 @@ def composite_inertia_matrix(graph: Graph, model: np.ndarray) -> list:
     return [x for row in M for x in row]
 
 
-def carried_inertia(R: Sequence, p: Sequence, inertia: Sequence) -> list:
+def carried_inertia(R: Sequence[Sequence[Value]], p: Sequence[Value], inertia: Sequence[Value]) -> list[Value]:
     """A rigid-body inertia (m, h, I_O) in a child's frame, expressed in its parent's:
     h' = R h + m p, I_O' = R I_O R^T - [Rh]x [p]x - [p]x [Rh]x - m [p]x [p]x (as add_inertia_to_parent)."""
     mass, h, (i0, i1, i2, i3, i4, i5) = inertia[0], inertia[1:4], inertia[4:]
@@ -489,14 +502,19 @@ def carried_inertia(R: Sequence, p: Sequence, inertia: Sequence) -> list:
     return moved
 
 
-def coriolis_matrix(graph: Graph, model: np.ndarray) -> list:
+def coriolis_matrix(graph: Graph, model: np.ndarray) -> list[Value]:
     """The Christoffel-consistent Vm(q, qd) on traced q[i], qd[i], as coriolis.coriolis_core computes it
     (Echeandia and Wensing 2021, Algorithm 2): world frame, v_i = v_p + S_i qd_i, Sdot_i = v_i x S_i,
     composite I^c and B^c summed up the tree; C_ij = S_i^T (I^c_j Sdot_j + B^c_j S_j) and
     C_ji = Sdot_i^T I^c_j S_j + S_i^T B^c_j^T S_j for each ancestor i of j."""
     arm = bodies(model)
     n = len(arm)
-    poses, S, Sdot, velocity, IC, BC = [], [], [], [], [], []
+    poses: list[Frame] = []  # (R, p) of each joint in the world
+    S: list[list[Value]] = []
+    Sdot: list[list[Value]] = []
+    velocity: list[list[Value]] = []
+    IC: list[list[Value]] = []
+    BC: list[list[Value]] = []
     for i, body in enumerate(arm):
         R, p = joint_transform(graph, body, i)
         if body.parent >= 0:  # the pose in the world: R_w = R_wp R, p_w = p_wp + R_wp p
@@ -505,7 +523,7 @@ def coriolis_matrix(graph: Graph, model: np.ndarray) -> list:
             R = [[sum(Rp[r][k] * R[k][c] for k in range(3)) for c in range(3)] for r in range(3)]
         poses.append((R, p))
         z = [R[0][2], R[1][2], R[2][2]]
-        S.append(z + cross(p, z) if body.revolute else [0.0, 0.0, 0.0] + z)
+        S.append(z + cross(p, z) if body.revolute else [0.0, 0.0, 0.0, *z])
         rate = graph.input(f"qd[{i}]")
         parent_v = velocity[body.parent] if body.parent >= 0 else [0.0] * 6
         velocity.append([parent_v[k] + S[i][k] * rate for k in range(6)])
@@ -513,7 +531,7 @@ def coriolis_matrix(graph: Graph, model: np.ndarray) -> list:
         Sdot.append(cross(w, sw) + [a + b for a, b in zip(cross(w, su), cross(u, sw), strict=True)])
         IC.append(carried_inertia(R, p, [body.mass, *body.first_moment, *body.inertia]))
         BC.append(body_coriolis(velocity[i], IC[i]))
-    C = [[0.0] * n for _ in range(n)]
+    C: list[list[Value]] = [[0.0] * n for _ in range(n)]
     for j in range(n - 1, -1, -1):
         mass, h, inertia = IC[j][0], tuple(IC[j][1:4]), tuple(IC[j][4:])
         rigid = rigid_body(mass, h, inertia)
@@ -537,7 +555,7 @@ def coriolis_matrix(graph: Graph, model: np.ndarray) -> list:
     return [x for row in C for x in row]
 
 
-def body_coriolis(v: Sequence, inertia: Sequence) -> list:
+def body_coriolis(v: Sequence[Value], inertia: Sequence[Value]) -> list[Value]:
     """B = 1/2 [(v x*) I + (I v) xbar* - I (v x)] of a rigid body (m, h, I_O) as B11 (9, by rows) and l (3),
     B = [[B11, 0], [-[l]x, 0]] (coriolis.body_coriolis)."""
     wx, wy, wz, ux, uy, uz = v
@@ -572,7 +590,7 @@ class GeneratedFunction:
     name: str
     arguments: tuple[str, ...]
     graph: Graph
-    outputs: list
+    outputs: list[Value]
     shape: tuple[int, ...]
     order: list[int] = field(default_factory=list)
 
@@ -595,7 +613,7 @@ class GeneratedFunction:
         return counts
 
 
-def live_nodes(graph: Graph, outputs: list) -> list[int]:
+def live_nodes(graph: Graph, outputs: Sequence[Value]) -> list[int]:
     """The nodes the outputs need, in the graph's order (each after its operands)."""
     needed = set()
     stack = [x.index for x in outputs if isinstance(x, Trace)]
@@ -619,6 +637,7 @@ def generate(model: np.ndarray, name: str, base_columns: Sequence[int] = ()) -> 
         raise ModelError(f"generated code is for {', '.join(ARGUMENTS)}, got {name!r}")
     graph = Graph()
     n = int(model[N_JOINTS])
+    shape: tuple[int, ...]
     if name == "M":
         outputs, shape = composite_inertia_matrix(graph, model), (n, n)
     elif name == "Vm":
@@ -635,10 +654,13 @@ def generate(model: np.ndarray, name: str, base_columns: Sequence[int] = ()) -> 
 
 
 def statements(function: GeneratedFunction, literal: Callable[[float], str],
-               call: Callable[[str, str], str], coulomb: Callable[[str, tuple], str]) -> tuple[list, list]:  # fmt: skip
+               call: Callable[[str, str], str], coulomb: Callable[[str, tuple], str]
+               ) -> tuple[list[tuple[str, str]], list[str]]:  # fmt: skip
     """(assignments, output expressions): one (variable, expression) per live node, named x0, x1, ...;
     inputs are referred to by name."""
-    graph, names, lines = function.graph, {}, []
+    graph = function.graph
+    names: dict[int, str] = {}
+    lines: list[tuple[str, str]] = []
     for index in function.order:
         op, a, b = graph.nodes[index]
         if op == "in":
@@ -716,7 +738,7 @@ class GeneratedCode:
         ``base.names`` the regrouped combinations and ``base.regrouping`` the matrix (None without "Wb").
     """
 
-    def __init__(self, robot: object, functions: dict[str, GeneratedFunction], base: BaseParameters | None = None
+    def __init__(self, robot: Robot, functions: dict[str, GeneratedFunction], base: BaseParameters | None = None
                  ) -> None:  # fmt: skip
         self.robot = robot
         self.functions = functions
@@ -808,20 +830,23 @@ class CompiledCode:
         self.n = n = code.robot.n
         self.shapes = {name: f.shape for name, f in code.functions.items()}
         self.arguments = {name: f.arguments for name, f in code.functions.items()}
-        self._one, self._batch = {}, {}
+        self._one: dict[str, Callable[..., int]] = {}  # status 0 when computed (checked_entry)
+        self._batch: dict[str, Callable[..., None]] = {}
         vector, matrix = "float64[::1]", "float64[:, ::1]"
         for name, function in code.functions.items():
             namespace: dict[str, object] = {"math": math, "LARGEST": LARGEST}
             exec(compile(python_source(function), f"<armdyn generated {name}>", "exec"), namespace)
             arity = len(function.arguments)
+            generated = cast(Callable[..., None], namespace[name])  # defined by the exec above
             inner = numba.njit(f"void({', '.join([vector] * (arity + 1))})", fastmath={"contract"},
-                               error_model="numpy")(namespace[name])  # fmt: skip
+                               error_model="numpy")(generated)  # fmt: skip
             self._batch[name] = batch_loop(inner, arity)
             namespace["inner"] = inner
             exec(compile(checked_entry(function, n), f"<armdyn generated {name}, checked>", "exec"), namespace)
             result = matrix if len(function.shape) == 2 else vector
+            checked = cast(Callable[..., int], namespace["checked"])  # defined by the exec above
             self._one[name] = numba.njit(f"int64({', '.join([vector] * arity)}, {result})",
-                                         error_model="numpy")(namespace["checked"])  # fmt: skip
+                                         error_model="numpy")(checked)  # fmt: skip
 
     def tau(self, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
         """tau = M qdd + Vm qd + F + G.
@@ -1026,6 +1051,7 @@ def generate_code(arm: Robot, functions: Sequence[str] = FUNCTIONS) -> Generated
     """
     inputs.arm_argument(arm, Robot, numeric=True, why=" (use derive for closed forms in symbols)")
     packed = arm.packed
+    assert packed is not None  # a numeric arm is packed
     names = [functions] if isinstance(functions, str) else list(functions)
     unknown = [f for f in names if f not in ARGUMENTS]
     if unknown or not names:
