@@ -72,7 +72,7 @@ def scenarios(package: ModuleType, quick: bool) -> dict[str, tuple[Callable[[], 
     sinusoid = _first(package, "trajectories.Sinusoid")
     drive_pid = _first(package, "control.DrivePID", "actuators.DrivePID")
     puma, ur5 = package.models.puma560(), _ur5(package)
-    driven = _first(package, "actuators.puma560")()
+    driven = _first(package, "actuators.puma560_with_drives", "actuators.puma560")()
     runs = 100 if quick else 1000
     rng = np.random.default_rng(7)
     starts = rng.uniform(-0.2, 0.2, (runs, ur5.n))
@@ -82,7 +82,7 @@ def scenarios(package: ModuleType, quick: bool) -> dict[str, tuple[Callable[[], 
 
     def ur5_runs() -> object:
         law, path = computed_torque(100.0, 20.0), sinusoid(0.1, 0.5)
-        if many is not None and not hasattr(package.simulation, "MANY_RUNS_ALIAS"):
+        if many is not None:  # versions before simulate(..., runs=)
             return many(ur5, law, path, t_final=1.0, q0=starts, keep="summary").summaries
         return package.simulate(ur5, law, path, t_final=1.0, q0=starts, runs=runs).summaries
 

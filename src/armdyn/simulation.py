@@ -644,7 +644,7 @@ def simulate(
         When M(q) becomes singular or the state non-finite during the run (its ``result``
         holds the run up to then), or an adaptive solver fails.
     """
-    single_run_options = {"method": (method, "rk4"), "events": (tuple(events), ()), "progress": (progress, None),
+    single_run_options = {"method": (method, "rk4"), "events": (events, ()), "progress": (progress, None),
                           "coulomb_smoothing": (coulomb_smoothing, "auto")}  # fmt: skip
     per_run = {"runs": runs, "plants": plants, "models": models, "gains": gains, "keep": keep, "after": after,
                "threads": threads}  # fmt: skip
@@ -735,17 +735,33 @@ class DrivenPlant(Protocol):
 
 def _refuse_options(arm: object, options: Mapping[str, tuple[object, object]]) -> None:
     """An ArgumentError naming the options given that do not apply to this plant or route."""
-    given = [name for name, (value, default) in options.items()
-             if not (value is default or (isinstance(value, (str, tuple)) and value == default))]  # fmt: skip
+    given = [name for name, (value, default) in options.items() if not _is_default(value, default)]
     if given:
         what = "an arm with drives" if isinstance(arm, DrivenPlant) else "many runs at once"
         raise ArgumentError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to {what}")
 
 
+def _is_default(value: object, default: object) -> bool:
+    """Whether an option was left at its default (an empty sequence of events included)."""
+    if value is default:
+        return True
+    if isinstance(default, tuple):
+        return isinstance(value, (tuple, list)) and len(value) == 0
+    return isinstance(value, str) and value == default
+
+
 def _holds_runs(q0: object, qd0: object, disturbance: object, trajectory: object) -> bool:
-    """Whether an argument holds one row (or one trajectory) per run."""
-    rows = any(np.ndim(value) == 2 for value in (q0, qd0, disturbance) if not callable(value))
-    return rows or isinstance(trajectory, (list, tuple))
+    """Whether an argument holds one row (or one trajectory) per run; a ragged or odd argument does not (the
+    single run's checks then name it)."""
+    for value in (q0, qd0, disturbance):
+        if value is None or callable(value):
+            continue
+        try:
+            if np.ndim(value) == 2:
+                return True
+        except ValueError:
+            continue
+    return isinstance(trajectory, (list, tuple))
 
 
 def _simulate_driven(

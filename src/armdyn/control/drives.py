@@ -208,8 +208,27 @@ VoltagePD = DrivePID
 
 
 def drive_law(controller: object, arm: ActuatedArm) -> tuple[int, np.ndarray, np.ndarray | None]:
-    """The compiled drive-level law of ``controller`` for ``arm`` (see ``DrivePID.drive_law``), or an
-    ArgumentError naming the laws an arm with drives runs."""
+    """The compiled drive-level law of ``controller`` for ``arm`` (see ``DrivePID.drive_law``).
+
+    Parameters
+    ----------
+    controller : DrivePID or CurrentComputedTorque
+        The law.
+    arm : ActuatedArm
+        The arm with its drives.
+
+    Returns
+    -------
+    tuple
+        (the law's code in armdyn.dynamics.drives, gains (4, n), the current loops' bandwidths or None).
+
+    Raises
+    ------
+    armdyn.ArgumentError
+        When the controller is not a drive-level law.
+    armdyn.ModelError
+        When the law does not fit the drives or a gain is invalid.
+    """
     if not isinstance(controller, (DrivePID, CurrentComputedTorque)):
         raise ArgumentError("an arm with drives runs a drive-level law: controller must be an armdyn.control.DrivePID "
                             f"or CurrentComputedTorque, got {type(controller).__name__}")  # fmt: skip

@@ -268,9 +268,7 @@ def regressor(arm: ArmModel, q: object, qd: object, qdd: object, out: np.ndarray
     return _stacked(arm, q, qd, qdd, None, out)
 
 
-def _stacked(
-    arm: ArmModel, q: object, qd: object, qdd: object, columns: np.ndarray | None, out: object
-) -> np.ndarray:
+def _stacked(arm: ArmModel, q: object, qd: object, qdd: object, columns: np.ndarray | None, out: object) -> np.ndarray:
     """W[..., columns] (all columns for None), a block of states at a time into one result."""
     _check_arm(arm)
     n = arm.n
