@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, NoReturn, SupportsFloat, cast
 import numpy as np
 import typer
 from numba.core import event as numba_events
+from numpy.typing import ArrayLike
 from rich.console import Console
 from rich.table import Table
 from typer._click.exceptions import NoArgsIsHelpError  # typer's own click names it nowhere public
@@ -1125,11 +1126,11 @@ def _csv_bytes(path: str) -> bytes:
     return data
 
 
-def _controller(kind: str, kp: object, kv: object, ki: object, period: float, limit: object) -> object:
+def _controller(kind: str, kp: object, kv: object, ki: object, period: float, limit: ArrayLike) -> object:
     """The controller of ``simulate``: gains and torque limit one number or one per joint."""
     from armdyn import control
 
-    kinds = {
+    kinds: dict[str, Callable[[], Callable[..., np.ndarray] | None]] = {
         "computed-torque": lambda: control.ComputedTorque(kp, kv, ki),
         "pd-gravity": lambda: control.PDGravity(kp, kv),
         "pid": lambda: control.PID(kp, kv, ki),
@@ -1139,8 +1140,10 @@ def _controller(kind: str, kp: object, kv: object, ki: object, period: float, li
         _fail(f"--controller must be one of {', '.join(kinds)}, got '{kind}'")
     controller = kinds[kind]()
     limited = not np.all(np.asarray(limit, dtype=float) == np.inf)
-    if controller is None and (period != 0 or limited):
-        _fail("--period and --torque-limit need a controller (--controller none applies no torque)")
+    if controller is None:
+        if period != 0 or limited:
+            _fail("--period and --torque-limit need a controller (--controller none applies no torque)")
+        return None
     if limited:  # Saturated refuses NaN and limits <= 0
         controller = control.Saturated(controller, limit)
     if period != 0:  # Digital refuses a negative or non-finite period

@@ -8,8 +8,9 @@ which the compiled simulation loop runs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import TypeVar, cast
 
 import numpy as np
 from numba import njit
@@ -117,7 +118,9 @@ def quintic_blend(u: T) -> tuple[T, T, T]:
     return 10 * u**3 - 15 * u**4 + 6 * u**5, 30 * u**2 - 60 * u**3 + 30 * u**4, 60 * u - 180 * u**2 + 120 * u**3
 
 
-compiled_quintic_blend = njit(inline="always", **NUMBA_OPTIONS)(quintic_blend)
+compiled_quintic_blend = cast(
+    Callable[[float], tuple[float, float, float]], njit(inline="always", **NUMBA_OPTIONS)(quintic_blend)
+)
 
 
 @dataclass(frozen=True)
