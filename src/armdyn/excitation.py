@@ -627,7 +627,7 @@ def identification_data(
         When the simulation stops.
     """
     from armdyn import control
-    from armdyn.simulation import PythonLoopWarning, simulate
+    from armdyn.simulation import PythonLoopWarning, Result, simulate
 
     inputs.arm_argument(arm, Robot, name="arm", numeric=True)
     n = arm.n
@@ -652,6 +652,7 @@ def identification_data(
             warnings.simplefilter("ignore", PythonLoopWarning)
             run = simulate(arm, law, trajectory, t_final=t_final, dt=dt, q0=q_start, qd0=qd_start,
                            coulomb_smoothing=0.0)  # fmt: skip
+        assert isinstance(run, Result)  # one run (no per-run argument was given)
         t, q, qd, qdd, tau = run.t, run.q, run.qd, run.qdd, run.tau
     else:
         if controller is not None:

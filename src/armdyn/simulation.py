@@ -25,10 +25,11 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 from numba import njit, prange
+from numpy.typing import ArrayLike
 
 from armdyn import control, inputs, memory, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
@@ -60,6 +61,12 @@ from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from armdyn.actuators.packing import DriveRecord
+    from armdyn.control.task import Tracking
+
 SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau", "bdf": "BDF", "lsoda": "LSODA"}
 """The adaptive methods: simulate's names for them (taken in any case) and scipy's."""
 ADAPTIVE = tuple(SOLVERS)
@@ -89,9 +96,9 @@ class Result:
     arm: Robot
     info: dict = field(default_factory=dict)
     energy_of: Callable[[], np.ndarray] | None = field(default=None, repr=False)
-    task: object = None
+    task: Tracking | None = None
     """The task-space record (armdyn.control.Tracking: y, y_d, error) under a task-space controller."""
-    drives: object = None
+    drives: DriveRecord | None = None
     """The drives' record (armdyn.actuators.DriveRecord: state, voltages, currents) of an arm with actuators."""
 
     @cached_property
@@ -104,13 +111,13 @@ class Result:
         """e = q_d - q (None without a trajectory)."""
         return None if self.q_d is None else self.q_d - self.q
 
-    def plot(self, path: str | Path | None = None, title: str | None = None) -> object:
+    def plot(self, path: str | Path | None = None, title: str | None = None) -> Figure:
         """Joint values with their desired values, tracking errors and torques (matplotlib figure)."""
         from armdyn.plotting import plot_result
 
         return plot_result(self, path, title)
 
-    def animate(self, path: str | Path, **options: object) -> Path:
+    def animate(self, path: str | Path, **options: Any) -> Path:
         """An animation of the run: the arm moving with its desired and actual tool paths, beside the
         tracking error with a moving time cursor (armdyn.plotting.animate).
 
@@ -142,7 +149,7 @@ class Result:
 
         return png_bytes(self.plot())
 
-    def plot_task(self, path: str | Path | None = None, title: str | None = None) -> object:
+    def plot_task(self, path: str | Path | None = None, title: str | None = None) -> Figure:
         """The task-space path over the desired one and the task error (a run under a task-space law)."""
         from armdyn.plotting import plot_task
 
@@ -159,7 +166,7 @@ class Result:
         for name, values in (("q", self.q), ("qd", self.qd), ("qdd", self.qdd), ("tau", self.tau)):
             columns[name] = values
         if self.q_d is not None:
-            columns["q_d"], columns["e"] = self.q_d, self.error
+            columns["q_d"], columns["e"] = self.q_d, self.q_d - self.q  # the error, e = q_d - q
         header = ["t"] + [f"{name}{i + 1}" for name in list(columns)[1:] for i in range(n)] + ["energy"]
         table = np.hstack([*columns.values(), self.energy[:, None]])
         if self.task is not None:
@@ -175,9 +182,10 @@ class Result:
             writer.writerows(table.tolist())
 
     def to_npz(self, path: str | Path) -> None:
-        arrays = {"t": self.t, "q": self.q, "qd": self.qd, "qdd": self.qdd, "tau": self.tau, "energy": self.energy}
+        arrays: dict[str, Any] = {"t": self.t, "q": self.q, "qd": self.qd, "qdd": self.qdd, "tau": self.tau,
+                                  "energy": self.energy}  # fmt: skip
         if self.q_d is not None:
-            arrays |= {"q_d": self.q_d, "error": self.error}
+            arrays |= {"q_d": self.q_d, "error": self.q_d - self.q}
         if self.task is not None:
             arrays |= {"y": self.task.y, "y_d": self.task.y_d, "task_error": self.task.error}
         np.savez(path, **arrays)
@@ -366,6 +374,7 @@ def packed_plants(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
     """Compiled plants with their Coulomb friction taken out (the loop adds the smoothed one)."""
     plants, coulombs = [], []
     for arm in arms:
+        assert arm.packed is not None, "the callers refuse symbolic arms"
         buffer = arm.packed.copy()  # packed once per Robot
         for i in range(arm.n):
             base = HEADER + STRIDE * i
@@ -404,11 +413,11 @@ def _callable_argument(value: object, name: str, what: str, example: str) -> Non
     if value is None:
         return
     if isinstance(value, type):
-        raise ModelError(
+        raise ArgumentError(
             f"{name} must be {what}, got the class {value.__name__} itself, not an object (e.g. {example})"
         )
     if not callable(value):
-        raise ModelError(f"{name} must be {what}, got {type(value).__name__}")
+        raise ArgumentError(f"{name} must be {what}, got {type(value).__name__}")
 
 
 def _check_limit(limit: object, n: int) -> None:
@@ -449,8 +458,8 @@ def _events(arm: Robot, events: object) -> list[tuple[float, Robot]]:
             raise ModelError(f"each event must be a (time, arm) pair, got {event!r}") from None
         if not _is_time(time):
             raise ModelError(f"an event time must be a finite number of seconds >= 0, got {reprlib.repr(time)}")
-        if not isinstance(plant, Robot) or plant.n != arm.n:
-            raise ModelError(f"the arm of the event at t = {time} must be a Robot with {arm.n} joints")
+        if not isinstance(plant, Robot) or plant.n != arm.n or plant.is_symbolic:
+            raise ModelError(f"the arm of the event at t = {time} must be a numeric Robot with {arm.n} joints")
         checked.append((float(time), plant))
     return sorted(checked, key=lambda e: e[0])
 
@@ -524,14 +533,14 @@ def step_count(t_final: float, dt: float, n: int, adaptive: bool) -> int:
 
 
 def simulate(
-    arm: Robot,
+    arm: Robot | DrivenPlant,
     controller: object = None,
     trajectory: object = None,
     t_final: float = 5.0,
     dt: float = 1e-3,
     method: str = "rk4",
-    q0: Sequence[float] | None = None,
-    qd0: Sequence[float] | None = None,
+    q0: ArrayLike | None = None,
+    qd0: ArrayLike | None = None,
     disturbance: object = None,
     events: Sequence[tuple[float, Robot]] = (),
     coulomb_smoothing: float | str = "auto",
@@ -562,8 +571,8 @@ def simulate(
 
     Parameters
     ----------
-    arm : Robot
-        The plant.
+    arm : Robot or ActuatedArm
+        The plant: a numeric arm, or an arm with its drives (any DrivenPlant).
     controller : callable, optional
         None (zero torque), one of armdyn.control's, or any callable
         ``controller(t, q, qd, q_d, qd_d, qdd_d, e_int) -> tau``; one that takes a ``plant``
@@ -628,23 +637,25 @@ def simulate(
     ModelError
         When t_final or dt is not a positive number (or is 1e15 or more), or the run would
         record more samples than MAX_SAMPLES or than the memory available holds (the message
-        says how much it needs); when q0 or qd0 has the wrong shape; when the controller, the
-        trajectory, the progress callback or a disturbance law is neither None nor a callable
-        object (a class, such as control.PID for control.PID(kp, kv), included), the
-        controller's model does not match the arm, a Saturated limit is not one number or one
-        per joint, or a Digital period is not a whole number of steps (or meets an adaptive
-        method); when events is not a sequence of (time >= 0, Robot) pairs, coulomb_smoothing
-        is not "auto" or a number >= 0, or the method is unknown (the message lists the
-        methods); and during the run when a controller, trajectory or disturbance of the
-        user's returns other than n finite values (the message names which).
+        says how much it needs); when q0 or qd0 has the wrong shape; when the controller's model
+        does not match the arm, a Saturated limit is not one number or one per joint, or a
+        Digital period is not a whole number of steps (or meets an adaptive method); when events
+        is not a sequence of (time >= 0, numeric Robot) pairs, coulomb_smoothing is not "auto" or
+        a number >= 0, the method is unknown (the message lists the methods), or a disturbance is
+        neither a callable nor one or n finite numbers; and during the
+        run when a controller, trajectory or disturbance of the user's returns other than n
+        finite values (the message names which).
     armdyn.ArgumentError
-        When the plant is neither a Robot nor an arm with drives, or an option does not apply to the
-        plant or to many runs (the message names it).
+        When the plant is neither a numeric Robot nor an arm with drives, an option does not apply to
+        the plant or to many runs (the message names it), or the controller, the trajectory or the
+        progress callback is neither None nor a callable object (a class, such as control.PID for
+        control.PID(kp, kv), included), or plants or models is not a Robot or Plants.
     SimulationError
         When M(q) becomes singular or the state non-finite during the run (its ``result``
         holds the run up to then), or an adaptive solver fails.
     """
-    single_run_options = {"method": (method, "rk4"), "events": (events, ()), "progress": (progress, None),
+    given_events = tuple(events) if isinstance(events, list) else events  # a generator is read once, by _events
+    single_run_options = {"method": (method, "rk4"), "events": (given_events, ()), "progress": (progress, None),
                           "coulomb_smoothing": (coulomb_smoothing, "auto")}  # fmt: skip
     per_run = {"runs": runs, "plants": plants, "models": models, "gains": gains, "keep": keep, "after": after,
                "threads": threads}  # fmt: skip
@@ -652,7 +663,9 @@ def simulate(
         _refuse_options(arm, {**single_run_options, "disturbance": (disturbance, None),
                               **{name: (value, None) for name, value in per_run.items()}})  # fmt: skip
         return _simulate_driven(arm, controller, trajectory, t_final, dt, q0, qd0, step)
-    inputs.arm_argument(arm, Robot, "arm", why=" (simulate takes a numeric Robot or an armdyn.actuators.ActuatedArm)")
+    inputs.arm_argument(
+        arm, Robot, "arm", numeric=True, why=" (simulate takes a numeric Robot or an armdyn.actuators.ActuatedArm)"
+    )
     if step is not None:
         raise ArgumentError("step applies to an arm with drives (a Robot's RK4 step is dt)")
     if any(value is not None for value in per_run.values()) or _holds_runs(q0, qd0, disturbance, trajectory):
@@ -668,11 +681,11 @@ def simulate(
         trajectory, "trajectory", "None or a callable t -> (q_d, qd_d, qdd_d)", "armdyn.trajectories.Sinusoid(a, f)"
     )
     _callable_argument(progress, "progress", "None or a callable taking the fraction done", "print")
-    q0, qd0 = (np.zeros(n) if x is None else _one_state(x, n, name) for x, name in ((q0, "q0"), (qd0, "qd0")))
+    start, velocity = (np.zeros(n) if x is None else _one_state(x, n, name) for x, name in ((q0, "q0"), (qd0, "qd0")))
     if disturbance is not None and (isinstance(disturbance, type) or not callable(disturbance)):  # a class: no law
         disturbance = np.broadcast_to(_one_state(disturbance, n, "disturbance", allow_scalar=True), (n,)).copy()
-    events = _events(arm, events)
-    arms = [arm] + [e[1] for e in events]
+    plant_events = _events(arm, events)
+    arms = [arm] + [e[1] for e in plant_events]
     steps = step_count(t_final, dt, n, adaptive)
     law = controller
     spec, period, controller = unwrapped_law(controller, n)
@@ -684,7 +697,8 @@ def simulate(
         and (disturbance is None or not callable(disturbance))
         and (spec.model is None or not spec.model.is_symbolic)
     )
-    setup = _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, coulomb_smoothing) \
+    setup = _compiled_setup(arm, arms, plant_events, spec, period, trajectory, start, disturbance, dt,
+                            coulomb_smoothing) \
         if compiled else None  # fmt: skip
     if not compiled and (_users_own(controller) or _users_own(trajectory) or callable(disturbance)):
         warnings.warn(
@@ -699,16 +713,17 @@ def simulate(
         "trajectory": trajectories.describe_trajectory(trajectory),
     }
     if adaptive:
-        result = _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method,
-                           coulomb_smoothing, progress, setup)  # fmt: skip
+        result = _adaptive(arms, plant_events, controller, trajectory, start, velocity, disturbance, steps, dt,
+                           method, coulomb_smoothing, progress, setup)  # fmt: skip
     elif compiled:
-        result = _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup)
+        result = _compiled_rk4(arm, arms, plant_events, trajectory, start, velocity, steps, dt, progress, setup)
     else:
-        result = _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt,
-                             coulomb_smoothing)  # fmt: skip
+        result = _python_rk4(arms, plant_events, controller, period, trajectory, start, velocity, disturbance,
+                             steps, dt, coulomb_smoothing)  # fmt: skip
     result.info.update(described)
-    if callable(getattr(law, "tracking", None)):  # a task-space law records its task error
-        result.task = law.tracking(arm, result.t, result.q)
+    tracking = getattr(law, "tracking", None)
+    if callable(tracking):  # a task-space law records its task error
+        result.task = tracking(arm, result.t, result.q)
     return result
 
 
@@ -726,11 +741,11 @@ class DrivenPlant(Protocol):
 
     def packed_drives(self) -> np.ndarray: ...
 
-    def stable_step(self, q: object, bandwidth: object = None) -> float: ...
+    def stable_step(self, q: ArrayLike, bandwidth: ArrayLike | None = None) -> float: ...
 
-    def initial_state(self, q: object, qd: object = None) -> np.ndarray: ...
+    def initial_state(self, q: ArrayLike, qd: ArrayLike | None = None) -> np.ndarray: ...
 
-    def drive_record(self, states: np.ndarray, applied: np.ndarray) -> object: ...
+    def drive_record(self, states: np.ndarray, applied: np.ndarray) -> DriveRecord: ...
 
 
 def _refuse_options(arm: object, options: Mapping[str, tuple[object, object]]) -> None:
@@ -750,18 +765,10 @@ def _is_default(value: object, default: object) -> bool:
     return isinstance(value, str) and value == default
 
 
-def _holds_runs(q0: object, qd0: object, disturbance: object, trajectory: object) -> bool:
-    """Whether an argument holds one row (or one trajectory) per run; a ragged or odd argument does not (the
-    single run's checks then name it)."""
-    for value in (q0, qd0, disturbance):
-        if value is None or callable(value):
-            continue
-        try:
-            if np.ndim(value) == 2:
-                return True
-        except ValueError:
-            continue
-    return isinstance(trajectory, (list, tuple))
+def _holds_runs(q0: ArrayLike | None, qd0: ArrayLike | None, disturbance: object, trajectory: object) -> bool:
+    """Whether an argument holds one row (or one trajectory) per run."""
+    rows = any(_rows(value) is not None for value in (q0, qd0, disturbance) if not callable(value))
+    return rows or isinstance(trajectory, (list, tuple))
 
 
 def _simulate_driven(
@@ -795,6 +802,7 @@ def _simulate_driven(
     applied, torques = np.empty((samples, n)), np.empty((samples, n))
     accelerations, references = np.empty((samples, n)), np.empty((samples, n))
     mechanical = arm.mechanical_robot()
+    assert mechanical.packed is not None, "an ActuatedArm refuses symbolic arms"
     stopped = run_drives(mechanical.packed, drives, gains, law, path[0], path[1], start, y, dt / substeps, substeps,
                          times, states, applied, torques, accelerations, references)  # fmt: skip
     rows = samples if stopped < 0 else stopped
@@ -804,7 +812,7 @@ def _simulate_driven(
             "trajectory": trajectories.describe_trajectory(trajectory)}  # fmt: skip
     result = Result(times[:rows], q, qd, accelerations[:rows], torques[:rows],
                     references[:rows] if trajectory is not None else None, mechanical, info,
-                    lambda: mechanical.kinetic_energy(q, qd) + mechanical.potential_energy(q))  # fmt: skip
+                    lambda: np.asarray(mechanical.kinetic_energy(q, qd) + mechanical.potential_energy(q)))  # fmt: skip
     result.drives = arm.drive_record(states[:rows], applied[:rows])
     if stopped >= 0:
         raise SimulationError(
@@ -942,7 +950,9 @@ def _no_coulomb(link):
     return dataclasses.replace(link, coulomb=(0.0, 0.0))
 
 
-def _desired_of(trajectory: object, t: float, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _desired_of(
+    trajectory: Callable[[float], tuple[ArrayLike, ArrayLike, ArrayLike]] | None, t: float, q0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(q_d, qd_d, qdd_d) at t, each checked to be n finite values (a scalar or one value for every joint)."""
     if trajectory is None:
         return q0, np.zeros_like(q0), np.zeros_like(q0)
@@ -954,19 +964,19 @@ def _desired_of(trajectory: object, t: float, q0: np.ndarray) -> tuple[np.ndarra
             f"the trajectory must return (q_d, qd_d, qdd_d), got {reprlib.repr(values)} at t = {t}"
         ) from None
     n = q0.shape[0]
-    return tuple(
-        _returned(value, n, f"the trajectory's {name} at t = {t}")
-        for value, name in ((q_d, "q_d"), (qd_d, "qd_d"), (qdd_d, "qdd_d"))
+    return (
+        _returned(q_d, n, f"the trajectory's q_d at t = {t}"),
+        _returned(qd_d, n, f"the trajectory's qd_d at t = {t}"),
+        _returned(qdd_d, n, f"the trajectory's qdd_d at t = {t}"),
     )
 
 
-def _returned(value: object, n: int, what: str) -> np.ndarray:
+def _returned(value: ArrayLike, n: int, what: str) -> np.ndarray:
     """What a callable of the user's returned, as n finite floats, a scalar or a single value
     standing for every joint (as armdyn's trajectories of scalar parameters give); or a
     ModelError naming ``what``."""
-    usual = isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (n,)
-    if usual and np.isfinite(value).all():  # once per step: no further checks
-        return value
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (n,) and np.isfinite(value).all():
+        return value  # the usual case, once per step: no further checks
     try:
         shape = np.shape(value)
     except (TypeError, ValueError):  # a ragged sequence: inputs.state names it
@@ -983,7 +993,13 @@ def _torque(controller, plant, t, q, qd, desired, e_int, eps):
     return _one_state(tau, q.shape[0], f"the controller's torque at t = {t}", allow_scalar=True)
 
 
-def _tau_d(disturbance: object, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+def _tau_d(
+    disturbance: np.ndarray | Callable[[float, np.ndarray, np.ndarray], ArrayLike] | None,
+    t: float,
+    q: np.ndarray,
+    qd: np.ndarray,
+) -> np.ndarray:
+    """tau_d at (t, q, qd): the run's constant (n,) disturbance, or its law's value checked."""
     if disturbance is None:
         return np.zeros_like(q)
     if callable(disturbance):
@@ -1071,8 +1087,9 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
     def compiled_rate(t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         singular = continuous_rate(t, x, setup[0], setup[1], setup[2], buffers[0], buffers[1])
         if singular >= 0:
-            raise _stopped(arms[0], STOPPED_SINGULAR, singular, t, x[:n], Result(times[:0], *[np.empty((0, n))] * 4,
-                                                                          None, arms[0]))  # fmt: skip
+            empty = np.empty((0, n))
+            raise _stopped(arms[0], STOPPED_SINGULAR, singular, t, x[:n],
+                           Result(times[:0], empty, empty, empty, empty, None, arms[0]))  # fmt: skip
         return buffers[0].copy(), buffers[1].copy()
 
     rate_and_torque = compiled_rate if setup is not None else python_rate
@@ -1227,12 +1244,12 @@ def plant_variants(
     Raises
     ------
     armdyn.ModelError
-        When the arm is symbolic, count is not a positive integer, or a value has the wrong
-        shape or breaks its rule (negative mass, a scale <= 0, moments breaking the triangle
-        inequality).
+        When count is not a positive integer, or a value has the wrong shape or breaks its rule
+        (negative mass, a scale <= 0, moments breaking the triangle inequality).
+    armdyn.ArgumentError
+        When the arm is not a numeric Robot.
     """
-    if not isinstance(arm, Robot):
-        raise ModelError(f"arm must be an armdyn Robot, got {type(arm).__name__}")
+    inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (variants are packed models)")
     count = inputs.integer(count, "count", 1)
     n = arm.n
     mass = _per_variant(payload_mass, "payload_mass", count, ())
@@ -1289,9 +1306,11 @@ def nominal(arm: Robot) -> Nominal:
 
     Raises
     ------
-    armdyn.ModelError
-        When the arm is symbolic.
+    armdyn.ArgumentError
+        When the arm is not a numeric Robot.
     """
+    inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (a packed model)")
+    assert arm.packed is not None, "arm_argument refused a symbolic arm"
     base, coulomb = packed_plants([arm])
     tool = int(arm.packed[TOOL_LINK])
     start = HEADER + STRIDE * tool
@@ -1481,7 +1500,9 @@ class Ensemble:
         """
         import xarray
 
-        variables = {name: (("run", "joint"), self.summaries[:, k]) for k, name in enumerate(SUMMARY_NAMES)}
+        variables: dict[str, tuple[tuple[str, ...], np.ndarray]] = {
+            name: (("run", "joint"), self.summaries[:, k]) for k, name in enumerate(SUMMARY_NAMES)
+        }
         variables |= {name: (("run", "time", "joint"), values) for name, values in self.samples.items()}
         variables |= {"stopped_at": (("run",), self.outcome[:, 0]), "reason": (("run",), self.outcome[:, 1])}
         coordinates = {"run": np.arange(self.runs), "joint": self.arm.joint_names}
@@ -1532,7 +1553,9 @@ def launch_many(
     chunk = law[2] * max(1, 256 // law[2])  # whole sample periods of a Digital law
     previous = numba.get_num_threads()
     if threads is not None:
-        numba.set_num_threads(inputs.integer(threads, "threads", 1, numba.config.NUMBA_NUM_THREADS))
+        # numba.config sets its options when imported, unseen by a type checker
+        largest = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+        numba.set_num_threads(inputs.integer(threads, "threads", 1, largest))
     try:
         run_many(plants, models, law, path, starts, (dt, rows, chunk, every, after), (summaries, outcome, *samples))
     finally:
@@ -1560,27 +1583,38 @@ def _variants(value: object, arm: Robot, runs: int, name: str) -> tuple[np.ndarr
         packed, coulomb = packed_plants([value])
         return packed, coulomb, np.zeros(runs, dtype=np.int64)
     if isinstance(value, Plants):
+        assert arm.packed is not None, "many runs refuse a symbolic arm"
         if value.arm.n != arm.n or value.packed.shape[1] != arm.packed.shape[0]:
             raise ModelError(f"{name} must vary an arm with the plant's {arm.n} joints")
         if len(value) not in (1, runs):
             raise ModelError(f"{name} holds {len(value)} variants: give 1 or one per run ({runs})")
         return value.packed, value.coulomb, np.arange(runs, dtype=np.int64) % len(value)
-    raise ModelError(f"{name} must be None, a Robot or armdyn.simulation.Plants (plant_variants), got "
-                     f"{type(value).__name__}")  # fmt: skip
+    raise ArgumentError(f"{name} must be None, a Robot or armdyn.simulation.Plants (plant_variants), got "
+                        f"{type(value).__name__}")  # fmt: skip
 
 
 def _paths(trajectory: object, runs: int, n: int) -> tuple[int, np.ndarray]:
     """The compiled kind and (runs, 4, n) parameters of one trajectory or one per run (of one kind)."""
-    many = isinstance(trajectory, (list, tuple))
-    if many and len(trajectory) != runs:
-        raise ModelError(f"give one trajectory or one per run ({runs}), got {len(trajectory)}")
-    specs = [trajectories.packed(path, n) for path in (trajectory if many else [trajectory])]
-    if any(spec is None for spec in specs):
+    paths = list(trajectory) if isinstance(trajectory, (list, tuple)) else [trajectory]
+    if isinstance(trajectory, (list, tuple)) and len(paths) != runs:
+        raise ModelError(f"give one trajectory or one per run ({runs}), got {len(paths)}")
+    packed = [trajectories.packed(path, n) for path in paths]
+    specs = [spec for spec in packed if spec is not None]
+    if len(specs) != len(packed):
         raise ArgumentError("many runs run None, armdyn.trajectories.Sinusoid or Quintic trajectories")
     if len({spec[0] for spec in specs}) != 1:
         raise ModelError("the runs' trajectories must be of one kind (all Sinusoid, or all Quintic)")
     params = np.stack([spec[1] for spec in specs])
     return specs[0][0], np.ascontiguousarray(np.broadcast_to(params, (runs, *params.shape[1:])))
+
+
+def _rows(value: object, ndim: int = 2) -> int | None:
+    """The length of a per-run argument's first axis (one row per run) when it has ``ndim`` axes, else None."""
+    try:
+        shape = np.asarray(value).shape  # as np.shape(value)
+    except (TypeError, ValueError):  # a ragged sequence: the argument's own check names it
+        return None
+    return shape[0] if len(shape) == ndim else None
 
 
 def _simulate_runs(
@@ -1620,9 +1654,9 @@ def _simulate_runs(
         raise ArgumentError("many runs run armdyn.control's laws (ComputedTorque, PDGravity, PID, in Digital or "
                          f"Saturated) or None (no torque), got {type(controller).__name__}")  # fmt: skip
     lengths = {len(v) for v in (plants, models) if isinstance(v, Plants)}
-    lengths |= {np.shape(v)[0] for v in (q0, qd0, disturbance) if np.ndim(v) == 2}
+    lengths |= {rows for v in (q0, qd0, disturbance) if (rows := _rows(v)) is not None}
     lengths |= {len(trajectory)} if isinstance(trajectory, (list, tuple)) else set()
-    lengths |= {np.shape(gains)[0]} if np.ndim(gains) == 3 else set()
+    lengths |= {rows} if (rows := _rows(gains, 3)) is not None else set()
     lengths.discard(1)
     if runs is None:
         if len(lengths) > 1:

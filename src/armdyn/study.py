@@ -30,13 +30,17 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from armdyn import control, inputs, trajectories
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, MissingDependencyError, ModelError
 from armdyn.robot import Robot
 from armdyn.simulation import SUMMARY_NAMES, Nominal, launch_many, law_table, nominal, vary_packed
+
+if TYPE_CHECKING:
+    from pandas import DataFrame
 
 __all__ = ["Estimate", "Normal", "Requirement", "Study", "StudyResult", "Uniform", "clopper_pearson", "runs_needed"]
 
@@ -204,7 +208,7 @@ class Requirement:
         object.__setattr__(self, "clauses", tuple(clauses))
         object.__setattr__(self, "after", after)
 
-    def holds(self, table: object) -> np.ndarray:
+    def holds(self, table: DataFrame) -> np.ndarray:
         """(N,) bool: the rows of a study's table (a DataFrame) that meet every clause (and finished).
 
         Parameters
@@ -352,7 +356,7 @@ class Setup:
     runs: int
 
 
-def run_block(setup: Setup, index: int, threads: int | None = None) -> object:
+def run_block(setup: Setup, index: int, threads: int | None = None) -> DataFrame:
     """Block ``index`` of a study: its runs' parameters from SeedSequence(seed, spawn_key=(index,)),
     one compiled call of simulate's many-runs path (launch_many), and a DataFrame of the runs (run id,
     parameters, summaries, finished). The same block gives the same bits wherever it runs.
@@ -429,7 +433,7 @@ class StudyResult:
         the dashboard link of a cluster.
     """
 
-    table: object
+    table: DataFrame
     estimate: Estimate
     spec: Requirement
     info: dict
@@ -488,8 +492,10 @@ class Study:
     Raises
     ------
     armdyn.ModelError
-        When the arm is not numeric, the controller is not one of armdyn.control's laws, the
-        trajectory is not a Sinusoid or Quintic, a distribution is invalid or the spec unreadable.
+        When a distribution is invalid or the spec unreadable.
+    armdyn.ArgumentError
+        When the arm is not a numeric Robot, the controller is not one of armdyn.control's laws, or
+        the trajectory is not a Sinusoid or Quintic.
     """
 
     def __init__(
@@ -510,8 +516,7 @@ class Study:
     ) -> None:
         from armdyn.simulation import checked_times, packed_plants, step_count, unwrapped_law
 
-        if not isinstance(arm, Robot) or arm.is_symbolic:
-            raise ModelError(f"arm must be a numeric armdyn Robot, got {type(arm).__name__}")
+        inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (a study runs compiled code)")
         n = arm.n
         self.arm, self.spec = arm, spec if isinstance(spec, Requirement) else Requirement(spec)
         self.t_final, self.dt = checked_times(t_final, dt)
@@ -520,12 +525,12 @@ class Study:
         self.after = after
         law_spec, period, self.controller = unwrapped_law(controller, n)
         if law_spec is None or controller is None:
-            raise ModelError("a study runs one of armdyn.control's laws (ComputedTorque, PDGravity, PID)")
+            raise ArgumentError("a study runs one of armdyn.control's laws (ComputedTorque, PDGravity, PID)")
         gains, hold = law_table(law_spec, period, self.dt, n)
         belief, belief_coulomb = packed_plants([law_spec.model if law_spec.model is not None else arm])
         path = trajectories.packed(trajectory, n)
         if path is None:
-            raise ModelError("a study's trajectory must be None, an armdyn.trajectories.Sinusoid or a Quintic")
+            raise ArgumentError("a study's trajectory must be None, an armdyn.trajectories.Sinusoid or a Quintic")
         start = q0 if q0 is not None else arm.configurations.get("qn", arm.configurations.get("qz", np.zeros(n)))
         start = inputs.numbers(start, "q0", (n,))
         self.trajectory = trajectory
@@ -533,7 +538,7 @@ class Study:
             ("payload", payload), ("mass_error", mass_error), ("friction_error", friction_error),
             ("start_error", start_error))}  # fmt: skip
         self.block = inputs.integer(block, "block", 1)
-        self._setup = dict(arm=nominal(arm), joints=tuple(arm.joint_names),
+        self._setup: dict[str, Any] = dict(arm=nominal(arm), joints=tuple(arm.joint_names),
                            law=(law_spec.kind, gains, hold, belief[0], belief_coulomb[0]), path=path, q0=start,
                            dt=self.dt, rows=round(self.t_final / self.dt) + 1,
                            after_row=math.ceil(after / self.dt - 1e-9), **self.distributions)  # fmt: skip
@@ -606,7 +611,10 @@ class Study:
         armdyn.ModelError
             When the arguments are out of range, ``out`` holds another study, the scheduler
             cannot be reached within ``timeout`` (nothing computed is lost: the blocks written to
-            ``out`` stay), or Dask is not installed.
+            ``out`` stay).
+        armdyn.MissingDependencyError
+            When ``scheduler`` needs Dask, or ``out`` needs pyarrow (Parquet), and it is not installed
+            (both come with armdyn's ``cluster`` extra).
         """
         import pandas
 
@@ -617,6 +625,8 @@ class Study:
         memory.affordable(8.0 * setup.runs * columns + 8.0 * min(setup.block, setup.runs) * 30 * len(setup.joints),
                           f"the table of {setup.runs} runs")  # fmt: skip
         blocks = math.ceil(setup.runs / setup.block)
+        if out is not None:
+            _parquet_writer()
         folder = _study_folder(out, self, setup) if out is not None else None
         done = {b: pandas.read_parquet(_block_file(folder, b)) for b in range(blocks)
                 if folder is not None and _block_file(folder, b).exists()}  # fmt: skip
@@ -624,7 +634,7 @@ class Study:
         info = {"runs": setup.runs, "seed": setup.seed, "block": setup.block, "scheduler": scheduler or "local",
                 "computed": len(todo), "read": len(done)}  # fmt: skip
 
-        def arrived(index: int, table: object) -> None:
+        def arrived(index: int, table: DataFrame) -> None:
             done[index] = table
             if folder is not None:
                 _write_block(folder, index, table)
@@ -642,11 +652,19 @@ class Study:
         return StudyResult(table, estimate, self.spec, info)
 
 
+def _parquet_writer() -> None:
+    """A MissingDependencyError unless pyarrow, which reads and writes the blocks, is installed."""
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise MissingDependencyError("pyarrow", "cluster", needed_by="armdyn.Study.run(out=...)") from None
+
+
 def _block_file(folder: Path, index: int) -> Path:
     return folder / f"block-{index:06d}.parquet"
 
 
-def _write_block(folder: Path, index: int, table: object) -> None:
+def _write_block(folder: Path, index: int, table: DataFrame) -> None:
     """Write a block atomically: a file that exists is a whole block."""
     target = _block_file(folder, index)
     partial = target.with_suffix(".partial")
@@ -689,13 +707,15 @@ def _warm(threads: int) -> str:
 
 
 def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeout: float,
-             arrived: Callable[[int, object], None]) -> dict:  # fmt: skip
+             arrived: Callable[[int, DataFrame], None]) -> dict:  # fmt: skip
     """The blocks ``todo`` on a Dask cluster: one task per block, each worker one task thread with
     one Numba thread, its kernels warmed first; lost blocks are recomputed by Dask (retries)."""
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
-        raise ModelError("scheduler needs Dask: pip install 'armdyn[cluster]'") from None
+        raise MissingDependencyError(
+            "dask.distributed", "cluster", needed_by="armdyn.Study.run(scheduler=...)"
+        ) from None
     cluster = None
     if scheduler == "local-cluster":
         workers = inputs.integer(workers, "workers", 1, 4 * (os.cpu_count() or 1), " (4 per core)")

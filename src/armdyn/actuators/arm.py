@@ -36,12 +36,13 @@ import reprlib
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from armdyn import inputs
 from armdyn.actuators import packing
 from armdyn.actuators.hydraulics import Hydraulic
 from armdyn.actuators.motors import DCMotor
-from armdyn.errors import ModelError
+from armdyn.errors import MissingDependencyError, ModelError
 from armdyn.model.arm import Link
 from armdyn.robot import Robot
 
@@ -119,6 +120,15 @@ def _rotor_friction(w_M: np.ndarray, positive: np.ndarray, negative: np.ndarray)
 
 
 # ----- the arm-plus-actuator system ----------------------------------------------------------------------
+def _orifice_gain(drive: Drive) -> float:
+    """C_d w / sqrt(rho) of a hydraulic drive's square-root orifice (Merritt 1967); 0 for any other drive."""
+    if not (isinstance(drive, Hydraulic) and drive.orifice == "sqrt"):
+        return 0.0
+    c_d, w, rho = drive.discharge_coefficient, drive.orifice_width, drive.density
+    assert c_d is not None and w is not None and rho is not None, "Hydraulic requires them with orifice='sqrt'"
+    return c_d * w / math.sqrt(rho)
+
+
 def _joint_sense(coulomb: tuple[float, float], r: float) -> tuple[float, float]:
     """Rotor Coulomb friction (Tc+, Tc-) for positive and negative rotor velocity, as the Link's pair for
     positive and negative joint velocity (they swap, with their signs, when r < 0). Its own inverse."""
@@ -178,17 +188,15 @@ class ActuatedArm:
     ------
     armdyn.ModelError
         When the arm has motors (Jm or G set: they would be counted twice; the message says how to
-        move them into drives), symbolic parameters, or not as many drives as joints; when a drive
-        is not a DCMotor or Hydraulic, or a hydraulic drive cannot drive its joint (a rotary motor
-        on a prismatic joint, a piston on a revolute one); the message names the drive and the
-        joint.
-    TypeError
-        When ``robot`` is not a Robot.
+        move them into drives), or not as many drives as joints; when a drive is not a DCMotor or
+        Hydraulic, or a hydraulic drive cannot drive its joint (a rotary motor on a prismatic joint,
+        a piston on a revolute one); the message names the drive and the joint.
+    armdyn.ArgumentError
+        When ``robot`` is not a Robot, or has symbolic parameters.
     """
 
     def __init__(self, robot: Robot, drives: Sequence[Drive]) -> None:
-        if not isinstance(robot, Robot):
-            raise TypeError(f"robot must be an armdyn Robot, got {type(robot).__name__}")
+        inputs.arm_argument(robot, Robot, "robot", numeric=True, why=" (the arm-plus-actuator model)")
         self.robot, self.drives, self.n, self.name = robot, _checked_drives(robot, drives), robot.n, robot.name
         self._where = f" for '{robot.name}' with actuators"
         self._parameters()
@@ -248,14 +256,7 @@ class ActuatedArm:
         self._K_ce = np.array([d.total_coefficient if isinstance(d, Hydraulic) else 1.0 for d in drives])
         self._P_s = vector(Hydraulic, "supply_pressure", 1.0)
         self._sqrt = np.array([isinstance(d, Hydraulic) and d.orifice == "sqrt" for d in drives])
-        self._sqrt_gain = np.array(
-            [
-                d.discharge_coefficient * d.orifice_width / math.sqrt(d.density)
-                if isinstance(d, Hydraulic) and d.orifice == "sqrt"
-                else 0.0
-                for d in drives
-            ]
-        )
+        self._sqrt_gain = np.array([_orifice_gain(d) for d in drives])
         self._stroke = vector(Hydraulic, "stroke", math.inf)
         self._u_max = np.array([d.voltage_limit if isinstance(d, DCMotor) else d.current_limit for d in drives])
 
@@ -266,7 +267,9 @@ class ActuatedArm:
         link, drive = self.robot.links[j], self.drives[j]
         if isinstance(drive, DCMotor) and not drive.flexible:
             r = drive.gear_ratio
-            motor = _joint_sense(drive.coulomb, r)
+            pair = drive.coulomb
+            assert isinstance(pair, tuple), "DCMotor keeps its Coulomb friction as the pair (Tc+, Tc-)"
+            motor = _joint_sense(pair, r)
             viscous = drive.viscous + link.viscous * r**2
             if reduced:
                 viscous += drive.back_emf * drive.torque_constant / drive.resistance
@@ -323,7 +326,7 @@ class ActuatedArm:
             )
         return self._reduced
 
-    def inertia_matrix(self, q: object) -> np.ndarray:
+    def inertia_matrix(self, q: ArrayLike) -> np.ndarray:
         """M'(q) = M(q) + R^-2 J_M (BOOK.md section 7, in joint torques).
 
         Parameters
@@ -343,7 +346,7 @@ class ActuatedArm:
         """
         return self.reduced_robot().inertia_matrix(q)
 
-    def coriolis_matrix(self, q: object, qd: object) -> np.ndarray:
+    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
         """V'(q, qd) = Vm(q, qd), the Christoffel form: M'dot - 2 V' is skew (BOOK.md section 7).
 
         Parameters
@@ -363,7 +366,7 @@ class ActuatedArm:
         """
         return self.reduced_robot().coriolis_matrix(q, qd)
 
-    def inertia_matrix_dot(self, q: object, qd: object) -> np.ndarray:
+    def inertia_matrix_dot(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
         """dM'/dt = V' + V'^T (the drives' inertias are constant).
 
         Parameters
@@ -383,7 +386,7 @@ class ActuatedArm:
         """
         return self.reduced_robot().inertia_matrix_dot(q, qd)
 
-    def gravity_vector(self, q: object) -> np.ndarray:
+    def gravity_vector(self, q: ArrayLike) -> np.ndarray:
         """G'(q) = G(q) (BOOK.md section 7, in joint torques).
 
         Parameters
@@ -403,7 +406,7 @@ class ActuatedArm:
         """
         return self.reduced_robot().gravity_vector(q)
 
-    def friction(self, qd: object) -> np.ndarray:
+    def friction(self, qd: ArrayLike) -> np.ndarray:
         """F'(qd) = F(qd) + R^-1 F_M(qd / r) + R^-2 B qd, B = B_M + K_b K_M / R_a (BOOK.md section 7).
 
         A hydraulic joint's share of R^-2 B qd is A^2 qd / K_ce.
@@ -445,7 +448,7 @@ class ActuatedArm:
     def _gain(self) -> np.ndarray:
         return np.where(self._is_dc, self._K_M / (self._R_a * self._r), self._A * self._K_q * self._K_v / self._K_ce)
 
-    def inverse_dynamics(self, q: object, qd: object, qdd: object) -> np.ndarray:
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> np.ndarray:
         """v = K'^-1 (M' qdd + V' qd + F' + G'): the inputs that give qdd (limits not applied).
 
         Parameters
@@ -465,7 +468,7 @@ class ActuatedArm:
         """
         return self.reduced_robot().inverse_dynamics(q, qd, qdd) / self._gain
 
-    def forward_dynamics(self, q: object, qd: object, v: object) -> np.ndarray:
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, v: ArrayLike) -> np.ndarray:
         """qdd of the reduced model under the inputs v, with the drives' limits.
 
         The joint torque of a DC drive is (K_M / r) i with the steady current
@@ -504,7 +507,7 @@ class ActuatedArm:
         tau = np.where(self._is_dc, self._K_M * current / self._r, self._A * P_L)
         return self._mechanical.forward_dynamics(q, qd, tau)
 
-    def kinetic_energy(self, q: object, qd: object) -> float | np.ndarray:
+    def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> float | np.ndarray:
         """1/2 qd^T M'(q) qd: the links' and the rotors' kinetic energy.
 
         Parameters
@@ -524,7 +527,7 @@ class ActuatedArm:
         """
         return self.reduced_robot().kinetic_energy(q, qd)
 
-    def potential_energy(self, q: object) -> float | np.ndarray:
+    def potential_energy(self, q: ArrayLike) -> float | np.ndarray:
         """P(q), the arm's potential energy.
 
         Parameters
@@ -560,7 +563,7 @@ class ActuatedArm:
         }
         return [f"{key} {names[j]}" for key, joints in groups.items() for j in joints]
 
-    def initial_state(self, q: object, qd: object = None) -> np.ndarray:
+    def initial_state(self, q: ArrayLike, qd: ArrayLike | None = None) -> np.ndarray:
         """x with the drives at rest relative to the links: q_M = q / r, qd_M = qd / r, i = x_v = P_L = 0.
 
         Parameters
@@ -591,7 +594,7 @@ class ActuatedArm:
         rotors = [q[..., f] / self._r[f], qd[..., f] / self._r[f]]
         return np.concatenate([q, qd, *rotors, np.zeros((*q.shape[:-1], extra))], -1)
 
-    def _split(self, x: object) -> dict[str, np.ndarray]:
+    def _split(self, x: ArrayLike) -> dict[str, np.ndarray]:
         x = inputs.state(x, self.n_states, "x", f"{self._where} (x = [{', '.join(self.state_names)}])")
         return {key: x[..., part] for key, part in self._slices.items()}
 
@@ -603,7 +606,7 @@ class ActuatedArm:
                 "full model; give L > 0, or use the reduced model (forward_dynamics)"
             )
 
-    def state_derivative(self, x: object, v: object) -> np.ndarray:
+    def state_derivative(self, x: ArrayLike, v: ArrayLike) -> np.ndarray:
         """xdot of the full model, x = [q, qd, q_M, qd_M, i, x_v, P_L] (see ``state_names``), batched.
 
         The arm: M qdd + Vm qd + F + G = tau (with the rigid drives' rotors and friction folded into
@@ -667,7 +670,7 @@ class ActuatedArm:
         dP_L = _pressure_rate(Q_L, qd[..., h], P_L, self._A[h], self._C_tp[h], self._C[h])
         return np.concatenate([qd, qdd, w_M, wd_M, di, dx_v, dP_L], -1)
 
-    def stored_energy(self, x: object) -> float | np.ndarray:
+    def stored_energy(self, x: ArrayLike) -> float | np.ndarray:
         """K + P + 1/2 sum L i^2 + 1/2 sum K (r q_M - q)^2 + 1/2 sum (V_t / (4 beta_e)) P_L^2.
 
         The links' and rotors' kinetic energy, the potential energy, the armatures' magnetic
@@ -733,7 +736,7 @@ class ActuatedArm:
                 "linearize elsewhere"
             )
 
-    def linearize(self, x0: object, v0: object) -> tuple[np.ndarray, np.ndarray]:
+    def linearize(self, x0: ArrayLike, v0: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """(A, B) with xdot ~ A (x - x0) + B (v - v0): the full model linearized about (x0, v0).
 
         By central differences of ``state_derivative`` in one batched call: the step of state j is
@@ -780,7 +783,7 @@ class ActuatedArm:
         B = (rates[2 * m : 2 * m + n] - rates[2 * m + n :]).T / (2 * hv)
         return A, B
 
-    def to_control(self, x0: object, v0: object) -> object:
+    def to_control(self, x0: ArrayLike, v0: ArrayLike) -> object:
         """The linearization about (x0, v0) as a python-control StateSpace, outputs the full state.
 
         Parameters
@@ -798,12 +801,16 @@ class ActuatedArm:
         Raises
         ------
         armdyn.ModelError
-            As ``linearize``, or when python-control is not installed.
+            As ``linearize``.
+        armdyn.MissingDependencyError
+            When python-control is not installed.
         """
         try:
             import control
         except ImportError:
-            raise ModelError("to_control() needs python-control: pip install 'armdyn[control]'") from None
+            raise MissingDependencyError(
+                "control", "control", needed_by="armdyn.actuators.ActuatedArm.to_control"
+            ) from None
         A, B = self.linearize(x0, v0)
         return control.ss(A, B, np.eye(self.n_states), np.zeros(B.shape))
 
@@ -824,7 +831,7 @@ class ActuatedArm:
         self._check_full()
         return packing.packed_drives(self)
 
-    def stable_step(self, q: object, bandwidth: object = None) -> float:
+    def stable_step(self, q: ArrayLike, bandwidth: ArrayLike | None = None) -> float:
         """The RK4 step (s) that resolves the drives' fast dynamics near q (``armdyn.actuators.stable_step``).
 
         Parameters
@@ -842,7 +849,9 @@ class ActuatedArm:
         Raises
         ------
         armdyn.ModelError
-            When q is not one configuration, or M(q) is singular.
+            When q is not one configuration.
+        armdyn.SingularError
+            When M(q) is singular (or too ill-conditioned) at q.
         """
         return packing.stable_step(self, q, bandwidth)
 
@@ -876,8 +885,6 @@ class ActuatedArm:
 def _checked_drives(arm: Robot, drives: object) -> tuple[Drive, ...]:
     """The drives, one per joint, each able to drive its joint, on an arm without motors."""
     where = f"robot '{arm.name}'"
-    if arm.is_symbolic:
-        raise ModelError(f"{where} has symbolic parameters: the arm-plus-actuator model needs numbers")
     motors = [link.name for link in arm.links if link.motor_inertia != 0 or link.gear_ratio != 1]
     if motors:
         raise ModelError(
@@ -966,11 +973,10 @@ def motor_drives(
     ------
     armdyn.ModelError
         When a value is not one or n numbers, or a drive's parameter breaks its rule (see DCMotor).
-    TypeError
-        When ``robot`` is not a Robot.
+    armdyn.ArgumentError
+        When ``arm`` is not a Robot.
     """
-    if not isinstance(arm, Robot):
-        raise TypeError(f"robot must be an armdyn Robot, got {type(arm).__name__}")
+    inputs.arm_argument(arm, Robot, "arm")
     n = arm.n
 
     def per_joint(value: object, name: str) -> np.ndarray:

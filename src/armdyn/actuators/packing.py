@@ -8,9 +8,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ModelError, SingularError
 
 if TYPE_CHECKING:
     from armdyn.actuators.arm import ActuatedArm
@@ -70,7 +71,7 @@ def packed_drives(arm: ActuatedArm) -> np.ndarray:
     return table
 
 
-def stable_step(arm: ActuatedArm, q: object, bandwidth: object = None) -> float:
+def stable_step(arm: ActuatedArm, q: ArrayLike, bandwidth: ArrayLike | None = None) -> float:
     """The RK4 step (s) that resolves the drives' fast dynamics near q: 0.5 / lambda for the fastest real
     pole and 0.15 / w for the fastest lightly damped oscillation.
 
@@ -99,15 +100,19 @@ def stable_step(arm: ActuatedArm, q: object, bandwidth: object = None) -> float:
     Raises
     ------
     armdyn.ModelError
-        When q is not one configuration, or M(q) is singular.
+        When q is not one configuration.
+    armdyn.SingularError
+        When M(q) is singular (or too ill-conditioned) at q.
     """
     q = inputs.state(q, arm.n, "q", arm._where)
     if q.shape != (arm.n,):
         raise ModelError(f"stable_step takes one configuration of {arm.n} values{arm._where}")
     inertia = arm._mechanical.inertia_matrix(q)
-    if not np.linalg.cond(inertia) < 1e12:
-        raise ModelError(f"M(q) is singular at q = {np.array2string(q, precision=6)}{arm._where}: the drives' time "
-                         "constants need the inertia they move (start elsewhere)")  # fmt: skip
+    condition = float(np.linalg.cond(inertia))
+    if not condition < 1e12:
+        raise SingularError(f"M(q) is singular at q = {np.array2string(q, precision=6)}{arm._where}: the drives' "
+                            "time constants need the inertia they move (start elsewhere)", state=q,
+                            condition=condition)  # fmt: skip
     mobility = np.diag(np.linalg.inv(inertia))  # 1/m_j
     d, f, h = arm._dc, arm._flex, arm._hyd
     electrical = arm._R_a[d] / arm._L[d] if bandwidth is None else np.maximum(arm._R_a / arm._L, bandwidth)[d]

@@ -10,12 +10,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armdyn import inputs
+from armdyn.actuators.arm import ActuatedArm
 from armdyn.actuators.motors import DCMotor
 from armdyn.dynamics import drives as compiled
 from armdyn.errors import ArgumentError, ModelError
 
 if TYPE_CHECKING:
-    from armdyn.actuators.arm import ActuatedArm
+    from armdyn.simulation import DrivenPlant
 
 
 @dataclass(frozen=True)
@@ -64,13 +65,13 @@ class DrivePID:
         named = ((self.kp, "kp"), (self.kv, "kv"), (self.ki, "ki"))
         return np.stack([inputs.gains(gain, name, n) for gain, name in named])
 
-    def drive_law(self, arm: ActuatedArm) -> tuple[int, np.ndarray, np.ndarray | None]:
+    def drive_law(self, arm: DrivenPlant) -> tuple[int, np.ndarray, np.ndarray | None]:
         """The compiled law's code, its gains (4, n: kp, kv, ki and an unused row) and no current loop.
 
         Parameters
         ----------
-        arm : ActuatedArm
-            The arm whose drives the law drives.
+        arm : ActuatedArm or DrivenPlant
+            The arm whose drives the law drives (its number of joints is read).
 
         Returns
         -------
@@ -207,29 +208,34 @@ VoltagePD = DrivePID
 """The PD on the motor voltages: DrivePID without the integral (kept as the book's name for it)."""
 
 
-def drive_law(controller: object, arm: ActuatedArm) -> tuple[int, np.ndarray, np.ndarray | None]:
+def drive_law(controller: object, arm: DrivenPlant) -> tuple[int, np.ndarray, np.ndarray | None]:
     """The compiled drive-level law of ``controller`` for ``arm`` (see ``DrivePID.drive_law``).
 
     Parameters
     ----------
     controller : DrivePID or CurrentComputedTorque
-        The law.
-    arm : ActuatedArm
-        The arm with its drives.
+        The drive-level law.
+    arm : ActuatedArm or DrivenPlant
+        The arm with its drives (CurrentComputedTorque reads the motors of an armdyn ActuatedArm).
 
     Returns
     -------
     tuple
-        (the law's code in armdyn.dynamics.drives, gains (4, n), the current loops' bandwidths or None).
+        (the law's code in armdyn.dynamics.drives, gains (4, n), the current loops' w_c (n,) or None).
 
     Raises
     ------
     armdyn.ArgumentError
-        When the controller is not a drive-level law.
+        When the controller is not a drive-level law, or CurrentComputedTorque meets a plant that is not
+        an ActuatedArm.
     armdyn.ModelError
-        When the law does not fit the drives or a gain is invalid.
+        As the law's ``drive_law``.
     """
-    if not isinstance(controller, (DrivePID, CurrentComputedTorque)):
+    if isinstance(controller, DrivePID):
+        return controller.drive_law(arm)
+    if not isinstance(controller, CurrentComputedTorque):
         raise ArgumentError("an arm with drives runs a drive-level law: controller must be an armdyn.control.DrivePID "
                             f"or CurrentComputedTorque, got {type(controller).__name__}")  # fmt: skip
+    inputs.arm_argument(arm, ActuatedArm, "arm", why=" (computed torque through current commands)")
+    assert isinstance(arm, ActuatedArm), "arm_argument refused any other plant"
     return controller.drive_law(arm)
