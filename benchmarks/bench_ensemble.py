@@ -80,7 +80,7 @@ def ur5_rollouts(runs: int, threads: int = 2) -> None:
     model = mujoco_ur5(ROBOTS / UR5)
     rng = np.random.default_rng(1)
     q0, qd0 = rng.uniform(-np.pi, np.pi, (runs, 6)), rng.uniform(-1, 1, (runs, 6))
-    simulate(arm, None, None, t_final=0.01, q0=q0[:2], qd0=qd0[:2])
+    simulate(arm, None, None, t_final=0.01, q0=q0[:2], qd0=qd0[:2], runs=2)
     start = time.perf_counter()
     ours = simulate(arm, None, None, t_final=1.0, q0=q0, qd0=qd0, threads=threads)
     armdyn_rate = runs / (time.perf_counter() - start)

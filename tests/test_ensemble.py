@@ -104,13 +104,13 @@ def test_plant_variants_equal_robots_built_one_by_one(puma: ad.Robot) -> None:
 @pytest.mark.parametrize(
     ("arguments", "message"),
     [
-        ({"q0": np.zeros((3, 6)), "qd0": np.zeros((4, 6))}, "disagree on the number of runs"),
+        ({"q0": np.zeros((3, 6)), "qd0": np.zeros((4, 6)), "keep": "summary"}, "disagree on the number of runs"),
         ({"runs": 2, "q0": np.zeros((3, 6))}, "runs = 2"),
         ({"keep": "everything"}, "keep must be"),
         ({"keep": -1}, "keep must be"),
         ({"gains": np.ones((2, 6))}, "gains must be"),
         ({"plants": "heavy"}, "plants must be None"),
-        ({"trajectory": [tr.Sinusoid(0.1, 1.0), tr.Quintic(0.0, 1.0, 0.0, 1.0)]}, "one kind"),
+        ({"trajectory": [tr.Sinusoid(0.1, 1.0), tr.Quintic(0.0, 1.0, 0.0, 1.0)], "runs": 2}, "one kind"),
         ({"runs": 1, "controller": lambda t, q, qd, q_d, qd_d, qdd_d, e: q}, "run armdyn.control's laws"),
     ],
 )

@@ -984,7 +984,7 @@ def parameterization_targets() -> list[Target]:
         for k in ("q", "qd", "qdd", "tau")
     }
     base_args = {
-        "robot": _robot_arg(),
+        "arm": _robot_arg(),
         "samples": Arg(lambda arm: 30, lambda arm: scalar_values([30, 12], _count(1, 10**4), integer=True)),
         "seed": Arg(lambda arm: 0, lambda arm: scalar_values([0, 5], _count(0, 10**9), integer=True)),
         "tolerance": Arg(
@@ -996,16 +996,16 @@ def parameterization_targets() -> list[Target]:
     return [
         Target(
             "identify",
-            lambda arm, **kw: ad.identify(**kw),
-            {"robot": _robot_arg(), **sample_args, "drives": DRIVES},
+            lambda _arm, **kw: ad.identify(**kw),
+            {"arm": _robot_arg(), **sample_args, "drives": DRIVES},
             [ARMS[0]],
             combos=4,
         ),
-        Target("base_parameters", lambda arm, **kw: ad.base_parameters(**kw), base_args, SMALL_ARMS),
+        Target("base_parameters", lambda _arm, **kw: ad.base_parameters(**kw), base_args, SMALL_ARMS),
         Target(
             "dynamics.regressor.parameters",
-            lambda arm, **kw: parameterization.parameters(**kw),
-            {"robot": _robot_arg()},
+            lambda _arm, **kw: parameterization.parameters(**kw),
+            {"arm": _robot_arg()},
             ARMS,
         ),
     ]
@@ -1056,7 +1056,7 @@ def module_targets() -> list[Target]:
     ):
         function = getattr(kinematics, name)
         targets.append(
-            Target(f"kinematics.{name}", lambda arm, f=function, **kw: f(**kw), {"arm": robot, **args}, ARMS)
+            Target(f"kinematics.{name}", lambda _arm, f=function, **kw: f(**kw), {"arm": robot, **args}, ARMS)
         )
     three = np.array([0.1, 0.2, 0.3])
     targets += [
@@ -1095,9 +1095,7 @@ def module_targets() -> list[Target]:
     }
     for name, args in lagrange.items():
         function = getattr(ad.lagrange, name)
-        targets.append(
-            Target(f"lagrange.{name}", lambda arm, f=function, **kw: f(**kw), {"robot": robot, **args}, ARMS)
-        )
+        targets.append(Target(f"lagrange.{name}", lambda _arm, f=function, **kw: f(**kw), {"arm": robot, **args}, ARMS))
     return targets
 
 
@@ -1310,10 +1308,10 @@ def properties_targets() -> list[Target]:
     }
     span = Arg(lambda arm: 1.0, lambda arm: scalar_values([1.0, 0.5], positive))
     return [
-        Target("properties.check", lambda arm, **kw: properties.check(**kw), check_args, SMALL_ARMS, combos=10),
+        Target("properties.check", lambda _arm, **kw: properties.check(**kw), check_args, SMALL_ARMS, combos=10),
         Target(
             "properties.joint_ranges",
-            lambda arm, **kw: properties.joint_ranges(**kw),
+            lambda _arm, **kw: properties.joint_ranges(**kw),
             {"arm": _robot_arg(True, symbolic_ok=True), "limits": limits, "prismatic_span": span},
             ARMS,
         ),

@@ -85,7 +85,7 @@ def test_simulation_of_a_singular_arm_stops_with_an_error() -> None:
         ({"q0": [0.0, 0.0, 0.0]}, r"q0 must have shape \(2,\)"),
         ({"disturbance": [np.nan, 0.0]}, "disturbance must be finite"),
         ({"events": [(np.nan, ad.models.two_link_planar())]}, "event time must be a finite"),
-        ({"events": [(0.5, ad.models.puma560())]}, "must be a Robot with 2 joints"),
+        ({"events": [(0.5, ad.models.puma560())]}, "must be a numeric Robot with 2 joints"),
         ({"t_final": np.nan}, "t_final must be a positive"),
         ({"dt": -1e-3}, "dt must be a positive"),
         ({"controller": "pd"}, "controller must be callable"),

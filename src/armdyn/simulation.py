@@ -609,9 +609,10 @@ def simulate(
         the step the drives' time constants allow (armdyn.actuators.stable_step at the start).
     runs : int, optional
         Many runs in one compiled call, parallel over runs (each equal to the single run with its
-        arguments to rounding): N, or by default the length of the per-run arguments. q0, qd0 and the
-        disturbance may then hold one row per run, the trajectory may be a sequence (one per run, of
-        one kind), and the controller must be one of armdyn.control's joint laws; method="rk4" only.
+        arguments to rounding), taken when ``runs`` or any of the many-run arguments below is given:
+        N, or None for the length of the per-run arguments. q0, qd0 and the disturbance may then hold
+        one row per run, the trajectory may be a sequence (one per run, of one kind), and the
+        controller must be one of armdyn.control's joint laws; method="rk4" only.
     plants, models : Plants or Robot, optional
         Many runs: the plants, and the controller's models (its belief), one variant per run or one
         for all (``plant_variants``).
@@ -668,7 +669,7 @@ def simulate(
     )
     if step is not None:
         raise ArgumentError("step applies to an arm with drives (a Robot's RK4 step is dt)")
-    if any(value is not None for value in per_run.values()) or _holds_runs(q0, qd0, disturbance, trajectory):
+    if any(value is not None for value in per_run.values()):  # many runs are asked for by name, never guessed
         _refuse_options(arm, single_run_options)
         return _simulate_runs(arm, controller, trajectory, t_final, dt, runs, q0, qd0, plants, models, gains,
                               disturbance, keep, after, threads)  # fmt: skip
@@ -763,12 +764,6 @@ def _is_default(value: object, default: object) -> bool:
     if isinstance(default, tuple):
         return isinstance(value, (tuple, list)) and len(value) == 0
     return isinstance(value, str) and value == default
-
-
-def _holds_runs(q0: ArrayLike | None, qd0: ArrayLike | None, disturbance: object, trajectory: object) -> bool:
-    """Whether an argument holds one row (or one trajectory) per run."""
-    rows = any(_rows(value) is not None for value in (q0, qd0, disturbance) if not callable(value))
-    return rows or isinstance(trajectory, (list, tuple))
 
 
 def _simulate_driven(
