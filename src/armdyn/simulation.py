@@ -37,7 +37,7 @@ from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.drives import INPUT_LIMIT, clipped, closed_loop
 from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
-from armdyn.dynamics.linalg import cholesky, cholesky_solve
+from armdyn.dynamics.linalg import cholesky, cholesky_solve_vector
 from armdyn.dynamics.packed import (
     COULOMB_NEG,
     COULOMB_POS,
@@ -221,7 +221,7 @@ def _solve(
         return singular
     for i in range(qd.shape[0]):
         qdd[i] = tau[i] - N[i] - smooth_coulomb(coulomb, eps, i, qd[i])
-    cholesky_solve(M, qdd.reshape((qd.shape[0], 1)))
+    cholesky_solve_vector(M, qdd)
     return -1
 
 
@@ -233,11 +233,11 @@ def rk4_stage_state(y: np.ndarray, rate: np.ndarray, c: float, h: float, out: np
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def rk4_advance(y: np.ndarray, rates: np.ndarray, h: float) -> None:
+def rk4_advance(y: np.ndarray, k1: np.ndarray, k2: np.ndarray, k3: np.ndarray, k4: np.ndarray, h: float) -> None:
     """The classical fourth-order Runge-Kutta step y += h/6 (k1 + 2 k2 + 2 k3 + k4) from the four stage
-    rates (4, size): the one compiled RK4 of the fixed-step runs, with or without drives."""
+    rates: the one compiled RK4 of the fixed-step runs, with or without drives."""
     for j in range(y.shape[0]):
-        y[j] += h / 6.0 * (rates[0, j] + 2.0 * rates[1, j] + 2.0 * rates[2, j] + rates[3, j])
+        y[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
 
 
 @njit(**NUMBA_OPTIONS)
@@ -265,10 +265,12 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     work = np.empty(workspace_size(n))
     control_work = np.empty(workspace_size(n))
     goal = np.empty((3, n))
-    y, stage_y = x.copy(), np.empty(2 * n)  # [q; qd], and the state of a stage
-    q, qd = y[:n], y[n:]
-    rates = np.empty((4, 2 * n))  # each stage's [qd; qdd]
-    net, applied, u, Nv = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    q, qd = x[:n].copy(), x[n:].copy()
+    stages = np.empty((8, n))  # the RK4 slopes of q and qd
+    k1q, k1v, k2q, k2v, k3q, k3v, k4q, k4v = stages[0], stages[1], stages[2], stages[3], stages[4], stages[5], \
+        stages[6], stages[7]  # fmt: skip
+    scratch = np.empty((6, n))
+    qs, vs, net, applied, u, Nv = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
     M_, Mp = np.empty((n, n)), np.empty((n, n))
     for k in range(first, last):
         t = t0 + k * dt
@@ -284,24 +286,36 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             control_law(kind, model, model_coulomb, eps, control_work, q, qd, goal, e_int, gain, u, M_, Nv, tau_held)
         for i in range(n):
             applied[i] = tau_held[i] - disturbance[i]
-        rates[0, :n] = qd
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
-            singular = _solve(Mp, Nv, applied, coulomb, eps, qd, rates[0, n:], plant_model[PIVOT_FLOOR])
+            singular = _solve(Mp, Nv, applied, coulomb, eps, qd, k1v, plant_model[PIVOT_FLOOR])
         else:
-            singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, rates[0, n:])
+            singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, k1v)
         if singular >= 0:
             outcome[0], outcome[1], outcome[2] = k, STOPPED_SINGULAR, singular
             break
         T_[k] = t
         for i in range(n):
-            Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], rates[0, n + i], tau_held[i], goal[0, i]
-        for stage in range(1, 4):
-            rk4_stage_state(y, rates[stage - 1], 0.5 if stage < 3 else 1.0, dt, stage_y)
-            rates[stage, :n] = stage_y[n:]
-            singular = max(singular, _accelerations(plant_model, coulomb, eps, work, stage_y[:n], stage_y[n:],
-                                                    applied, Mp, net, rates[stage, n:]))  # fmt: skip
-        rk4_advance(y, rates, dt)
+            Q[k, i], QD[k, i], QDD[k, i], TAU[k, i], QDES[k, i] = q[i], qd[i], k1v[i], tau_held[i], goal[0, i]
+        for i in range(n):
+            k1q[i] = qd[i]
+        rk4_stage_state(q, k1q, 0.5, dt, qs)
+        rk4_stage_state(qd, k1v, 0.5, dt, vs)
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k2v))
+        for i in range(n):
+            k2q[i] = vs[i]
+        rk4_stage_state(q, k2q, 0.5, dt, qs)
+        rk4_stage_state(qd, k2v, 0.5, dt, vs)
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k3v))
+        for i in range(n):
+            k3q[i] = vs[i]
+        rk4_stage_state(q, k3q, 1.0, dt, qs)
+        rk4_stage_state(qd, k3v, 1.0, dt, vs)
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k4v))
+        for i in range(n):
+            k4q[i] = vs[i]
+        rk4_advance(q, k1q, k2q, k3q, k4q, dt)
+        rk4_advance(qd, k1v, k2v, k3v, k4v, dt)
         for i in range(n):  # a state that blew up explains a singular stage too
             if not (abs(q[i]) < LARGEST_STATE and abs(qd[i]) < np.inf):  # NaN fails both
                 outcome[0], outcome[1], outcome[2] = k + 1, STOPPED_DIVERGED, i
@@ -310,7 +324,8 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             outcome[0], outcome[1], outcome[2] = k + 1, STOPPED_SINGULAR, singular
         if outcome[0] >= 0:
             break
-    x[:] = y
+    x[:n] = q
+    x[n:] = qd
 
 
 @njit(**NUMBA_OPTIONS)
@@ -365,7 +380,7 @@ def run_drives(
                             return sample
                     if sample == last:
                         return -1
-            rk4_advance(y, rates, h)
+            rk4_advance(y, rates[0], rates[1], rates[2], rates[3], h)
     return -1
 
 

@@ -77,6 +77,23 @@ def cholesky_solve(L: np.ndarray, X: np.ndarray) -> None:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
+def cholesky_solve_vector(L: np.ndarray, x: np.ndarray) -> None:
+    """x <- A^-1 x in place for one right-hand side x (m,), A = L L^T factored by ``cholesky``: the same
+    substitutions as ``cholesky_solve`` without the loop over columns (the simulation's every stage)."""
+    m = L.shape[0]
+    for r in range(m):
+        total = x[r]
+        for k in range(r):
+            total -= L[r, k] * x[k]
+        x[r] = total / L[r, r]
+    for r in range(m - 1, -1, -1):
+        total = x[r]
+        for k in range(r + 1, m):
+            total -= L[k, r] * x[k]
+        x[r] = total / L[r, r]
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
 def lu(A: np.ndarray, pivots: np.ndarray) -> bool:
     """P A = L U in place with partial pivoting (row k swapped with pivots[k]); False when singular."""
     n = A.shape[0]
