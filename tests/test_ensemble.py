@@ -32,6 +32,11 @@ def test_one_run_equals_simulate(puma: ad.Robot) -> None:
     assert np.allclose(many.summaries[0, 1], np.abs(error[late]).max(0))
     assert np.allclose(many.summaries[0, 2], np.sqrt(np.mean(error**2, axis=0)))
     assert np.allclose(many.summaries[0, 3], np.abs(single.tau).max(0))
+    one, runs = single.to_xarray(), many.to_xarray()  # one run and many, under the same dimension names
+    assert one["q"].dims == ("time", "joint") and runs["q"].dims == ("run", "time", "joint")
+    assert list(one["joint"].values) == list(runs["joint"].values) == puma.joint_names
+    np.testing.assert_allclose(runs["q"].isel(run=0).values, one["q"].values, rtol=0.0, atol=1e-12)
+    assert np.allclose(one["error"].values, error) and one["energy"].dims == ("time",)
 
 
 def test_runs_with_different_plants_models_gains_and_starts_equal_their_single_runs(puma: ad.Robot) -> None:

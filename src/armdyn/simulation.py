@@ -190,6 +190,32 @@ class Result:
             arrays |= {"y": self.task.y, "y_d": self.task.y_d, "task_error": self.task.error}
         np.savez(path, **arrays)
 
+    def to_xarray(self) -> Any:
+        """The run as an xarray Dataset with dimensions time and joint, as ``Ensemble.to_xarray`` names them
+        (run, time, joint) for many runs.
+
+        Returns
+        -------
+        xarray.Dataset
+            q, qd, qdd and tau (time, joint), the desired q_d and the error q_d - q with a trajectory, the
+            energy K + P (time); ``info`` as attributes; ``.to_dataframe()`` gives pandas.
+
+        Raises
+        ------
+        None
+            It only arranges the arrays.
+        """
+        import xarray
+
+        variables: dict[str, tuple[tuple[str, ...], np.ndarray]] = {
+            name: (("time", "joint"), getattr(self, name)) for name in ("q", "qd", "qdd", "tau")
+        }
+        if self.q_d is not None:
+            variables |= {"q_d": (("time", "joint"), self.q_d), "error": (("time", "joint"), self.q_d - self.q)}
+        variables["energy"] = (("time",), self.energy)
+        coordinates = {"time": self.t, "joint": list(self.arm.joint_names)}
+        return xarray.Dataset(variables, coords=coordinates, attrs={k: str(v) for k, v in self.info.items()})
+
 
 # ----- the compiled loop ------------------------------------------------------------------------------
 @njit(**NUMBA_OPTIONS)
