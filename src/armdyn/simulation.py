@@ -595,7 +595,7 @@ def simulate(
     after: float | None = None,
     threads: int | None = None,
 ) -> Result | Ensemble:
-    """Simulate a plant under control from (q0, qd0) for t_final seconds (Chapter 4, BOOK.md section 8).
+    """Simulate a plant under control from (q0, qd0) for t_final seconds (Lewis, Dawson and Abdallah 2004, Chapter 4).
 
     The one way to simulate: one run of an arm (a Robot), one run of an arm with its drives (an
     ActuatedArm, Section 3.6: the drives' electrics and hydraulics integrated with the links), or many
@@ -811,7 +811,7 @@ def _simulate_driven(
     arm: DrivenPlant, controller: object, trajectory: object, t_final: float, dt: float, q0: object, qd0: object,
     step: float | None,
 ) -> Result:  # fmt: skip
-    """One run of an arm with its drives (BOOK.md section 7): the full model x = [q, qd, q_M, qd_M, i, x_v,
+    """One run of an arm with its drives (Lewis, Dawson and Abdallah 2004, Section 3.6): the full model x = [q, qd, q_M, qd_M, i, x_v,
     P_L] and the law's integrators by compiled RK4, the drive-level law evaluated at every stage, the inputs
     clipped to their limits and the currents and spools held within theirs. The drives are stiff (L/R is
     about a millisecond, an oil column rings at hundreds of hertz): the run records every ``dt`` and

@@ -1,5 +1,5 @@
 """Paths in task coordinates y_d(t) with their velocities and accelerations (Example 4.2-1): a circle,
-a straight line and a tool-pose line, each with a quintic time law (BOOK.md section 6)."""
+a straight line and a tool-pose line, each with a quintic time law (Lewis, Dawson and Abdallah 2004, Sections 3.5 and 4.2)."""
 
 from __future__ import annotations
 
