@@ -1,4 +1,5 @@
-"""The arm with its drives as the compiled stepper takes it (Lewis, Dawson and Abdallah 2004, Section 3.6): the drives' parameters packed,
+"""The arm with its drives as the compiled stepper takes it (Lewis, Dawson and Abdallah 2004,
+Section 3.6): the drives' parameters packed,
 the RK4 step their time constants allow, and the record of what they did during a run."""
 
 from __future__ import annotations

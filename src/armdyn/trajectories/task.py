@@ -1,5 +1,6 @@
 """Paths in task coordinates y_d(t) with their velocities and accelerations (Example 4.2-1): a circle,
-a straight line and a tool-pose line, each with a quintic time law (Lewis, Dawson and Abdallah 2004, Sections 3.5 and 4.2)."""
+a straight line and a tool-pose line, each with a quintic time law (Lewis, Dawson and
+Abdallah 2004, Sections 3.5 and 4.2)."""
 
 from __future__ import annotations
 
