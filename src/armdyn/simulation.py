@@ -813,9 +813,10 @@ def _simulate_driven(
 ) -> Result:  # fmt: skip
     """One run of an arm with its drives (Lewis, Dawson and Abdallah 2004, Section 3.6): the full model
     x = [q, qd, q_M, qd_M, i, x_v, P_L] and the law's integrators by compiled RK4, the drive-level law
-    evaluated at every stage, the inputs clipped to their limits and the currents and spools held within theirs. The drives are stiff (L/R is
-    about a millisecond, an oil column rings at hundreds of hertz): the run records every ``dt`` and
-    integrates with the step their time constants allow (``info["substeps"]`` steps per sample)."""
+    evaluated at every stage, the inputs clipped to their limits and the currents and spools held within
+    theirs. The drives are stiff (L/R is about a millisecond, an oil column rings at hundreds of hertz): the
+    run records every ``dt`` and integrates with the step their time constants allow (``info["substeps"]``
+    steps per sample)."""
     from armdyn.control.drives import drive_law
 
     n = arm.n
