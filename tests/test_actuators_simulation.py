@@ -256,3 +256,25 @@ def test_the_built_in_puma_drives() -> None:
     assert arm.n == 6 and arm.drives[0].name == "motor q1"
     assert np.allclose(arm.reduced_robot().inertia_matrix(np.zeros(6)), ad.models.puma560().inertia_matrix(np.zeros(6)))
     assert [d.torque_constant for d in arm.drives] == list(act.PUMA560_ELECTRICS["torque_constant"])
+
+
+def test_a_run_with_drives_that_diverges_is_a_simulation_error_holding_the_run() -> None:
+    arm = act.puma560_with_drives()
+    with pytest.raises(ad.SimulationError, match="stopped at t = ") as stopped:
+        ad.simulate(arm, DrivePID(1e6, 1e4), None, t_final=0.05, step=1e-3, q0=np.full(6, 0.2))
+    run = stopped.value.result
+    assert 0 < run.t.shape[0] < 51 and run.drives.x.shape == (run.t.shape[0], arm.n_states)
+    assert np.all(np.isfinite(run.q))
+
+
+def test_single_run_options_are_refused_with_many_runs() -> None:
+    arm = ad.models.two_link_planar()
+    single_run_only = [
+        ({"method": "rk45"}, "method"),
+        ({"events": [(0.1, arm)]}, "events"),
+        ({"progress": print}, "progress"),
+        ({"coulomb_smoothing": 0.0}, "coulomb_smoothing"),
+    ]
+    for options, name in single_run_only:
+        with pytest.raises(ad.ArgumentError, match=f"{name} does not apply to many runs at once"):
+            ad.simulate(arm, ad.control.PDGravity(1.0, 1.0), None, t_final=0.01, runs=2, **options)
