@@ -9,7 +9,7 @@ import armdyn as ad
 from armdyn import control
 from armdyn import trajectories as tr
 from armdyn.errors import ModelError
-from armdyn.simulation import SUMMARY_NAMES, plant_variants, simulate
+from armdyn.simulation import SUMMARY_NAMES, plant_variants, run_summaries, simulate
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +37,34 @@ def test_one_run_equals_simulate(puma: ad.Robot) -> None:
     assert list(one["joint"].values) == list(runs["joint"].values) == puma.joint_names
     np.testing.assert_allclose(runs["q"].isel(run=0).values, one["q"].values, rtol=0.0, atol=1e-12)
     assert np.allclose(one["error"].values, error) and one["energy"].dims == ("time",)
+
+
+def test_one_result_interface_for_one_run_and_many(puma: ad.Robot) -> None:
+    """A Result answers as many runs do: its summary row (NumPy, from its samples) equals the row the
+    compiled many-run loop keeps for the same run, and single runs concatenated along "run" hold the
+    many runs' Dataset."""
+    import xarray
+
+    rng = np.random.default_rng(11)
+    q0 = puma.configuration("qn") + rng.uniform(-0.05, 0.05, (3, 6))
+    law = control.PDGravity(80.0, 15.0)
+    paths = [tr.Sinusoid(0.1, 0.7 + 0.2 * k, 0.0, q0[k]) for k in range(3)]
+    many = simulate(puma, law, paths, t_final=1.5, q0=q0, keep="full")  # the error's window from 1 s on
+    singles = [ad.simulate(puma, law, paths[k], t_final=1.5, q0=q0[k]) for k in range(3)]
+    assert all(isinstance(r, ad.simulation.RunSummaries) for r in (many, *singles))
+    assert [r.runs for r in singles] == [1, 1, 1] and many.runs == 3
+    stacked = np.concatenate([r.summaries for r in singles])
+    np.testing.assert_allclose(stacked, many.summaries, rtol=1e-10, atol=1e-12)
+    late = [run_summaries(r.t, r.q, r.q_d, r.tau, 0.5) for r in singles]
+    earlier = simulate(puma, law, paths, t_final=1.5, q0=q0, after=0.5)
+    np.testing.assert_allclose(np.stack(late), earlier.summaries, rtol=1e-10, atol=1e-12)
+    frames = [r.summary() for r in singles]
+    assert list(frames[0].columns) == list(many.summary().columns) and bool(frames[0]["finished"].iloc[0])
+    joined = xarray.concat([r.to_xarray() for r in singles], dim="run")
+    whole = many.to_xarray()
+    for name in ("q", "qd", "tau", "q_d", *SUMMARY_NAMES, "stopped_at", "reason"):
+        assert joined[name].dims == whole[name].dims, name
+        np.testing.assert_allclose(joined[name].values, whole[name].values, rtol=1e-10, atol=1e-12, err_msg=name)
 
 
 def test_runs_with_different_plants_models_gains_and_starts_equal_their_single_runs(puma: ad.Robot) -> None:

@@ -83,9 +83,76 @@ class PythonLoopWarning(UserWarning):
     """simulate runs a user's controller or trajectory in its Python loop (slower than compiled)."""
 
 
+class RunSummaries:
+    """What one run and many runs answer alike: ``runs``, ``finished``, the per-run ``summaries`` and
+    ``summary()``, ``to_xarray()`` with named dimensions (run, time, joint). ``Result`` is one run,
+    ``Ensemble`` many; a Result's summary row equals the row many runs compute for the same run."""
+
+    arm: Robot
+    t: np.ndarray
+    info: dict
+
+    summaries: np.ndarray
+    """(runs, 5, n): per run and joint the rows named by SUMMARY_NAMES."""
+    outcome: np.ndarray
+    """(runs, 3) integers: (-1, 0, -1) for a run that finished, else (row it stopped at, reason, joint)."""
+
+    @property
+    def runs(self) -> int:
+        """The number of runs (1 for a Result)."""
+        return int(self.summaries.shape[0])
+
+    @property
+    def finished(self) -> np.ndarray:
+        """(runs,) bool: the runs that reached t_final."""
+        return np.asarray(self.outcome[:, 0] < 0)
+
+    def summary(self) -> Any:
+        """The summaries as a pandas DataFrame: one row per run, a column per quantity and joint
+        ("max_error_after q1", ...), the largest over joints ("max_error_after"), and "finished".
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per run, indexed by "run".
+
+        Raises
+        ------
+        None
+            It only arranges the summaries.
+        """
+        import pandas  # a dependency, imported when first used (start-up time)
+
+        columns = {}
+        for k, name in enumerate(SUMMARY_NAMES):
+            values = self.summaries[:, k]
+            for j, joint in enumerate(self.arm.joint_names):
+                columns[f"{name} {joint}"] = values[:, j]
+            if name != "final_q":
+                columns[name] = np.abs(values).max(axis=1)
+        columns["finished"] = self.finished
+        return pandas.DataFrame(columns, index=pandas.RangeIndex(self.runs, name="run"))
+
+
+def run_summaries(t: np.ndarray, q: np.ndarray, q_d: np.ndarray, tau: np.ndarray, after: float) -> np.ndarray:
+    """(5, n): one run's summary rows (SUMMARY_NAMES) from its samples at every step: the final error
+    e = q_d - q, the largest |e| from ``after`` seconds on, the RMS error, the largest |tau|, the final q;
+    the rows many runs compute in their compiled loop."""
+    if len(t) == 0:
+        return np.full((5, q.shape[-1]), np.nan)
+    error = q_d - q
+    dt = t[1] - t[0] if len(t) > 1 else 1.0
+    first = math.ceil(after / dt - 1e-9)
+    window = np.abs(error[first:])
+    largest_after = window.max(axis=0) if len(window) else np.zeros(q.shape[1])
+    rms = np.sqrt(np.sum(error * error, axis=0) / len(t))
+    return np.stack((error[-1], largest_after, rms, np.abs(tau).max(axis=0), q[-1]))
+
+
 @dataclass
-class Result:
-    """A simulated run. Arrays have time as their first axis."""
+class Result(RunSummaries):
+    """A simulated run. Arrays have time as their first axis; ``summary()`` and ``to_xarray()`` as
+    many runs give them (one run)."""
 
     t: np.ndarray
     q: np.ndarray
@@ -110,6 +177,18 @@ class Result:
     def error(self) -> np.ndarray | None:
         """e = q_d - q (None without a trajectory)."""
         return None if self.q_d is None else self.q_d - self.q
+
+    summaries: np.ndarray = field(init=False, repr=False, compare=False)
+    """(1, 5, n): the run's summary rows (SUMMARY_NAMES), the error's largest value taken from ``after``
+    seconds on (info["after"], default 1 s as many runs'); NaN errors without a trajectory."""
+    outcome: np.ndarray = field(init=False, repr=False, compare=False)
+    """(1, 3): (-1, 0, -1), a run that finished (a run that stops raises SimulationError holding it)."""
+
+    def __post_init__(self) -> None:
+        q_d = self.q_d if self.q_d is not None else np.full_like(self.q, np.nan)
+        after = float(self.info.get("after", 1.0))
+        self.summaries = run_summaries(self.t, self.q, q_d, self.tau, after)[None]
+        self.outcome = np.array([[-1, 0, -1]])
 
     def plot(self, path: str | Path | None = None, title: str | None = None) -> Figure:
         """Joint values with their desired values, tracking errors and torques (matplotlib figure)."""
@@ -192,13 +271,15 @@ class Result:
 
     def to_xarray(self) -> Any:
         """The run as an xarray Dataset with dimensions time and joint, as ``Ensemble.to_xarray`` names them
-        (run, time, joint) for many runs.
+        (run, time, joint) for many runs: ``xarray.concat`` of single runs along "run" holds many runs'
+        variables.
 
         Returns
         -------
         xarray.Dataset
             q, qd, qdd and tau (time, joint), the desired q_d and the error q_d - q with a trajectory, the
-            energy K + P (time); ``info`` as attributes; ``.to_dataframe()`` gives pandas.
+            energy K + P (time), the summaries (joint, named by SUMMARY_NAMES), stopped_at and reason;
+            ``info`` as attributes; ``.to_dataframe()`` gives pandas.
 
         Raises
         ------
@@ -213,6 +294,8 @@ class Result:
         if self.q_d is not None:
             variables |= {"q_d": (("time", "joint"), self.q_d), "error": (("time", "joint"), self.q_d - self.q)}
         variables["energy"] = (("time",), self.energy)
+        variables |= {name: (("joint",), self.summaries[0, k]) for k, name in enumerate(SUMMARY_NAMES)}
+        variables |= {"stopped_at": ((), self.outcome[0, 0]), "reason": ((), self.outcome[0, 1])}
         coordinates = {"time": self.t, "joint": list(self.arm.joint_names)}
         return xarray.Dataset(variables, coords=coordinates, attrs={k: str(v) for k, v in self.info.items()})
 
@@ -1457,7 +1540,7 @@ def run_many(
 
 
 @dataclass
-class Ensemble:
+class Ensemble(RunSummaries):
     """What ``simulate(..., runs=N)`` kept of N runs: per-run summaries, and samples when asked.
 
     Attributes
@@ -1484,42 +1567,6 @@ class Ensemble:
     outcome: np.ndarray
     samples: dict
     info: dict
-
-    @property
-    def runs(self) -> int:
-        """N, the number of runs."""
-        return self.summaries.shape[0]
-
-    @property
-    def finished(self) -> np.ndarray:
-        """(N,) bool: the runs that reached t_final."""
-        return self.outcome[:, 0] < 0
-
-    def summary(self) -> object:
-        """The summaries as a pandas DataFrame: one row per run, a column per quantity and joint
-        ("max_error_after q1", ...), the largest over joints ("max_error_after"), and "finished".
-
-        Returns
-        -------
-        pandas.DataFrame
-            N rows.
-
-        Raises
-        ------
-        None
-            It only arranges the summaries.
-        """
-        import pandas  # a dependency, imported when first used (start-up time)
-
-        columns = {}
-        for k, name in enumerate(SUMMARY_NAMES):
-            values = self.summaries[:, k]
-            for j, joint in enumerate(self.arm.joint_names):
-                columns[f"{name} {joint}"] = values[:, j]
-            if name != "final_q":
-                columns[name] = np.abs(values).max(axis=1)
-        columns["finished"] = self.finished
-        return pandas.DataFrame(columns, index=pandas.RangeIndex(self.runs, name="run"))
 
     def to_xarray(self) -> object:
         """An xarray Dataset with dimensions run, joint and (when samples were kept) time.
