@@ -76,10 +76,10 @@ def test_times_must_be_positive_numbers_below_1e15(name: str, value: object) -> 
 
 
 @pytest.mark.parametrize("method", ["rk4", "rk45", "radau"])
-def test_a_step_beyond_twice_t_final_gives_the_start_alone_with_every_method(method: str) -> None:
-    result = run(controller=control.PID(10.0, 2.0), dt=0.5, method=method, q0=[0.1, 0.2])
-    assert_array_equal(result.t, [0.0])
-    assert_array_equal(result.q, [[0.1, 0.2]])
+def test_a_step_longer_than_t_final_is_refused_with_every_method(method: str) -> None:
+    """Before, dt = 0.5 over t_final = 0.01 gave the start alone, silently."""
+    with pytest.raises(ad.ModelError, match=r"not a whole number of steps .* nearest valid t_final is 0.5 s"):
+        run(controller=control.PID(10.0, 2.0), dt=0.5, method=method, q0=[0.1, 0.2])
 
 
 def test_times_of_other_number_types_give_the_same_run() -> None:
@@ -322,3 +322,49 @@ def test_cli_identify_refuses_a_file_beyond_its_cap(tmp_path: Path, monkeypatch:
     path = tmp_path / "big.csv"
     path.write_text("q1,q2,qd1,qd2,qdd1,qdd2,tau1,tau2\n" + "0,0,0,0,0,0,0,0\n" * 10)
     assert_one_error_line(invoke("identify", "two_link_planar", path), "big.csv is larger than 64 bytes")
+
+
+# ----- time and the summaries' window: nothing rounded or passed silently ---------------------------------
+@pytest.mark.parametrize(("t_final", "dt", "nearest"), [(0.1, 1.0, "1 s"), (0.25, 0.1, "0.2 s or 0.3 s")])
+def test_t_final_not_a_whole_number_of_steps_is_refused_with_the_nearest_valid_value(
+    t_final: float, dt: float, nearest: str
+) -> None:
+    """Before, t_final = 0.1 with dt = 1 gave one sample at t = 0; now the error names the valid values, and
+    a run at the value named ends there (the oracle: its last time)."""
+    with pytest.raises(ad.ModelError, match=f"not a whole number of steps.*nearest valid t_final is {nearest}"):
+        run(t_final=t_final, dt=dt)
+    valid = float(nearest.split(" ")[0])
+    assert run(t_final=valid, dt=dt).t[-1] == pytest.approx(valid, rel=1e-12)
+
+
+def test_t_final_that_is_a_whole_number_of_steps_to_rounding_runs() -> None:
+    """1.0 / 0.001 is 1000.0000000000001 in floating point: a whole number of steps, 1001 samples."""
+    assert len(run(t_final=1.0, dt=0.001).t) == 1001
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"keep": 0}, "keep must be 'summary', 'full' or a whole number of steps >= 1, got 0"),
+        ({"after": -0.5}, "after must be at least 0"),
+        ({"after": float("nan")}, "after must be finite"),
+        ({"after": "1 s"}, "after must be a number"),
+        ({"after": 0.02}, r"window empty: it must be at most t_final = 0.01 s"),
+        ({"runs": 10**12}, "1,000,000,000,000 runs .* needs"),
+    ],
+)
+def test_many_run_arguments_out_of_range_are_refused_by_name(options: dict, message: str) -> None:
+    with pytest.raises(ad.ModelError, match=message):
+        run(controller=control.PDGravity(10.0, 1.0), **options)
+
+
+def test_the_summaries_default_window_is_the_final_sample_on_a_run_shorter_than_one_second() -> None:
+    """Before, runs shorter than the 1 s default had an empty window and a largest error of 0 (a pass); the
+    oracle is the largest |q_d - q| of the samples kept, from t_final on, for one run and for many."""
+    path = trajectories.Sinusoid(0.2, 2.0, 0.0, np.zeros(2))
+    many = run(controller=control.PDGravity(10.0, 1.0), trajectory=path, t_final=0.5, dt=0.001, keep="full")
+    error = np.abs(many.samples["q_d"][0] - many.samples["q"][0])
+    assert np.all(error[-1] > 0)
+    np.testing.assert_array_equal(many.summaries[0, 1], error[-1])
+    one = run(controller=control.PDGravity(10.0, 1.0), trajectory=path, t_final=0.5, dt=0.001)
+    np.testing.assert_allclose(one.summaries[0, 1], np.abs(one.q_d - one.q)[-1], rtol=0, atol=0)

@@ -134,6 +134,18 @@ class RunSummaries:
         return pandas.DataFrame(columns, index=pandas.RangeIndex(self.runs, name="run"))
 
 
+def summary_window(after: object, t_final: float) -> float:
+    """The start of the summaries' "max error after" window (s): ``after`` from 0 to t_final, or by
+    default 1 s (t_final when the run is shorter); an empty window is a ModelError, never a pass."""
+    if after is None:
+        return min(1.0, t_final)
+    start = inputs.number(after, "after", minimum=0.0)
+    if start > t_final:
+        raise ModelError(f"after = {start:g} s leaves the 'max error after' window empty: it must be at most "
+                         f"t_final = {t_final:g} s")  # fmt: skip
+    return start
+
+
 def run_summaries(t: np.ndarray, q: np.ndarray, q_d: np.ndarray, tau: np.ndarray, after: float) -> np.ndarray:
     """(5, n): one run's summary rows (SUMMARY_NAMES) from its samples at every step: the final error
     e = q_d - q, the largest |e| from ``after`` seconds on, the RMS error, the largest |tau|, the final q;
@@ -186,7 +198,7 @@ class Result(RunSummaries):
 
     def __post_init__(self) -> None:
         q_d = self.q_d if self.q_d is not None else np.full_like(self.q, np.nan)
-        after = float(self.info.get("after", 1.0))
+        after = float(self.info.get("after", min(1.0, self.t[-1] if len(self.t) else 0.0)))
         self.summaries = run_summaries(self.t, self.q, q_d, self.tau, after)[None]
         self.outcome = np.array([[-1, 0, -1]])
 
@@ -609,7 +621,8 @@ def _users_own(item: object) -> bool:
 
 
 def checked_times(t_final: object, dt: object) -> tuple[float, float]:
-    """t_final and dt as positive floats (below 1e15), or a ModelError naming them."""
+    """t_final and dt as positive floats (below 1e15), t_final a whole number of steps dt (to 1e-9
+    relative), or a ModelError naming them (and the nearest valid t_final): nothing is rounded silently."""
     checked = []
     for name, value in (("t_final", t_final), ("dt", dt)):
         try:
@@ -621,7 +634,16 @@ def checked_times(t_final: object, dt: object) -> tuple[float, float]:
                 f"{name} must be a positive number of seconds, below {LARGEST_STATE:.0e}, got {reprlib.repr(value)}"
             )
         checked.append(seconds)
-    return checked[0], checked[1]
+    t_final, dt = checked
+    ratio = t_final / dt
+    steps = round(ratio) if ratio <= MAX_SAMPLES else 0  # a record too long is step_count's to refuse
+    if ratio <= MAX_SAMPLES and (steps < 1 or abs(ratio - steps) > 1e-9 * ratio):
+        nearest = sorted({max(1, math.floor(ratio)), max(1, math.ceil(ratio))})
+        raise ModelError(
+            f"t_final = {t_final:g} s is not a whole number of steps of dt = {dt:g} s ({ratio:.6g} steps): the "
+            f"nearest valid t_final is {' or '.join(f'{k * dt:.12g} s' for k in nearest)}"
+        )
+    return t_final, dt
 
 
 def _method_name(method: object) -> str:
@@ -745,7 +767,8 @@ def simulate(
     keep : "summary", "full" or int, optional
         Many runs: what is kept of each, the summaries only (default), every step, or every k-th step.
     after : float, optional
-        Many runs: the start of the "max error after" window of the summaries (s), default 1.
+        Many runs: the start of the "max error after" window of the summaries (s), from 0 to t_final;
+        default 1 s, or t_final when the run is shorter.
     threads : int, optional
         Many runs: Numba's thread count for the call (default: as set; all cores).
 
@@ -916,7 +939,7 @@ def _simulate_driven(
         longest = inputs.number(step, "step")
         if not (0 < longest < math.inf):
             raise ModelError(f"step must be a positive number of seconds, got {step}")
-    samples, substeps = round(t_final / dt) + 1, max(1, math.ceil(dt / longest - 1e-9))
+    samples, substeps = step_count(t_final, dt, arm.n_states, False) + 1, max(1, math.ceil(dt / longest - 1e-9))
     y = np.concatenate([arm.initial_state(start, rates), np.zeros(n)])
     times, states = np.empty(samples), np.empty((samples, arm.n_states))
     applied, torques = np.empty((samples, n)), np.empty((samples, n))
@@ -1729,18 +1752,27 @@ def _simulate_runs(
     q, qd, tau and q_d every k-th step; ``"full"`` every step. The arguments are ``simulate``'s.
     """
     keep = "summary" if keep is None else keep
-    after = 1.0 if after is None else after
     inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (many runs run compiled code)")
     n = arm.n
     t_final, dt = checked_times(t_final, dt)
+    after = summary_window(after, t_final)
+    steps = step_count(t_final, dt, n, False)
+    rows = steps + 1
+    every = 0 if keep == "summary" else 1 if keep == "full" else keep
+    if isinstance(every, str) or not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 0:
+        raise ModelError(f"keep must be 'summary', 'full' or a whole number of steps >= 1, got {keep!r}")
+    if keep == 0:
+        raise ModelError("keep must be 'summary', 'full' or a whole number of steps >= 1, got 0 (to keep only the "
+                         "summaries, give keep='summary')")  # fmt: skip
+    kept = 0 if every == 0 else (rows - 1) // every + 1
     spec, period, law = unwrapped_law(controller, n)
     if spec is None:
         raise ArgumentError("many runs run armdyn.control's laws (ComputedTorque, PDGravity, PID, in Digital or "
                          f"Saturated) or None (no torque), got {type(controller).__name__}")  # fmt: skip
     lengths = {len(v) for v in (plants, models) if isinstance(v, Plants)}
-    lengths |= {rows for v in (q0, qd0, disturbance) if (rows := _rows(v)) is not None}
+    lengths |= {count for v in (q0, qd0, disturbance) if (count := _rows(v)) is not None}
     lengths |= {len(trajectory)} if isinstance(trajectory, (list, tuple)) else set()
-    lengths |= {rows} if (rows := _rows(gains, 3)) is not None else set()
+    lengths |= {count} if (count := _rows(gains, 3)) is not None else set()
     lengths.discard(1)
     if runs is None:
         if len(lengths) > 1:
@@ -1749,6 +1781,8 @@ def _simulate_runs(
     runs = inputs.integer(runs, "runs", 1)
     if lengths - {runs}:
         raise ModelError(f"runs = {runs}, but per-run arguments have {sorted(lengths - {runs})} rows")
+    per_run = 8 * ((17 + 4 * kept) * n + 6)  # starts, disturbance, gains, paths, summaries, outcome, kept samples
+    memory.affordable(float(runs) * per_run, f"{runs:,} runs (their starts, gains, summaries and samples kept)")
     plant_rows, plant_coulombs, plant_of = _variants(plants, arm, runs, "plants")
     shares = np.full(runs, spec.model is None and models is None)
     model_rows, model_coulombs, model_of = _variants(models if models is not None else spec.model, arm, runs,
@@ -1765,13 +1799,6 @@ def _simulate_runs(
     path_kind, params = _paths(trajectory, runs, n)
     starts = (_runs_of(q0, "q0", runs, n), _runs_of(qd0, "qd0", runs, n))
     tau_d = _runs_of(disturbance, "disturbance", runs, n)
-    steps = step_count(t_final, dt, n, False)
-    rows = steps + 1
-    every = 0 if keep == "summary" else 1 if keep == "full" else keep
-    if isinstance(every, str) or not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 0:
-        raise ModelError(f"keep must be 'summary', 'full' or a whole number of steps >= 1, got {keep!r}")
-    kept = 0 if every == 0 else (rows - 1) // every + 1
-    memory.affordable(runs * kept * n * 4 * 8 + runs * n * 5 * 8, f"the samples kept of {runs} runs")
     summaries, outcome, samples = launch_many(
         (plant_rows, plant_coulombs, plant_of, tau_d), (model_rows, model_coulombs, model_of, shares),
         (spec.kind, table, hold), (path_kind, params), starts, (dt, rows, every, math.ceil(after / dt - 1e-9)),
