@@ -259,7 +259,11 @@ def test_the_built_in_puma_drives() -> None:
 
 
 def test_a_run_with_drives_that_diverges_is_a_simulation_error_holding_the_run() -> None:
-    arm = act.puma560_with_drives()
+    """An RK4 step seven times the wrist armatures' L / R_a blows the run up; the drives have no limits
+    (held currents and clipped voltages would keep it bounded)."""
+    arm = act.with_actuators(*act.motor_drives(ad.models.puma560(), **{**act.PUMA560_ELECTRICS,
+                                                                       "voltage_limit": np.inf,
+                                                                       "current_limit": np.inf}))  # fmt: skip
     with pytest.raises(ad.SimulationError, match="stopped at t = ") as stopped:
         ad.simulate(arm, DrivePID(1e6, 1e4), None, t_final=0.05, step=1e-3, q0=np.full(6, 0.2))
     run = stopped.value.result
@@ -278,3 +282,94 @@ def test_single_run_options_are_refused_with_many_runs() -> None:
     for options, name in single_run_only:
         with pytest.raises(ad.ArgumentError, match=f"{name} does not apply to many runs at once"):
             ad.simulate(arm, ad.control.PDGravity(1.0, 1.0), None, t_final=0.01, runs=2, **options)
+
+
+def _limited_puma(current_limit: float, voltage_limit: float = 40.0) -> act.ActuatedArm:
+    """The PUMA 560 with the large motors' electrics on every joint and the given limits."""
+    electrics = {"torque_constant": 0.22, "back_emf": 0.22, "resistance": 2.1, "inductance": 2e-3}
+    bare, drives = act.motor_drives(ad.models.puma560(), **electrics, voltage_limit=voltage_limit,
+                                    current_limit=current_limit)  # fmt: skip
+    return act.with_actuators(bare, drives)
+
+
+@pytest.mark.parametrize("step", [None, 1e-3])
+def test_the_current_and_voltage_limits_hold_at_every_sample_and_decide_the_run(step: float | None) -> None:
+    """A saturated current loop: under a PID that asks for far more than the amplifier gives, each current
+    reaches its limit and never leaves it (to rounding), at the default step and at one RK4 step per 1 ms
+    sample; the voltage stays within its limit; and runs at 0.5, 5 and 20 A differ (the limit decides the
+    motion). Where a current is held, the voltage recorded is the one that holds it, R_a i + K_b qd / r."""
+    q0 = np.array(ad.models.puma560().configurations["qn"])
+    path, law = tr.Sinusoid(0.5, 2.0, 0.0, q0), DrivePID(20.0, 0.5)
+    runs = {}
+    for limit in (0.5, 5.0, 20.0):
+        arm = _limited_puma(limit)
+        run = ad.simulate(arm, law, path, t_final=0.3, q0=q0, step=step)
+        current, voltage = run.drives.i, run.drives.v
+        assert np.abs(current).max() <= limit * (1 + 1e-15), (limit, np.abs(current).max())
+        assert np.abs(current).max() == pytest.approx(limit, rel=1e-12)  # the limit is met
+        assert np.abs(voltage).max() <= 40.0
+        held = np.abs(current) >= limit * (1 - 1e-15)
+        holding = arm._R_a * current + arm._K_b * run.qd / arm._r
+        assert held.sum() > 10 and np.allclose(voltage[held], holding[held], rtol=1e-12, atol=1e-12)
+        runs[limit] = run
+    for low, high in ((0.5, 5.0), (5.0, 20.0)):
+        assert np.abs(runs[low].q - runs[high].q).max() > 1e-3, (low, high)
+
+
+def test_the_spool_stays_within_its_stroke() -> None:
+    """A valve whose current limit would take the spool to five times its stroke: the spool meets its hard
+    stop and never passes it, while the rest of the run goes on."""
+    base = act.representative_drives(ad.models.polar_rp(), "hydraulic")
+    arm = act.with_actuators(base.robot, [dataclasses.replace(d, current_limit=0.05) for d in base.drives])
+    q0 = np.full(2, 0.2)
+    for path, law in ((tr.Sinusoid(0.3, 2.0, 0.0, q0), DrivePID(0.1, 0.0, 0.1)), (None, DrivePID(1.0, 0.01))):
+        run = ad.simulate(arm, law, path, t_final=0.5, q0=q0 + (0.1 if path is None else 0.0))
+        stroke = np.array([d.stroke for d in arm.drives])
+        assert np.all(np.abs(run.drives.spool) <= stroke), np.abs(run.drives.spool).max(axis=0) / stroke
+        assert np.abs(run.drives.spool).max() == stroke.max()  # the stop is met
+        assert np.abs(run.drives.v).max() <= 0.05
+
+
+def test_the_hard_stops_put_a_state_back_and_hold_its_rate() -> None:
+    """The compiled pieces of the saturated current loop and the spool stop: hold_limits projects a state
+    past a limit back onto it (NaN stays NaN), and at the limit full_rates zeroes the rate that points out,
+    applying the voltage that holds the current (R_a i + K_b qd_M), while a rate pointing in is left."""
+    from armdyn.dynamics import drives as compiled
+
+    arm = act.with_actuators(*act.motor_drives(ad.models.two_link_planar(), torque_constant=0.2, back_emf=0.2,
+                                               resistance=2.0, inductance=2e-3, voltage_limit=24.0,
+                                               current_limit=3.0))  # fmt: skip
+    table = arm.packed_drives()
+    x = arm.initial_state(np.array([0.3, -0.2]), np.array([0.5, -1.0]))
+    c = arm._slices["i"]
+    x[c] = [7.0, np.nan]
+    compiled.hold_limits(table, x)
+    assert x[c][0] == 3.0 and np.isnan(x[c][1])
+    x[c] = [3.0, -3.0]
+    model = arm.mechanical_robot().packed
+    for u, held in (([24.0, -24.0], True), ([-24.0, 24.0], False)):
+        applied, out = np.array(u), np.empty(arm.n_states)
+        compiled.full_rates(model, table, x, applied, np.empty(2), out)
+        unheld = (np.array(u) - arm._R_a * x[c] - arm._K_b * x[2:4] / arm._r) / arm._L
+        if held:
+            assert np.all(out[c] == 0.0) and np.all(unheld * x[c] > 0)
+            assert np.allclose(applied, arm._R_a * x[c] + arm._K_b * x[2:4] / arm._r, rtol=1e-15)
+        else:
+            assert np.allclose(out[c], unheld, rtol=1e-15) and np.array_equal(applied, u)
+
+
+def test_limits_far_away_leave_the_run_unchanged_bit_for_bit() -> None:
+    """Limits that are never met (1e6 A, 1e6 V, a 1 m stroke) give the run without limits, bit for bit."""
+    q0 = np.array(ad.models.puma560().configurations["qn"])
+    path = tr.Sinusoid(0.1, 0.5, 0.0, q0)
+    free, far = _limited_puma(np.inf, np.inf), _limited_puma(1e6, 1e6)
+    runs = [ad.simulate(arm, DrivePID(20.0, 0.5, 20.0), path, t_final=0.1, q0=q0) for arm in (free, far)]
+    assert np.array_equal(runs[0].drives.x, runs[1].drives.x) and np.array_equal(runs[0].drives.v, runs[1].drives.v)
+    base = act.representative_drives(ad.models.polar_rp(), "hydraulic")
+    free = act.with_actuators(base.robot, [dataclasses.replace(d, current_limit=np.inf, stroke=np.inf)
+                                           for d in base.drives])  # fmt: skip
+    far = act.with_actuators(base.robot, [dataclasses.replace(d, current_limit=1e6, stroke=1.0) for d in base.drives])
+    q0 = np.full(2, 0.2)
+    runs = [ad.simulate(arm, DrivePID(0.1, 0.002, 0.05), tr.Sinusoid(0.1, 0.5, 0.0, q0), t_final=0.1, q0=q0)
+            for arm in (free, far)]  # fmt: skip
+    assert np.array_equal(runs[0].drives.x, runs[1].drives.x) and np.array_equal(runs[0].drives.v, runs[1].drives.v)

@@ -35,7 +35,7 @@ from armdyn import control, inputs, memory, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
-from armdyn.dynamics.drives import INPUT_LIMIT, clipped, closed_loop
+from armdyn.dynamics.drives import closed_loop, hold_limits
 from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
 from armdyn.dynamics.linalg import cholesky, cholesky_solve_vector
 from armdyn.dynamics.packed import (
@@ -469,8 +469,9 @@ def run_drives(
     references: np.ndarray,
 ) -> int:
     """RK4 on y = [x, z] (the arm with its drives and the law's integrators), ``substeps`` steps of h between
-    samples, the drive-level law evaluated at every stage (armdyn.dynamics.drives.closed_loop); records each
-    sample (the inputs after their limits). Returns -1, or the sample where M(q) was singular or the state
+    samples, the drive-level law evaluated at every stage (armdyn.dynamics.drives.closed_loop), the currents and
+    spools put back within their limits at every stage and step (hold_limits); records each sample (the
+    inputs as applied). Returns -1, or the sample where M(q) was singular or the state
     stopped being finite. The four stages share one evaluation site, so the inlined model is compiled once."""
     n, size, last = int(model[N_JOINTS]), y.shape[0], states.shape[0] - 1
     rates, stage_y = np.empty((4, size)), np.empty(size)
@@ -483,6 +484,7 @@ def run_drives(
                 c = 0.0 if stage == 0 else (0.5 if stage < 3 else 1.0)
                 if stage > 0:
                     rk4_stage_state(y, rates[stage - 1], c, h, stage_y)
+                    hold_limits(drives, stage_y)
                 at = y if stage == 0 else stage_y
                 status = closed_loop(model, drives, gains, law, kind, params, q0, t + (step + c) * h, at, u, tau,
                                      reference, work, rates[stage], stage != 2)  # fmt: skip
@@ -491,8 +493,7 @@ def run_drives(
                 if step == 0 and stage == 0:
                     times[sample] = t
                     states[sample] = y[:recorded]
-                    for j in range(n):
-                        applied[sample, j] = clipped(u[j], drives[INPUT_LIMIT, j])
+                    applied[sample] = u
                     torques[sample] = tau
                     accelerations[sample] = rates[0, n : 2 * n]
                     references[sample] = reference[0]
@@ -502,6 +503,7 @@ def run_drives(
                     if sample == last:
                         return -1
             rk4_advance(y, rates[0], rates[1], rates[2], rates[3], h)
+            hold_limits(drives, y)
     return -1
 
 
@@ -920,9 +922,9 @@ def _simulate_driven(
     """One run of an arm with its drives (Lewis, Dawson and Abdallah 2004, Section 3.6): the full model
     x = [q, qd, q_M, qd_M, i, x_v, P_L] and the law's integrators by compiled RK4, the drive-level law
     evaluated at every stage, the inputs clipped to their limits and the currents and spools held within
-    theirs. The drives are stiff (L/R is about a millisecond, an oil column rings at hundreds of hertz): the
-    run records every ``dt`` and integrates with the step their time constants allow (``info["substeps"]``
-    steps per sample)."""
+    theirs at every stage (armdyn.dynamics.drives: a saturated current loop, a spool's hard stop). The drives
+    are stiff (L/R is about a millisecond, an oil column rings at hundreds of hertz): the run records every
+    ``dt`` and integrates with the step their time constants allow (``info["substeps"]`` steps per sample)."""
     from armdyn.control.drives import drive_law
 
     n = arm.n

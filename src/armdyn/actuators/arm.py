@@ -110,7 +110,8 @@ def _pressure_rate(
 
 
 def _held(rate: np.ndarray, value: np.ndarray, limit: np.ndarray) -> np.ndarray:
-    """The rate of a state held within +-limit: zero where it would leave the range."""
+    """The rate of a state held within +-limit: zero where it would leave the range (the projected
+    dynamics of a state kept in a box, Dupuis and Nagurney 1993)."""
     return np.where(((value >= limit) & (rate > 0)) | ((value <= -limit) & (rate < 0)), 0.0, rate)
 
 
@@ -163,7 +164,9 @@ class ActuatedArm:
     The full model has the state x = [q, qd, q_M, qd_M, i, x_v, P_L] (``state_names``): q_M and
     qd_M for the flexible drives, in joint order, i for the DC drives, x_v and P_L for the
     hydraulic ones. Limits act there and in ``forward_dynamics``: the input is clipped to the
-    voltage (valve current) limit, the current and the spool are held within theirs.
+    voltage (valve current) limit, the current and the spool are held within theirs (a saturated
+    current loop and the spool's hard stop: at a limit the rate that points out is zero; see
+    ``state_derivative``).
 
     Parameters
     ----------
@@ -615,7 +618,10 @@ class ActuatedArm:
         rotors of flexible drives J_M qdd_M + B_M qd_M + F_M + r tau = K_M i; the armatures
         L di/dt + R_a i + K_b qd_M = v; the valves and the continuity equation of Merritt (1967)
         (BOOK.md section 7). v is clipped to the voltage (valve current) limits, and the currents
-        and spools are held within theirs.
+        and spools are held within theirs: at a limit the rate that points out is zero (the
+        amplifier's current loop applies R_a i + K_b qd_M there; the spool meets its stop), the
+        projected dynamics of a state kept in a box (Dupuis and Nagurney 1993). A state past a
+        limit is not moved back here; ``simulate`` does that at every RK4 stage.
 
         Parameters
         ----------

@@ -62,7 +62,8 @@ class Hydraulic:
     current_limit : float, optional
         |i| <= current_limit for the valve current, A (default math.inf): the input is clipped.
     stroke : float, optional
-        |x_v| <= stroke, m (default math.inf): the spool stops there.
+        |x_v| <= stroke, m (default math.inf): a hard stop; the spool's rate is zero there when the valve
+        pushes it outward, and a simulation keeps it within the stroke at every RK4 stage.
     name : str, optional
         The drive's name, used in messages (default "hydraulic").
 

@@ -48,7 +48,10 @@ class DCMotor:
     voltage_limit : float, optional
         |v| <= voltage_limit, V (default math.inf: none). The input is clipped to it.
     current_limit : float, optional
-        |i| <= current_limit, A (default math.inf: none): the amplifier holds the current there.
+        |i| <= current_limit, A (default math.inf: none). The amplifier is a saturated current loop:
+        at the limit, where the voltage would push the current out, it applies the voltage that holds
+        it, R_a i + K_b qd_M (di/dt = 0), and a simulation keeps the current within the limit at every
+        RK4 stage (armdyn.dynamics.drives).
     coulomb : float or (float, float), optional
         F_M, Coulomb friction on the rotor, N m: a magnitude c (c for positive and -c for negative
         rotor velocity qd_M) or a pair (Tc+, Tc-) with Tc+ >= 0 >= Tc- (default 0).

@@ -10,7 +10,16 @@ torque K (r q_M - q) + B_s (r qd_M - qd) for a flexible one, and A P_L for a hyd
 drives' own equations are the armature L di/dt + R_a i + K_b qd_M = v, the flexible rotor
 J_M qdd_M + B_M qd_M + F_M + r tau = K_M i, the valve tau_v dx_v/dt + x_v = K_v u, the load flow
 (linear or square-root orifice) and the continuity equation Q_L = A qd + C_tp P_L + C dP_L/dt.
-Inputs are clipped to their limits; currents and spools are held within theirs.
+
+Limits (``full_rates`` and ``hold_limits``): each DC drive's amplifier is a saturated current loop. Its
+voltage is the law's, clipped to +-V_max, while the current is inside +-i_max; at the limit, where
+that voltage would push the current out, the amplifier applies the voltage that holds it,
+v = R_a i + K_b qd_M (so di/dt = 0, the armature equation of the book's Section 3.6 unchanged). The
+valve current is clipped to its limit, and the spool meets a hard stop at +-stroke: its rate is
+zero there when pushed outward. Both are the projected dynamics of a state kept in a box (Dupuis and
+Nagurney 1993): the rate is zeroed where it points out of the box, and ``hold_limits`` puts a state
+that a finite RK4 step carried past a limit back on it, at every stage and every step, so that the
+limits hold at every stage and every recorded sample. With the limits infinite both do nothing.
 
 Control laws (row ``LAW`` of the gains, evaluated at every RK4 stage):
 
@@ -54,13 +63,29 @@ KP, KV, KI, BANDWIDTH = range(4)
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def _held(rate: float, value: float, limit: float) -> float:
-    """The rate of a state held within +-limit: zero where it would leave the range."""
+    """The rate of a state held within +-limit: zero where it would leave the range (the rate projected
+    onto the box the limits bound, Dupuis and Nagurney 1993)."""
     return 0.0 if (value >= limit and rate > 0) or (value <= -limit and rate < 0) else rate
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def clipped(value: float, limit: float) -> float:
     return min(max(value, -limit), limit)
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def hold_limits(drives: np.ndarray, x: np.ndarray) -> None:
+    """Put each DC drive's current back within +-i_max and each spool within +-stroke, in place: the
+    state projected onto the box its limits bound (the hard stops of the saturated current loop and of
+    the spool; a NaN stays NaN, so that a run that blows up is still seen)."""
+    for j in range(drives.shape[1]):
+        hydraulic = drives[DRIVE_KIND, j] == HYDRAULIC
+        at = int(drives[SPOOL_AT, j]) if hydraulic else int(drives[CURRENT_AT, j])
+        limit = drives[STROKE, j] if hydraulic else drives[CURRENT_LIMIT, j]
+        if x[at] > limit:
+            x[at] = limit
+        elif x[at] < -limit:
+            x[at] = -limit
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -91,8 +116,9 @@ def _load_flow(drives: np.ndarray, j: int, spool: float, pressure: float) -> flo
 @njit(inline="always", **NUMBA_OPTIONS)
 def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarray, tau: np.ndarray,
                out: np.ndarray) -> int:  # fmt: skip
-    """xdot of the full model under the inputs u (clipped here), the joint torques in ``tau``; returns
-    the status of the forward dynamics (0, or M singular)."""
+    """xdot of the full model under the law's inputs u, the joint torques in ``tau``; u is left as applied
+    (clipped to its limit, or a DC drive's voltage that holds its current at the current limit);
+    returns the status of the forward dynamics (0, or M singular)."""
     n = int(model[N_JOINTS])
     joint_torques(drives, x, tau)
     status = aba_one(model, x[:n], x[n : 2 * n], tau, out[n : 2 * n])
@@ -100,6 +126,7 @@ def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarr
         out[j] = x[n + j]
         kind, r = drives[DRIVE_KIND, j], drives[RATIO, j]
         u_j = clipped(u[j], drives[INPUT_LIMIT, j])
+        u[j] = u_j
         if kind == HYDRAULIC:
             s, p = int(drives[SPOOL_AT, j]), int(drives[PRESSURE_AT, j])
             spool_rate = (drives[VALVE_GAIN, j] * u_j - x[s]) / drives[VALVE_TIME, j]
@@ -120,6 +147,8 @@ def full_rates(model: np.ndarray, drives: np.ndarray, x: np.ndarray, u: np.ndarr
                       - r * tau[j]) / drives[ROTOR_INERTIA, j]  # fmt: skip
         rate = (u_j - drives[RESISTANCE, j] * current - drives[BACK_EMF, j] * rotor_speed) / drives[INDUCTANCE, j]
         out[c] = _held(rate, current, drives[CURRENT_LIMIT, j])
+        if out[c] == 0.0 and rate != 0.0:  # the current loop holds the current at its limit: v = R_a i + K_b qd_M
+            u[j] = drives[RESISTANCE, j] * current + drives[BACK_EMF, j] * rotor_speed
     return status
 
 
