@@ -40,6 +40,7 @@ from typer.core import TyperGroup
 
 from armdyn import models as catalog
 from armdyn.errors import MissingDependencyError, ModelError, SimulationError
+from armdyn.files import atomic_write, write_text
 from armdyn.robot import Robot
 
 if TYPE_CHECKING:
@@ -330,7 +331,14 @@ def _output_file(path: str, option: str) -> Path:
         _fail(f"{option} {path} is a folder; give a file name")
     if target.exists() and not target.is_file():
         _fail(f"{option} {path} is not a regular file (a device or a pipe); give a file name")
+    _writable(folder, f"{option} {path}")
     return target
+
+
+def _writable(folder: Path, what: str) -> None:
+    """A ModelError, before any work, when files cannot be made in ``folder`` (a read-only folder)."""
+    if not os.access(folder, os.W_OK | os.X_OK):
+        _fail(f"{what}: the folder {folder} is not writable")
 
 
 def _output_folder(path: str, option: str) -> Path:
@@ -340,7 +348,16 @@ def _output_folder(path: str, option: str) -> Path:
         _fail(f"{option} {path} is a file, not a folder")
     if not folder.exists() and not folder.absolute().parent.is_dir():
         _fail(f"{option} {path}: the folder {folder.absolute().parent} does not exist")
+    _writable(folder if folder.exists() else folder.absolute().parent, f"{option} {path}")
     return folder
+
+
+def _make_folder(folder: Path) -> None:
+    """Make an output folder (its parent exists: ``_output_folder``); a ModelError naming it when it cannot be."""
+    try:
+        folder.mkdir(exist_ok=True)
+    except OSError as error:
+        _fail(f"could not make the folder {folder}: {error.strerror or error}")
 
 
 def _animation_file(path: str, option: str) -> Path:
@@ -400,7 +417,7 @@ def _write_sheets(target: Path, sheets: Sequence[_Sheet], notes: Sequence[str] =
     (a heading and a table each, then the notes) or text (as printed, then the notes)."""
     suffix = target.suffix.lower()
     if suffix == ".csv":
-        with target.open("w", newline="", encoding="utf-8") as handle:
+        with atomic_write(target, newline="", encoding="utf-8") as handle:
             writer = csv_files.writer(handle)
             for index, sheet in enumerate(sheets):
                 if len(sheets) > 1:
@@ -421,7 +438,7 @@ def _write_sheets(target: Path, sheets: Sequence[_Sheet], notes: Sequence[str] =
             lines += [cells(row) for row in sheet.rows]
             lines += ["", sheet.caption, ""] if sheet.caption else [""]
         lines += [f"- {note}" for note in notes]
-        target.write_text("\n".join(lines).rstrip() + "\n", encoding="utf-8")
+        write_text(target, "\n".join(lines).rstrip() + "\n")
         return
     text = io.StringIO()
     plain = Console(file=text, width=160, no_color=True, highlight=False)
@@ -429,7 +446,7 @@ def _write_sheets(target: Path, sheets: Sequence[_Sheet], notes: Sequence[str] =
         plain.print(sheet.rich())
     for note in notes:
         plain.print(note, markup=False)
-    target.write_text(text.getvalue(), encoding="utf-8")
+    write_text(target, text.getvalue())
 
 
 def _units(arm: Robot, revolute: str, prismatic: str) -> str:
@@ -794,7 +811,7 @@ def derive(
         text = form.pretty(limit=None) if target is not None else form.pretty()
     _activity.stop()
     if target is not None:
-        target.write_text(text, encoding="utf-8")
+        write_text(target, text)
         console.print(f"wrote {output}")
     else:
         print(text)
@@ -828,7 +845,7 @@ def _generated_code(name: str, language: str, method: str, symbolic: bool, stric
 def _write_or_print(text: str, output: str | None) -> None:
     if output:
         target = _output_file(output, "--output")
-        target.write_text(text, encoding="utf-8")
+        write_text(target, text)
         console.print(f"wrote {output}")
     else:
         print(text)
@@ -1047,7 +1064,7 @@ def identify(
             highlight=False,
         )
     if target is not None:
-        with target.open("w", newline="", encoding="utf-8") as handle:
+        with atomic_write(target, newline="", encoding="utf-8") as handle:
             writer = csv_files.writer(handle)
             writer.writerow(["base parameter", "estimate", "standard error", "model value"])
             for row in zip(result.names, result.phi, result.standard_errors, result.base.phi, strict=True):
@@ -1369,7 +1386,7 @@ def simulate(
     report = _report(result) if result.task is None else _task_report(result)
     reports = [report] + ([_drive_report(result, driven)] if driven is not None else [])
     if folder is not None:
-        folder.mkdir(exist_ok=True)
+        _make_folder(folder)
         stem = re.sub(r"[^\w-]+", "_", arm.name).strip("_") or "arm"
         (result.plot if result.task is None else result.plot_task)(folder / f"{stem}.png")
         result.to_csv(folder / f"{stem}.csv")
@@ -1607,7 +1624,7 @@ def demo(
         "Result", run(arm, control.ComputedTorque(100.0, 20.0), desired, t_final=5.0, dt=1e-3, progress=progress)
     )
     _report(result)
-    folder.mkdir(exist_ok=True)
+    _make_folder(folder)
     result.plot(folder / "demo.png", title="Example 4.4-1: PD computed-torque control of the two-link arm")
     result.to_csv(folder / "demo.csv")
     _activity.status("writing the animation of Example 4.4-1")

@@ -19,6 +19,7 @@ import numpy as np
 
 from armdyn import inputs
 from armdyn.errors import ArgumentError, ModelError
+from armdyn.files import atomic_path
 from armdyn.model.arm import ArmModel
 
 if TYPE_CHECKING:
@@ -97,7 +98,7 @@ def plot_result(result: Result, path: str | Path | None = None, title: str | Non
     axes[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
     if path is not None:
-        fig.savefig(path, dpi=150)
+        save_figure(fig, path)
         plt.close(fig)
     return fig
 
@@ -180,7 +181,7 @@ def plot_task(result: Result, path: str | Path | None = None, title: str | None 
     error.grid(True, alpha=0.3)
     fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
     if path is not None:
-        fig.savefig(path, dpi=150)
+        save_figure(fig, path)
         plt.close(fig)
     return fig
 
@@ -233,7 +234,7 @@ def plot_ensemble(ensemble: Ensemble, path: str | Path | None, quantity: str, ro
              f"{ensemble.info['after']:g} s")  # fmt: skip
     fig.suptitle(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
     if path is not None:
-        fig.savefig(path, dpi=150)
+        save_figure(fig, path)
         plt.close(fig)
     return fig
 
@@ -268,7 +269,7 @@ def plot_study(result: StudyResult, path: str | Path | None = None) -> Figure:
     width = min(TITLE_WIDTH, int(12 * fig.get_figwidth()))
     fig.suptitle(textwrap.fill(f"{result.spec.text}: {result.estimate}", width), fontsize=10)
     if path is not None:
-        fig.savefig(path, dpi=150)
+        save_figure(fig, path)
         plt.close(fig)
     return fig
 
@@ -623,7 +624,7 @@ def plot_arm(
     ax.set_title(textwrap.fill(title or _q_title(arm, q, name), 70), fontsize=10)
     fig = cast("Figure", ax.figure)  # the axes of a figure (a subfigure's cannot save)
     if target is not None:
-        fig.savefig(target, dpi=150)
+        save_figure(fig, target)
         if own:
             plt.close(fig)
     return fig
@@ -838,10 +839,11 @@ def animate(
     scenes = [_scene(result.arm, result.q[k]) for k in indices]
     fig, panels = _animation_figure(result, scenes, _frame_indices(len(result.t), 2000), title, resolution)
     try:
-        if target.suffix.lower() == ".gif":
-            _write_gif(target, _blitted_frames(fig, panels, scenes, indices), rate)
-        else:
-            _write_mp4(target, fig, panels, scenes, indices, rate)
+        with atomic_path(target) as temporary:  # whole or not at all
+            if target.suffix.lower() == ".gif":
+                _write_gif(temporary, _blitted_frames(fig, panels, scenes, indices), rate)
+            else:
+                _write_mp4(temporary, fig, panels, scenes, indices, rate)
     finally:
         plt.close(fig)
     return target
@@ -887,6 +889,18 @@ def _write_mp4(target: Path, fig: Figure, panels: _Panels, scenes: list[_Scene],
         for scene, index in zip(scenes, indices, strict=True):
             panels.show(scene, index)
             writer.grab_frame()
+
+
+def save_figure(fig: Figure, path: str | Path) -> None:
+    """Save ``fig`` (150 dpi) to ``path`` whole or not at all (armdyn.files.atomic_path: a ModelError names
+    a missing folder or a failed write); a path without a suffix gets matplotlib's default format's."""
+    import matplotlib
+
+    target = Path(path)
+    if not target.suffix:
+        target = target.with_name(f"{target.name}.{matplotlib.rcParams['savefig.format']}")
+    with atomic_path(target) as temporary:
+        fig.savefig(temporary, dpi=150)
 
 
 def png_bytes(fig: Figure) -> bytes:

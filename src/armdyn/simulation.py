@@ -57,6 +57,7 @@ from armdyn.dynamics.packed import (
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.dynamics.status import OK
 from armdyn.errors import ArgumentError, ModelError, SimulationError
+from armdyn.files import atomic_write
 from armdyn.inputs import LARGEST_STATE
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
@@ -267,7 +268,7 @@ class Result(RunSummaries):
         if self.drives is not None:  # the drives' inputs, then their states by name (e.g. "i q1", "PL q2")
             header += [f"v{i + 1}" for i in range(n)] + [name for name in self.drives.names[2 * n :]]
             table = np.hstack([table, self.drives.v, self.drives.x[:, 2 * n :]])
-        with open(path, "w", newline="", encoding="utf-8") as handle:
+        with atomic_write(path, newline="", encoding="utf-8") as handle:  # whole or not at all
             writer = csv.writer(handle)
             writer.writerow(header)
             writer.writerows(table.tolist())
@@ -279,7 +280,9 @@ class Result(RunSummaries):
             arrays |= {"q_d": self.q_d, "error": self.q_d - self.q}
         if self.task is not None:
             arrays |= {"y": self.task.y, "y_d": self.task.y_d, "task_error": self.task.error}
-        np.savez(path, **arrays)
+        target = str(path) if str(path).endswith(".npz") else f"{path}.npz"  # as np.savez names it
+        with atomic_write(target, "wb") as handle:  # whole or not at all
+            np.savez(handle, **arrays)
 
     def to_xarray(self) -> Any:
         """The run as an xarray Dataset with dimensions time and joint, as ``Ensemble.to_xarray`` names them

@@ -7,9 +7,12 @@ cached kernels would go on running the old machine code. Here every compiled fun
 armdyn is cached in ``kernels-<hash>``, the hash taken over all those files together, so
 a change to any of them starts a fresh cache (and the stale folders beside it are removed).
 
-The folder is ``__pycache__`` inside the installed package when writable, else the
+The folder is ``__pycache__`` inside the installed package when it can be written, else the
 user's cache folder (``$XDG_CACHE_HOME/armdyn`` or ``~/.cache/armdyn``); with Numba's
-NUMBA_CACHE_DIR set, that folder.
+NUMBA_CACHE_DIR set, that folder. When none can be written (a read-only install and a
+read-only home), the kernels are compiled in memory, for this process only, with one
+RuntimeWarning; a damaged cache file is removed and its kernel compiled again, with a
+RuntimeWarning (numba_compat.GuardedCache).
 """
 
 from __future__ import annotations
@@ -17,12 +20,14 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import tempfile
+import warnings
 from pathlib import Path
 from types import FunctionType
 
 from numba.core import config
 
-from armdyn.dynamics.numba_compat import CacheImpl, CacheLocator
+from armdyn.dynamics.numba_compat import GuardedLocator, install_locator
 
 PACKAGE = Path(__file__).resolve().parent.parent
 PREFIX = "kernels-"
@@ -38,16 +43,33 @@ def sources_hash(package: Path = PACKAGE) -> str:
     return digest.hexdigest()[:16]
 
 
-def cache_folder(stamp: str, package: Path = PACKAGE) -> Path:
-    """The folder for kernels compiled from sources with this hash."""
+def candidates(stamp: str, package: Path = PACKAGE) -> list[Path]:
+    """The folders for kernels compiled from sources with this hash, in the order they are tried."""
     cache_dir = config.CACHE_DIR  # type: ignore[attr-defined]  # Numba sets its config from the environment at run time
     if cache_dir:
-        return Path(cache_dir) / "armdyn" / f"{PREFIX}{stamp}"
-    in_tree = package / "__pycache__"
-    if os.access(package, os.W_OK) and (not in_tree.exists() or os.access(in_tree, os.W_OK)):
-        return in_tree / f"{PREFIX}{stamp}"
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "armdyn" / f"{PREFIX}{stamp}"
+        return [Path(cache_dir) / "armdyn" / f"{PREFIX}{stamp}"]
+    folders = [package / "__pycache__" / f"{PREFIX}{stamp}"]
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    if os.path.isabs(base):  # no home folder: no user cache
+        folders.append(Path(base) / "armdyn" / f"{PREFIX}{stamp}")
+    return folders
+
+
+def writable(folder: Path) -> bool:
+    """True when ``folder`` exists or can be made, and a file can be written in it (tried, as Numba
+    does: a permission bit says nothing to root, nor on a read-only file system)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError:
+        return False
+    return True
+
+
+def cache_folder(stamp: str, package: Path = PACKAGE) -> Path | None:
+    """The folder for kernels compiled from sources with this hash: the first of ``candidates``
+    that can be written, or None when none can (the kernels are then compiled in memory)."""
+    return next((folder for folder in candidates(stamp, package) if writable(folder)), None)
 
 
 def remove_stale(folder: Path) -> None:
@@ -59,14 +81,30 @@ def remove_stale(folder: Path) -> None:
 
 STAMP = sources_hash()
 FOLDER = cache_folder(STAMP)
+_warned = False
 
 
-class KernelCacheLocator(CacheLocator):
+def warn_in_memory(reason: str) -> None:
+    """The one warning (per process) that armdyn's kernels are compiled in memory, not cached."""
+    global _warned
+    if not _warned:
+        _warned = True
+        warnings.warn(
+            f"armdyn's compiled-code cache: {reason}; the kernels are compiled in memory, for this process "
+            "only (set NUMBA_CACHE_DIR to a writable folder to keep them)",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+class KernelCacheLocator(GuardedLocator):
     """Numba cache locator for armdyn's own compiled functions (see the module docstring)."""
 
     def __init__(self, py_func: FunctionType, py_file: str) -> None:
         self._lineno = py_func.__code__.co_firstlineno
-        self._path = str(FOLDER / Path(py_file).resolve().relative_to(PACKAGE).parent)
+        self.in_memory = FOLDER is None
+        where = FOLDER or candidates(STAMP)[0]  # the path is never used in memory
+        self._path = str(where / Path(py_file).resolve().relative_to(PACKAGE).parent)
 
     def get_cache_path(self) -> str:
         return self._path
@@ -82,16 +120,20 @@ class KernelCacheLocator(CacheLocator):
         if not Path(py_file).resolve().is_relative_to(PACKAGE):
             return None  # not armdyn's: Numba's own locators decide
         locator = cls(py_func, py_file)
-        try:
-            locator.ensure_cache_path()
-        except OSError:
-            return None
+        if not locator.in_memory:
+            try:
+                locator.ensure_cache_path()
+            except OSError as error:
+                locator.in_memory = True
+                warn_in_memory(f"{locator.get_cache_path()} cannot be written ({error})")
         return locator
 
 
 def install() -> None:
-    """Put the locator first in Numba's list (once), and clear out stale kernel folders."""
-    if KernelCacheLocator not in CacheImpl._locator_classes:
-        CacheImpl._locator_classes.insert(0, KernelCacheLocator)
-        if FOLDER.parent.is_dir():
-            remove_stale(FOLDER)
+    """Put the locator first in Numba's list (once), clear out stale kernel folders, and warn (once)
+    when no folder can be written."""
+    install_locator(KernelCacheLocator)
+    if FOLDER is None:
+        warn_in_memory("none of " + ", ".join(map(str, candidates(STAMP))) + " can be written")
+    elif FOLDER.parent.is_dir():
+        remove_stale(FOLDER)

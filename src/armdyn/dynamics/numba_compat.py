@@ -7,7 +7,9 @@ armdyn relies on two private parts of Numba:
   and ``_can_compile``, which ``one_state_dispatcher`` overrides so that a one-state kernel
   compiles its one signature at its first call and refuses any other argument types at once;
 - the cache's locator classes (``caching._CacheLocator`` and the list of locators of
-  ``CacheImpl``, ``_CacheImpl`` before Numba 0.62), which cache.py extends.
+  ``CacheImpl``, ``_CacheImpl`` before Numba 0.62), which cache.py extends, and the cache
+  class the dispatchers build (``dispatcher.FunctionCache``), which GuardedCache replaces so
+  that the cache of armdyn's kernels can never stop a compile.
 
 Neither is a public interface, so each Numba release may change them. Importing this module
 checks the installed Numba against SUPPORTED (the range the test suite has run on, and the
@@ -17,9 +19,12 @@ which are supported; a missing internal raises ImportError naming it.
 
 from __future__ import annotations
 
+import glob
+import sys
 import threading
 import warnings
-from types import MethodType
+from pathlib import Path
+from types import FunctionType, MethodType
 from typing import TYPE_CHECKING, Any
 
 import numba
@@ -72,6 +77,94 @@ CacheLocator = _require(caching, "_CacheLocator")
 _require(CacheImpl, "_locator_classes")
 for _name in _DISPATCHER_INTERNALS[:3]:
     _require(Dispatcher, _name)
+_DISPATCHER_MODULE = sys.modules[Dispatcher.__module__]
+_require(_DISPATCHER_MODULE, "FunctionCache")  # the cache class Dispatcher.enable_caching builds
+for _name in ("load_overload", "save_overload", "disable"):
+    _require(caching.FunctionCache, _name)
+
+
+class GuardedLocator(caching._CacheLocator):  # checked above, as CacheLocator
+    """A cache locator whose functions are cached by GuardedCache; ``in_memory`` when its folder
+    cannot be written (the functions are then compiled in memory, for this process only)."""
+
+    in_memory = False
+
+
+class GuardedCache(caching.FunctionCache):
+    """Numba's function cache, made unable to stop a compile for the functions of a GuardedLocator:
+
+    - with the locator ``in_memory``, the cache is disabled: nothing is read or written;
+    - a cache entry that cannot be read (a truncated or damaged index or data file: an
+      UnpicklingError, EOFError, ...) is removed (the function's index and data files) with a
+      RuntimeWarning, and the function compiles again (and is saved afresh);
+    - an entry that cannot be written (a full disk, a folder made read-only) disables the cache
+      for the function, with a RuntimeWarning (once per process).
+
+    Other functions' caches behave as Numba's own.
+    """
+
+    _save_warned = False
+
+    def __init__(self, py_func: FunctionType) -> None:
+        super().__init__(py_func)
+        locator = self._impl.locator
+        self._guarded = isinstance(locator, GuardedLocator)
+        if self._guarded and locator.in_memory:
+            self.disable()
+
+    def load_overload(self, sig: Any, target_context: Any) -> Any:
+        if not self._guarded:
+            return super().load_overload(sig, target_context)
+        try:
+            return super().load_overload(sig, target_context)
+        except Exception as error:  # any damage: pickle raises many kinds
+            removed = self._remove_entry()
+            warnings.warn(
+                f"armdyn's compiled-code cache: the cached {self._py_func.__qualname__} could not be read "
+                f"({type(error).__name__}: {error}); removed {', '.join(removed) or 'nothing'} in "
+                f"{self._cache_path}, compiling it again",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            return None
+
+    def save_overload(self, sig: Any, data: Any) -> None:
+        if not self._guarded:
+            return super().save_overload(sig, data)
+        try:
+            super().save_overload(sig, data)
+        except Exception as error:  # an unwritable or full folder, or a damaged index that could not be removed
+            self.disable()
+            if not GuardedCache._save_warned:
+                GuardedCache._save_warned = True
+                warnings.warn(
+                    f"armdyn's compiled-code cache: could not write to {self._cache_path} "
+                    f"({type(error).__name__}: {error}); the kernels that cannot be saved are compiled in "
+                    "memory, for this process only",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+        return None
+
+    def _remove_entry(self) -> list[str]:
+        """Remove the function's index and data files (every signature's); the names removed."""
+        removed = []
+        for path in sorted(Path(self._cache_path).glob(glob.escape(self._impl.filename_base) + ".*")):
+            if path.suffix in (".nbi", ".nbc"):
+                try:
+                    path.unlink()
+                except OSError:
+                    continue
+                removed.append(path.name)
+        return removed
+
+
+def install_locator(locator: type[GuardedLocator]) -> None:
+    """Put ``locator`` first in Numba's list of cache locators, and make the dispatchers build their
+    caches as GuardedCache (once: again does nothing)."""
+    if locator not in CacheImpl._locator_classes:
+        CacheImpl._locator_classes.insert(0, locator)
+    setattr(_DISPATCHER_MODULE, "FunctionCache", GuardedCache)  # noqa: B010 - a module attribute mypy does not know
 
 
 def one_state_dispatcher(dispatcher: Dispatcher, signature: Signature) -> Dispatcher:
@@ -111,4 +204,14 @@ def one_state_dispatcher(dispatcher: Dispatcher, signature: Signature) -> Dispat
     return dispatcher
 
 
-__all__ = ["SUPPORTED", "CacheImpl", "CacheLocator", "check_version", "numba_version", "one_state_dispatcher"]
+__all__ = [
+    "SUPPORTED",
+    "CacheImpl",
+    "CacheLocator",
+    "GuardedCache",
+    "GuardedLocator",
+    "check_version",
+    "install_locator",
+    "numba_version",
+    "one_state_dispatcher",
+]
