@@ -40,6 +40,7 @@ import math
 import operator
 import os
 import re
+import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -830,11 +831,16 @@ def _partial(target: Path) -> Path:
 
 
 def _write_atomically(target: Path, data: bytes) -> None:
-    """Write a file whole or not at all: a temporary file in the same folder, flushed, fsynced, renamed."""
+    """Write a file whole or not at all: a temporary file in the same folder, flushed, fsynced, renamed.
+    ARMDYN_STUDY_WRITE_PAUSE (seconds, for fault-injection tests) holds each write half done that long."""
     partial = _partial(target)
     try:
         with open(partial, "wb") as handle:
-            handle.write(data)
+            handle.write(data[: len(data) // 2])
+            handle.flush()
+            if os.environ.get("ARMDYN_STUDY_WRITE_PAUSE"):
+                time.sleep(float(os.environ["ARMDYN_STUDY_WRITE_PAUSE"]))
+            handle.write(data[len(data) // 2 :])
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(partial, target)
