@@ -379,7 +379,6 @@ def test_a_spec_bound_that_is_not_a_number_is_a_model_error(spec: str) -> None:
     assert_one_error_line(invoke("study", "two_link_planar", "--runs", "10", "--spec", spec), "not a number")
 
 
-@pytest.mark.slow
 def test_a_worker_whose_environment_changed_numba_num_threads_still_compiles() -> None:
     """A dask.distributed Nanny applies its env after the worker imported Numba: a NUMBA_NUM_THREADS there made
     every later compile fail ("Cannot set NUMBA_NUM_THREADS", the study's own LocalCluster did this). The
