@@ -57,7 +57,18 @@ from armdyn.simulation import SUMMARY_NAMES, Nominal, launch_many, law_table, no
 if TYPE_CHECKING:
     from pandas import DataFrame
 
-__all__ = ["Estimate", "Normal", "Requirement", "Study", "StudyResult", "Uniform", "clopper_pearson", "runs_needed"]
+__all__ = [
+    "DamagedBlockWarning",
+    "Estimate",
+    "Normal",
+    "Requirement",
+    "Study",
+    "StudyResult",
+    "Uniform",
+    "clopper_pearson",
+    "fingerprint",
+    "runs_needed",
+]
 
 RUNS_PER_BLOCK = 1000
 """Runs per block: the unit of sampling, of work sent to a worker and of the files written."""
