@@ -1768,7 +1768,7 @@ BASE = {  # command: its cheapest valid arguments (the CSV added for identify)
     "check": ["two_link_planar", "--samples", "4"],
     "identify": ["two_link_planar"],
     "simulate": ["two_link_planar", "--t-final", "0.02"],
-    "study": ["two_link_planar", "--runs", "20", "--t-final", "0.02"],
+    "study": ["two_link_planar", "--runs", "20", "--t-final", "0.02", "--spec", "max-error-after-0.01s<1e-3"],
     "demo": None,
 }
 

@@ -179,3 +179,235 @@ def test_the_study_command(tmp_path: Path) -> None:
     probability = re.search(r"P\(spec holds\)\W+([0-9.]+)", first.output).group(1)
     assert probability in again.output
     assert_one_error_line(invoke("study", "two_link_planar", "--spec", "speed < 3"), "unknown quantity")
+
+
+# ----- the store: fingerprints, checked blocks, damaged files --------------------------------------------------
+def small_study(**options: object) -> Study:
+    """rr_study with very short runs and small blocks: a store's tests write many blocks."""
+    return rr_study(**({"t_final": 0.05, "after": 0.02, "block": 10} | options))
+
+
+@pytest.mark.parametrize(
+    ("change", "part"),
+    [
+        ({"arm": ad.models.two_link_planar().with_payload(0.5)}, "arm"),
+        ({"q0": [0.3, 0.7]}, "start"),
+        ({"controller": control.ComputedTorque(90.0, 20.0)}, "controller"),
+        ({"controller": control.ComputedTorque(100.0, 20.0, model=ad.models.two_link_planar().with_payload(1))},
+         "controller"),
+        ({"trajectory": tr.Sinusoid(0.2, 1.0, 0.0, [0.3, 0.6])}, "trajectory"),
+        ({"spec": "max_error_after < 1"}, "criteria"),
+        ({"mass_error": Uniform(-0.1, 0.2)}, "sampling"),
+        ({"dt": 5e-4}, "timing"),
+        ({"block": 5}, "block"),
+    ],
+)  # fmt: skip
+def test_a_resume_into_the_folder_of_a_changed_study_is_refused_naming_the_part(
+    tmp_path: Path, change: dict, part: str
+) -> None:
+    """The folder of one study refuses another that differs in one part (the arm's model under the same name,
+    the start, the controller's gains or model...), naming the part; the changed study in a fresh folder gives
+    the fresh run's table (not the first study's runs)."""
+    arm = ad.models.two_link_planar()
+    settings = {"arm": arm, "controller": control.ComputedTorque(100.0, 20.0),
+                "trajectory": tr.Sinusoid(0.1, 1.0, 0.0, [0.3, 0.6]), "spec": "max_error_after < 2e-3",
+                "q0": [0.3, 0.6], "t_final": 0.05, "after": 0.02, "payload": Uniform(0.0, 2.0),
+                "mass_error": Uniform(-0.2, 0.2), "block": 10}  # fmt: skip
+    first = Study(**settings).run(20, seed=1, out=tmp_path / "s")
+    changed = Study(**(settings | change))
+    with pytest.raises(ModelError, match=rf"holds another study \(it differs in [\w, ]*\b{part}\b"):
+        changed.run(20, seed=1, out=tmp_path / "s")
+    fresh = changed.run(20, seed=1).table
+    pd.testing.assert_frame_equal(changed.run(20, seed=1, out=tmp_path / "t").table, fresh)
+    assert not fresh.equals(first.table)
+    again = Study(**settings).run(20, seed=1, out=tmp_path / "s")
+    assert again.info["read"] == 2 and again.info["computed"] == 0
+    pd.testing.assert_frame_equal(again.table, first.table)
+
+
+def test_study_json_holds_the_fingerprint_and_its_parts(tmp_path: Path) -> None:
+    """study.json: the SHA-256 of its parts' hashes (recomputed here), with the armdyn version among them."""
+    import hashlib
+    import json
+
+    study = small_study()
+    result = study.run(20, seed=2, out=tmp_path / "s")
+    stored = json.loads((tmp_path / "s" / "study.json").read_text())
+    assert stored["fingerprint"] == result.info["fingerprint"]
+    assert hashlib.sha256(json.dumps(stored["parts"], sort_keys=True).encode()).hexdigest() == stored["fingerprint"]
+    assert {"arm", "start", "controller", "trajectory", "criteria", "sampling", "seed", "block", "version"} <= set(
+        stored["parts"]
+    )
+    assert not list((tmp_path / "s").glob(".*.partial"))
+
+
+def _damage(folder: Path) -> dict[int, str]:
+    """Damage blocks 1 to 5 of a folder of six blocks in five ways; the kind of damage per block."""
+    import json
+
+    blocks = sorted(folder.glob("block-*.parquet"))
+    data = blocks[1].read_bytes()
+    blocks[1].write_bytes(data[: len(data) // 2])  # truncated
+    blocks[2].write_bytes(b"")  # empty
+    blocks[3].write_bytes(blocks[0].read_bytes())  # a copy of block 0, its record too
+    (folder / "block-000003.json").write_text((folder / "block-000000.json").read_text())
+    data = bytearray(blocks[4].read_bytes())
+    data[len(data) // 3] ^= 0x01  # one bit of one byte
+    blocks[4].write_bytes(bytes(data))
+    short = pd.read_parquet(blocks[5]).iloc[:-1]  # a row missing, its record rewritten to match the file
+    short.to_parquet(blocks[5], index=False)
+    record = json.loads((folder / "block-000005.json").read_text())
+    import hashlib
+
+    record["sha256"] = hashlib.sha256(blocks[5].read_bytes()).hexdigest()
+    (folder / "block-000005.json").write_text(json.dumps(record))
+    return {1: "checksum", 2: "checksum", 3: "does not describe block 3", 4: "checksum", 5: "holds 9 rows"}
+
+
+def test_damaged_blocks_are_reported_and_recomputed_or_refused(tmp_path: Path) -> None:
+    """A truncated, an empty, a copied, a flipped-byte and a short block are each named in a warning and
+    computed again: the table equals the uninterrupted run's. With damaged="refuse" the first is refused."""
+    from armdyn.study import DamagedBlockWarning
+
+    study = small_study()
+    whole = study.run(60, seed=4)
+    study.run(60, seed=4, out=tmp_path / "s")
+    kinds = _damage(tmp_path / "s")
+    with pytest.raises(ModelError, match=r"block-000001.parquet is damaged .*checksum"):
+        study.run(60, seed=4, out=tmp_path / "s", damaged="refuse")
+    with pytest.warns(DamagedBlockWarning) as caught:
+        resumed = study.run(60, seed=4, out=tmp_path / "s")
+    messages = [str(w.message) for w in caught]
+    for index, kind in kinds.items():
+        assert any(f"block-{index:06d}.parquet" in m and kind in m for m in messages), (index, messages)
+    assert len(messages) == 5 and resumed.info["computed"] == 5 and resumed.info["read"] == 1
+    pd.testing.assert_frame_equal(resumed.table, whole.table, check_exact=True)
+    clean = study.run(60, seed=4, out=tmp_path / "s")  # everything was written again, whole
+    assert clean.info["read"] == 6
+    pd.testing.assert_frame_equal(clean.table, whole.table, check_exact=True)
+
+
+def test_a_block_without_its_record_or_a_record_without_its_block(tmp_path: Path) -> None:
+    """A record whose block never arrived (a kill between the two renames) is recomputed silently; a block
+    without its record is reported."""
+    from armdyn.study import DamagedBlockWarning
+
+    study = small_study()
+    whole = study.run(30, seed=5, out=tmp_path / "s")
+    (tmp_path / "s" / "block-000001.parquet").unlink()
+    (tmp_path / "s" / "block-000002.json").unlink()
+    with pytest.warns(DamagedBlockWarning, match="block-000002.parquet is damaged .*no record") as caught:
+        resumed = study.run(30, seed=5, out=tmp_path / "s")
+    assert len(caught) == 1 and resumed.info["computed"] == 2
+    pd.testing.assert_frame_equal(resumed.table, whole.table, check_exact=True)
+
+
+def test_duplicated_or_missing_run_ranges_are_found_before_the_table_is_assembled() -> None:
+    from armdyn.study import _check_ranges
+
+    study = small_study()
+    setup = study.setup(30, seed=1)
+    blocks = {b: run_block(setup, b) for b in range(3)}
+    _check_ranges(blocks, setup, 3)
+    with pytest.raises(ModelError, match="10 runs duplicated, 10 runs missing"):
+        _check_ranges(blocks | {2: blocks[1]}, setup, 3)
+    with pytest.raises(ModelError, match=r"blocks missing \[1\]"):
+        _check_ranges({0: blocks[0], 2: blocks[2]}, setup, 3)
+
+
+def test_a_damaged_study_json_is_written_again_unless_the_blocks_are_another_studys(tmp_path: Path) -> None:
+    """An empty or truncated study.json (a kill during a write by an older version, or a damaged disk) does
+    not make the study unfinishable: it is written again with a warning and the blocks are checked; but when
+    a block's record names another study, the folder is refused."""
+    from armdyn.study import DamagedBlockWarning
+
+    study = small_study()
+    whole = study.run(30, seed=6, out=tmp_path / "s")
+    text = (tmp_path / "s" / "study.json").read_text()
+    for damaged in ("", text[: len(text) // 2], "[1, 2]"):
+        (tmp_path / "s" / "study.json").write_text(damaged)
+        with pytest.warns(DamagedBlockWarning, match="study.json was damaged"):
+            resumed = study.run(30, seed=6, out=tmp_path / "s")
+        assert resumed.info["read"] == 3
+        pd.testing.assert_frame_equal(resumed.table, whole.table, check_exact=True)
+        assert (tmp_path / "s" / "study.json").read_text() == text
+    (tmp_path / "s" / "study.json").write_text("")
+    with pytest.raises(ModelError, match=r"study\.json is damaged and block-000000\.json belongs to another study"):
+        small_study(payload=Uniform(0.0, 1.0)).run(30, seed=6, out=tmp_path / "s")
+
+
+def test_an_empty_error_window_is_refused() -> None:
+    """A spec on the error after t with t >= t_final has no sample to judge: refused (it counted every run as a
+    pass), while a window of the last samples and a spec without a window are accepted."""
+    with pytest.raises(ModelError, match=r"window is empty; give after < t_final"):
+        rr_study("max-error-after-0.5s < 1e-3")
+    with pytest.raises(ModelError, match=r"after 0.3 s, but the runs end at t_final = 0.3 s"):
+        rr_study("max_error_after q2 < 1e-3", after=0.3)
+    late = rr_study("max_error_after < 1e-3", after=0.2999, block=10).run(10, seed=1)  # the last sample only
+    assert (late.table["max_error_after"] == late.table["final_error"]).all()
+    assert rr_study("payload < 1.2", after=0.5).run(10).estimate.runs == 10
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        ({"progress": 5}, "progress must be None or a function"),
+        ({"timeout": math.nan}, "timeout must be finite"),
+        ({"timeout": 0.0}, "timeout must be a positive"),
+        ({"damaged": "ignore"}, "damaged must be 'recompute' or 'refuse'"),
+        ({"out": Path("/no/such/folder/study")}, r"the folder /no/such/folder it goes in does not exist"),
+        ({"out": 5}, "out must be a folder"),
+    ],
+)
+def test_bad_run_arguments_are_model_errors(arguments: dict, message: str) -> None:
+    with pytest.raises(ModelError, match=message):
+        small_study().run(10, **arguments)
+
+
+@pytest.mark.skipif(not Path("/sys/kernel").is_dir(), reason="needs Linux's read-only /sys")
+def test_an_out_folder_that_cannot_be_written_is_a_model_error() -> None:
+    with pytest.raises(ModelError, match=r"out /sys/armdyn-study: cannot make the folder"):
+        small_study().run(10, out="/sys/armdyn-study")
+
+
+@pytest.mark.parametrize("spec", ["max_error_after < 1e-3e5", "max-error-after-1.2.3s < 1", "max_tau < 1-2"])
+def test_a_spec_bound_that_is_not_a_number_is_a_model_error(spec: str) -> None:
+    from tests.helpers import assert_one_error_line, invoke
+
+    with pytest.raises(ModelError, match="that is not a number"):
+        Requirement(spec)
+    assert_one_error_line(invoke("study", "two_link_planar", "--runs", "10", "--spec", spec), "not a number")
+
+
+def test_a_worker_whose_environment_changed_numba_num_threads_still_compiles() -> None:
+    """A dask.distributed Nanny applies its env after the worker imported Numba: a NUMBA_NUM_THREADS there made
+    every later compile fail ("Cannot set NUMBA_NUM_THREADS", the study's own LocalCluster did this). The
+    worker's thread setting now keeps the pool Numba started with: a fresh function compiles and runs; the old
+    setting fails on the same worker."""
+    distributed = pytest.importorskip("distributed")
+    from armdyn.study import _worker_threads
+
+    def old_setting() -> str:
+        import numba
+
+        numba.set_num_threads(1)
+        try:
+            return str(numba.njit(lambda x: x + 1)(1))
+        except RuntimeError as error:
+            return str(error)
+
+    def new_setting() -> tuple[int, int]:
+        import numba
+
+        _worker_threads(1)
+        return numba.njit(lambda x: x + 2)(1), numba.get_num_threads()
+
+    environment = {"NUMBA_NUM_THREADS": "1"}
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  env=environment) as cluster, distributed.Client(cluster) as client:  # fmt: skip
+        started = client.run(lambda: __import__("numba").config.NUMBA_NUM_THREADS)
+        (before,) = client.run(old_setting).values()
+        (after,) = client.run(new_setting).values()
+    if next(iter(started.values())) > 1:  # on one core, the Nanny's value is the value Numba started with
+        assert "Cannot set NUMBA_NUM_THREADS" in before
+    assert after == (3, 1)

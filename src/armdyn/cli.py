@@ -1506,6 +1506,9 @@ def study(
     output: str | None = typer.Option(
         None, "--out", "-o", help="A folder for the blocks (Parquet), made if missing: a rerun resumes there."
     ),
+    damaged: str = typer.Option(
+        "recompute", help="A damaged block found in --out on a rerun: recompute (with a warning) or refuse."
+    ),
     plot: str | None = typer.Option(None, help="Write the figure (histograms of the spec's quantities) to this PNG."),
     q0: str | None = typer.Option(None, "--q0", help=Q0_HELP),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
@@ -1522,6 +1525,8 @@ def study(
     gain_p, gain_v, gain_i = (_per_joint(value, option, arm.n) for value, option in named)
     if controller not in ("computed-torque", "pd-gravity", "pid"):
         _fail(f"--controller must be computed-torque, pd-gravity or pid, got '{controller}'")
+    if damaged not in ("recompute", "refuse"):
+        _fail(f"--damaged must be recompute or refuse, got '{damaged}'")
     law = _controller(controller, gain_p, gain_v, gain_i, 0.0, np.inf)
     desired = _trajectory(trajectory, arm, amplitude, frequency, start)
     declared = Study(arm, law, desired, spec=spec, t_final=t_final, dt=dt, q0=start, block=block,
@@ -1533,7 +1538,7 @@ def study(
         _activity.status(f"starting the study on {scheduler}")
     progress = _activity.bar(f"{runs} runs of {arm.name} ({scheduler})")
     result = declared.run(runs, seed=seed, scheduler=None if scheduler == "local" else scheduler, out=folder,
-                          confidence=confidence, workers=workers, progress=progress)  # fmt: skip
+                          confidence=confidence, workers=workers, progress=progress, damaged=damaged)  # fmt: skip
     _activity.stop()
     if "dashboard" in result.info:
         console.print(f"Dask dashboard: {result.info['dashboard']} ({result.info['workers']} workers)")

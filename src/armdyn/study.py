@@ -9,10 +9,21 @@ Each block is one compiled call of the many-runs path of ``simulate`` (``runs=``
 (``Setup``: the packed nominal arm, the law's gains, the path), never a pickled Robot. Blocks run
 in this process by default; with
 ``scheduler="local-cluster"`` on a ``dask.distributed.LocalCluster``, or with an address on an
-existing cluster (each worker one task thread, its Numba thread count set, its compiled-code cache
-warmed before work is sent; a block lost with its worker is recomputed, to the same bits). With
-``out=`` each block is written as it arrives (Parquet, one file per block) and a rerun skips
-the blocks already there.
+existing cluster (each worker one task thread, its Numba thread count set within the pool Numba started
+with, its compiled-code cache warmed before work is sent; a block lost with its worker is recomputed, to
+the same bits, and when every worker is lost the set-up is scattered again to those that come back).
+
+With ``out=`` the folder is a store that a crash cannot corrupt: study.json holds the study's fingerprint
+(the SHA-256 of the arm's packed model and gravity, the start, the controller and its model, the path,
+the timing, the criteria, the sampling, the seed, the block size, the number of runs and armdyn's
+version, and of each part), and each block is a Parquet file with a record (its run range, row count,
+the file's SHA-256 and the fingerprint). Every file is written to a temporary file in the folder,
+fsynced and renamed, the record before its block. A rerun reads the blocks that match their record
+and computes the others: one that is missing, or whose record is missing, was never finished; one
+that does not match its record (truncated, altered, another block's copy) is reported with a
+``DamagedBlockWarning`` and computed again (or refused, ``damaged="refuse"``). A rerun with another
+fingerprint is refused, naming the parts that differ. A damaged study.json is written again (with a
+warning) when no block record there names another study, else refused: remove the folder.
 
 The estimate of P(spec holds) is k / N with the exact Clopper-Pearson interval (Clopper and
 Pearson 1934); ``runs_needed`` gives Hoeffding's N >= ln(2 / delta) / (2 eps^2) for an accuracy eps
@@ -22,11 +33,15 @@ control design, Koltchinskii et al. 1999, cited in the book's Chapter 3 referenc
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
 import math
 import operator
 import os
 import re
+import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,7 +57,18 @@ from armdyn.simulation import SUMMARY_NAMES, Nominal, launch_many, law_table, no
 if TYPE_CHECKING:
     from pandas import DataFrame
 
-__all__ = ["Estimate", "Normal", "Requirement", "Study", "StudyResult", "Uniform", "clopper_pearson", "runs_needed"]
+__all__ = [
+    "DamagedBlockWarning",
+    "Estimate",
+    "Normal",
+    "Requirement",
+    "Study",
+    "StudyResult",
+    "Uniform",
+    "clopper_pearson",
+    "fingerprint",
+    "runs_needed",
+]
 
 RUNS_PER_BLOCK = 1000
 """Runs per block: the unit of sampling, of work sent to a worker and of the files written."""
@@ -199,14 +225,19 @@ class Requirement:
             name, op, bound = match.groups()
             window = re.fullmatch(r"max[-_]error[-_]after[-_]([0-9.]+)s", name.strip())
             if window is not None:
-                after, name = float(window.group(1)), "max_error_after"
+                after, name = _spec_number(window.group(1), part, "the window's start"), "max_error_after"
             quantity, _, joint = name.strip().replace("-", "_").partition(" ")
             if quantity not in (*SUMMARY_NAMES[:4], *_PARAMETERS):
                 raise ModelError(f"the spec names an unknown quantity {quantity!r}: use one of "
                                  f"{', '.join((*SUMMARY_NAMES[:4], *_PARAMETERS))}")  # fmt: skip
-            clauses.append((quantity if not joint else f"{quantity} {joint}", op, float(bound)))
+            clauses.append((quantity if not joint else f"{quantity} {joint}", op, _spec_number(bound, part, "bound")))
         object.__setattr__(self, "clauses", tuple(clauses))
         object.__setattr__(self, "after", after)
+
+    @property
+    def windowed(self) -> bool:
+        """True when a clause reads the error after the window's start (max_error_after)."""
+        return any(column.startswith("max_error_after") for column, _, _ in self.clauses)
 
     def holds(self, table: DataFrame) -> np.ndarray:
         """(N,) bool: the rows of a study's table (a DataFrame) that meet every clause (and finished).
@@ -232,6 +263,15 @@ class Requirement:
                 raise ModelError(f"the spec names {column!r}, which this study has no column for")
             result &= _OPERATORS[op](np.asarray(table[column], dtype=float), bound)
         return result
+
+
+def _spec_number(text: str, clause: str, what: str) -> float:
+    """A number of a spec clause, or a ModelError naming the clause."""
+    try:
+        return float(text)
+    except ValueError:
+        raise ModelError(f"the spec clause {clause.strip()!r} has a {what} {text!r} that is not a number, e.g. "
+                         "'max_error_after < 1e-3'") from None  # fmt: skip
 
 
 # ----- statistics --------------------------------------------------------------------------------------------
@@ -522,6 +562,9 @@ class Study:
         self.t_final, self.dt = checked_times(t_final, dt)
         step_count(self.t_final, self.dt, n, False)  # refuses runs too long to record
         after = self.spec.after if self.spec.after is not None else inputs.number(after, "after", minimum=0.0)
+        if self.spec.windowed and not after < self.t_final:
+            raise ModelError(f"the spec {self.spec.text!r} reads the error after {after:g} s, but the runs end at "
+                             f"t_final = {self.t_final:g} s: the window is empty; give after < t_final")  # fmt: skip
         self.after = after
         law_spec, period, self.controller = unwrapped_law(controller, n)
         if law_spec is None or controller is None:
@@ -576,6 +619,7 @@ class Study:
         workers: int = 2,
         progress: Callable[[float], None] | None = None,
         timeout: float = 10.0,
+        damaged: str = "recompute",
     ) -> StudyResult:
         """Run the study: ``runs`` runs in blocks, locally or on Dask, and estimate P(spec holds).
 
@@ -590,8 +634,9 @@ class Study:
             starts a dask.distributed LocalCluster of ``workers`` processes; "tcp://host:port"
             uses a running scheduler.
         out : str or Path, optional
-            A folder for the blocks (Parquet) and the study's description; blocks found there
-            are read, not recomputed.
+            A folder for the blocks (Parquet, each with a record of its runs and checksum) and the
+            study's fingerprint (study.json, written atomically); blocks found there that match their
+            record are read, not recomputed. A folder holding another study is refused.
         confidence : float, optional
             Of the interval (default 0.95).
         workers : int, optional
@@ -599,7 +644,12 @@ class Study:
         progress : callable, optional
             Called with the fraction of blocks done.
         timeout : float, optional
-            Seconds to wait for a scheduler before giving up (default 10).
+            Seconds to wait for a scheduler (or for a lost cluster's workers to come back) before giving up
+            (default 10).
+        damaged : {"recompute", "refuse"}, optional
+            What a resume does with a block in ``out`` that does not match its record (truncated, empty,
+            altered, another block's copy): compute it again with a ``DamagedBlockWarning`` naming it
+            (default), or raise a ModelError naming it.
 
         Returns
         -------
@@ -609,9 +659,11 @@ class Study:
         Raises
         ------
         armdyn.ModelError
-            When the arguments are out of range, ``out`` holds another study, the scheduler
-            cannot be reached within ``timeout`` (nothing computed is lost: the blocks written to
-            ``out`` stay).
+            When the arguments are out of range, ``out`` holds another study (the message names the
+            parts that differ) or cannot be written, a block is damaged and ``damaged="refuse"``, the
+            scheduler cannot be reached within ``timeout`` (nothing computed is lost: the blocks written
+            to ``out`` stay), or its workers are lost DASK_ROUNDS times in a row or none comes back
+            within ``timeout``.
         armdyn.MissingDependencyError
             When ``scheduler`` needs Dask, or ``out`` needs pyarrow (Parquet), and it is not installed
             (both come with armdyn's ``cluster`` extra).
@@ -624,20 +676,44 @@ class Study:
         columns = 6 + 4 * (len(setup.joints) + 1)
         memory.affordable(8.0 * setup.runs * columns + 8.0 * min(setup.block, setup.runs) * 30 * len(setup.joints),
                           f"the table of {setup.runs} runs")  # fmt: skip
+        if progress is not None and not callable(progress):
+            raise ArgumentError(f"progress must be None or a function of the fraction done, got {progress!r}")
+        timeout = inputs.number(timeout, "timeout")
+        if not timeout > 0:
+            raise ModelError(f"timeout must be a positive number of seconds, got {timeout:g}")
+        if damaged not in ("recompute", "refuse"):
+            raise ModelError(f"damaged must be 'recompute' or 'refuse', got {damaged!r}")
         blocks = math.ceil(setup.runs / setup.block)
+        identity = fingerprint(self, setup)
         if out is not None:
             _parquet_writer()
-        folder = _study_folder(out, self, setup) if out is not None else None
-        done = {b: pandas.read_parquet(_block_file(folder, b)) for b in range(blocks)
-                if folder is not None and _block_file(folder, b).exists()}  # fmt: skip
+        folder = _study_folder(out, self, setup, identity) if out is not None else None
+
+        def expected(index: int) -> dict:
+            first = index * setup.block
+            return {"index": index, "first": first, "count": min(setup.block, setup.runs - first),
+                    "fingerprint": identity[0]}  # fmt: skip
+
+        done: dict[int, DataFrame] = {}
+        for b in range(blocks if folder is not None else 0):
+            table, problem = _read_block(folder, b, expected(b))  # type: ignore[arg-type]
+            if problem is not None:
+                where = f"{_block_file(folder, b)}"  # type: ignore[arg-type]
+                if damaged == "refuse":
+                    raise ModelError(f"the study's block {where} is damaged ({problem}): remove it to compute it "
+                                     "again, or run with damaged='recompute'")  # fmt: skip
+                warnings.warn(f"the study's block {where} is damaged ({problem}): it is computed again",
+                              DamagedBlockWarning, stacklevel=2)  # fmt: skip
+            elif table is not None:
+                done[b] = table
         todo = [b for b in range(blocks) if b not in done]
         info = {"runs": setup.runs, "seed": setup.seed, "block": setup.block, "scheduler": scheduler or "local",
-                "computed": len(todo), "read": len(done)}  # fmt: skip
+                "computed": len(todo), "read": len(done), "fingerprint": identity[0]}  # fmt: skip
 
         def arrived(index: int, table: DataFrame) -> None:
             done[index] = table
             if folder is not None:
-                _write_block(folder, index, table)
+                _write_block(folder, index, table, expected(index))
             if progress is not None:
                 progress(len(done) / blocks)
 
@@ -645,7 +721,8 @@ class Study:
             for index in todo:
                 arrived(index, run_block(setup, index))
         else:
-            info |= _on_dask(setup, todo, scheduler, workers, timeout, arrived)
+            info |= _on_dask(setup, todo, scheduler, workers, timeout, identity[0][:16], arrived)
+        _check_ranges(done, setup, blocks)
         table = pandas.concat([done[b] for b in range(blocks)], ignore_index=True)
         table["holds"] = self.spec.holds(table)
         estimate = clopper_pearson(int(table["holds"].sum()), len(table), confidence)
@@ -660,56 +737,295 @@ def _parquet_writer() -> None:
         raise MissingDependencyError("pyarrow", "cluster", needed_by="armdyn.Study.run(out=...)") from None
 
 
+# ----- the store: a folder of checked blocks ------------------------------------------------------------------
+STORE_FORMAT = 2
+"""The layout of a study's folder: study.json (format, fingerprint and its parts), and per block a Parquet
+file with a record (block-XXXXXX.json: run range, rows, the file's SHA-256, the study's fingerprint)."""
+
+
+class DamagedBlockWarning(UserWarning):
+    """A block in a study's folder did not match its record and is computed again."""
+
+
+def _feed(digest: Any, value: object) -> None:
+    """Feed a value to a SHA-256, each kind tagged, arrays by dtype, shape and bytes, floats by their bits."""
+    if value is None or isinstance(value, (bool, np.bool_, int, np.integer, str)):
+        digest.update(f"{type(value).__name__}:{value!r};".encode())
+    elif isinstance(value, (float, np.floating)):
+        digest.update(b"f:" + np.float64(value).tobytes())
+    elif isinstance(value, np.ndarray):
+        digest.update(f"a:{value.dtype.str}:{value.shape};".encode() + np.ascontiguousarray(value).tobytes())
+    elif isinstance(value, (tuple, list)):
+        digest.update(f"t{len(value)}(".encode())
+        for item in value:
+            _feed(digest, item)
+        digest.update(b")")
+    elif hasattr(value, "__dataclass_fields__"):
+        digest.update(f"d:{type(value).__name__}(".encode())
+        for name in value.__dataclass_fields__:  # type: ignore[attr-defined]
+            _feed(digest, (name, getattr(value, name)))
+        digest.update(b")")
+    else:
+        raise TypeError(f"cannot fingerprint a {type(value).__name__}")
+
+
+def _hash(value: object) -> str:
+    digest = hashlib.sha256()
+    _feed(digest, value)
+    return digest.hexdigest()
+
+
+def fingerprint(study: Study, setup: Setup) -> tuple[str, dict[str, str]]:
+    """The study's identity: the SHA-256 of everything that decides its runs, and of each part (arm, start,
+    controller, trajectory, timing, criteria, sampling, seed, block, runs, version), so that a resume into a
+    folder of another study is refused by naming what differs.
+
+    Parameters
+    ----------
+    study : Study
+        The study.
+    setup : Setup
+        Its arrays for a number of runs and a seed.
+
+    Returns
+    -------
+    tuple of str and dict
+        The fingerprint (hex) and the hash of each part.
+
+    Raises
+    ------
+    None
+        Every part is made of arrays, numbers and text.
+    """
+    import armdyn
+
+    parts = {
+        "arm": _hash((setup.arm, np.asarray(study.arm.gravity, dtype=float), setup.joints)),
+        "start": _hash(setup.q0),
+        "controller": _hash(setup.law),
+        "trajectory": _hash(setup.path),
+        "timing": _hash((setup.dt, setup.rows)),
+        "criteria": _hash((study.spec.clauses, study.after, setup.after_row)),
+        "sampling": _hash((setup.payload, setup.mass_error, setup.friction_error, setup.start_error)),
+        "seed": _hash(setup.seed),
+        "block": _hash(setup.block),
+        "runs": _hash(setup.runs),
+        "version": _hash(armdyn.__version__),
+    }
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest(), parts
+
+
 def _block_file(folder: Path, index: int) -> Path:
     return folder / f"block-{index:06d}.parquet"
 
 
-def _write_block(folder: Path, index: int, table: DataFrame) -> None:
-    """Write a block atomically: a file that exists is a whole block."""
-    target = _block_file(folder, index)
-    partial = target.with_suffix(".partial")
-    table.to_parquet(partial, index=False)
-    os.replace(partial, target)
+def _record_file(folder: Path, index: int) -> Path:
+    return folder / f"block-{index:06d}.json"
 
 
-def _study_folder(out: str | Path, study: Study, setup: Setup) -> Path:
-    """The study's folder, made if missing; a ModelError when it holds another study's blocks."""
+def _sync_folder(folder: Path) -> None:
+    """fsync a folder, so that a rename in it survives a crash (where the system allows it)."""
+    try:
+        handle = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(handle)
+    except OSError:
+        pass
+    finally:
+        os.close(handle)
+
+
+def _partial(target: Path) -> Path:
+    return target.with_name(f".{target.name}.partial")
+
+
+def _write_atomically(target: Path, data: bytes) -> None:
+    """Write a file whole or not at all: a temporary file in the same folder, flushed, fsynced, renamed.
+    ARMDYN_STUDY_WRITE_PAUSE (seconds, for fault-injection tests) holds each write half done that long."""
+    partial = _partial(target)
+    try:
+        with open(partial, "wb") as handle:
+            handle.write(data[: len(data) // 2])
+            handle.flush()
+            if os.environ.get("ARMDYN_STUDY_WRITE_PAUSE"):
+                time.sleep(float(os.environ["ARMDYN_STUDY_WRITE_PAUSE"]))
+            handle.write(data[len(data) // 2 :])
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(partial, target)
+    except OSError as error:
+        partial.unlink(missing_ok=True)
+        raise ModelError(f"out {target.parent}: cannot write {target.name} ({error.strerror or error})") from None
+    _sync_folder(target.parent)
+
+
+def _write_block(folder: Path, index: int, table: DataFrame, record: dict) -> None:
+    """Write a block and its record: the record (run range, rows, the file's SHA-256) first, then the file by
+    an atomic rename, so that a file that exists with its record is a whole block."""
+    buffer = io.BytesIO()
+    table.to_parquet(buffer, index=False)
+    data = buffer.getvalue()
+    record = record | {"rows": len(table), "sha256": hashlib.sha256(data).hexdigest()}
+    _write_atomically(_record_file(folder, index), json.dumps(record, indent=1).encode())
+    _write_atomically(_block_file(folder, index), data)
+
+
+def _read_block(folder: Path, index: int, expected: dict) -> tuple[DataFrame | None, str | None]:
+    """Block ``index`` from the folder when it matches its record and ``expected`` (index, first run, count,
+    fingerprint): (table, None); (None, None) when it was never written; (None, what is wrong) when damaged."""
+    import pandas
+
+    file, record_file = _block_file(folder, index), _record_file(folder, index)
+    if not file.exists():
+        return None, None
+    try:
+        record = json.loads(record_file.read_text())
+    except FileNotFoundError:
+        return None, f"it has no record ({record_file.name}) of its runs and checksum"
+    except (OSError, ValueError):
+        return None, f"its record {record_file.name} is unreadable"
+    if not isinstance(record, dict) or any(record.get(key) != value for key, value in expected.items()):
+        return None, (f"its record {record_file.name} does not describe block {index} of this study (runs "
+                      f"{expected['first']} to {expected['first'] + expected['count'] - 1})")  # fmt: skip
+    try:
+        data = file.read_bytes()
+    except OSError as error:
+        return None, f"it cannot be read ({error.strerror or error})"
+    if hashlib.sha256(data).hexdigest() != record.get("sha256"):
+        return None, f"its checksum does not match its record (truncated or altered: {len(data)} bytes)"
+    try:
+        table = pandas.read_parquet(io.BytesIO(data))
+    except Exception as error:  # any reader error means the same: recompute the block
+        return None, f"it is not a readable Parquet file ({type(error).__name__})"
+    runs = np.arange(expected["first"], expected["first"] + expected["count"])
+    if len(table) != expected["count"] or "run" not in table or not np.array_equal(table["run"], runs):
+        return None, f"it holds {len(table)} rows, not runs {runs[0]} to {runs[-1]}"
+    return table, None
+
+
+def _check_ranges(done: dict[int, DataFrame], setup: Setup, blocks: int) -> None:
+    """A ModelError when the blocks' runs are not each of 0..runs-1 once, in order (duplicated or missing)."""
+    missing = [b for b in range(blocks) if b not in done]
+    runs = np.concatenate([np.asarray(done[b]["run"]) for b in range(blocks) if b in done])
+    if missing or not np.array_equal(runs, np.arange(setup.runs)):
+        values, counts = np.unique(runs, return_counts=True)
+        lost = np.setdiff1d(np.arange(setup.runs), values)
+        raise ModelError(f"the study's blocks do not hold runs 0 to {setup.runs - 1} once each: blocks missing "
+                         f"{missing}, {int((counts > 1).sum())} runs duplicated, {lost.size} runs missing")  # fmt: skip
+
+
+def _describe(study: Study, setup: Setup) -> dict:
+    """What a reader of study.json needs to know what the study is (the fingerprint decides)."""
+    return {"arm": study.arm.name, "spec": study.spec.text, "seed": setup.seed, "block": setup.block,
+            "runs": setup.runs, "t_final": study.t_final, "dt": study.dt, "after": study.after,
+            "controller": control.describe_controller(study.controller),
+            "trajectory": trajectories.describe_trajectory(study.trajectory),
+            "distributions": {k: repr(v) for k, v in study.distributions.items()}}  # fmt: skip
+
+
+def _study_folder(out: object, study: Study, setup: Setup, identity: tuple[str, dict[str, str]]) -> Path:
+    """The study's folder, made if missing, its study.json written atomically; a ModelError when it holds
+    another study (naming the parts that differ). A damaged study.json (unreadable) is written again, with a
+    warning, when no block record there names another study; else a ModelError."""
+    if not isinstance(out, (str, os.PathLike)):
+        raise ArgumentError(f"out must be a folder (a str or Path), got {type(out).__name__}")
     folder = Path(out)
-    description = {"arm": study.arm.name, "spec": study.spec.text, "seed": setup.seed, "block": setup.block,
-                   "runs": setup.runs, "t_final": study.t_final, "dt": study.dt, "after": study.after,
-                   "controller": control.describe_controller(study.controller),
-                   "trajectory": trajectories.describe_trajectory(study.trajectory),
-                   "distributions": {k: repr(v) for k, v in study.distributions.items()}}  # fmt: skip
     if folder.exists() and not folder.is_dir():
         raise ModelError(f"out {folder} is a file, not a folder")
-    folder.mkdir(parents=False, exist_ok=True)
+    if not folder.absolute().parent.is_dir():
+        raise ModelError(f"out {folder}: the folder {folder.absolute().parent} it goes in does not exist")
+    try:
+        folder.mkdir(exist_ok=True)
+    except OSError as error:
+        raise ModelError(f"out {folder}: cannot make the folder ({error.strerror or error})") from None
+    for leftover in folder.glob(".*.partial"):  # a write that a kill interrupted
+        leftover.unlink(missing_ok=True)
+    code, parts = identity
     stamp = folder / "study.json"
-    if stamp.exists():
+    document = {"format": STORE_FORMAT, "fingerprint": code, "parts": parts, "study": _describe(study, setup)}
+    if not stamp.exists():
+        _write_atomically(stamp, json.dumps(document, indent=1).encode())
+        return folder
+    try:
         previous = json.loads(stamp.read_text())
-        if previous != description:
-            changed = sorted(k for k in description if previous.get(k) != description[k])
-            raise ModelError(f"{folder} holds another study (it differs in {', '.join(changed)}): give another out")
-    else:
-        stamp.write_text(json.dumps(description, indent=1))
+        previous_code, previous_parts = previous["fingerprint"], dict(previous["parts"])
+    except (OSError, ValueError, TypeError, KeyError):
+        foreign = sorted(p.name for p in folder.glob("block-*.json") if _record_names_another(p, code))
+        if foreign:
+            raise ModelError(f"{folder}/study.json is damaged and {foreign[0]} belongs to another study: remove "
+                             f"the folder (or give another out) to start again") from None  # fmt: skip
+        warnings.warn(f"{folder}/study.json was damaged (unreadable); it is written again and the blocks are "
+                      "checked one by one", DamagedBlockWarning, stacklevel=3)  # fmt: skip
+        _write_atomically(stamp, json.dumps(document, indent=1).encode())
+        return folder
+    if previous_code != code:
+        changed = sorted(k for k in parts if previous_parts.get(k) != parts[k]) or ["its format"]
+        raise ModelError(f"{folder} holds another study (it differs in {', '.join(changed)}): give another out, "
+                         "or remove the folder to start again")  # fmt: skip
     return folder
+
+
+def _record_names_another(record_file: Path, code: str) -> bool:
+    """True when a block's record is readable and names a fingerprint other than ``code``."""
+    try:
+        record = json.loads(record_file.read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(record, dict) and record.get("fingerprint") != code
+
+
+def _worker_threads(threads: int) -> None:
+    """Numba's thread count on a worker, within the pool it started with; never a change of NUMBA_NUM_THREADS
+    after start-up. A worker whose environment got another NUMBA_NUM_THREADS after Numba started (a
+    dask.distributed Nanny applies its ``env`` after the process imported Numba) would refuse every later
+    compile ("Cannot set NUMBA_NUM_THREADS"): its environment is given back the pool's size."""
+    import numba
+
+    started = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # Numba sets its config at run time
+    if os.environ.get("NUMBA_NUM_THREADS", str(started)) != str(started):
+        os.environ["NUMBA_NUM_THREADS"] = str(started)
+    numba.set_num_threads(max(1, min(threads, started)))
 
 
 def _warm(threads: int) -> str:
     """On a worker: set Numba's thread count and load (or compile) the study's kernels once."""
-    import numba
-
     from armdyn import models
     from armdyn.simulation import simulate
 
-    numba.set_num_threads(threads)
+    _worker_threads(threads)
     simulate(models.two_link_planar(), control.PDGravity(1.0, 1.0), None, t_final=0.002, runs=1)
     return "warm"
 
 
-def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeout: float,
+def _remote_block(setup: Setup, index: int) -> DataFrame:
+    """A block on a worker, with one Numba thread (a worker that just restarted was not warmed)."""
+    _worker_threads(1)
+    return run_block(setup, index, 1)
+
+
+DASK_ROUNDS = 4
+"""Rounds of a Dask study in a row in which no block arrived (workers lost) before it gives up."""
+
+
+def _lost(error: BaseException) -> bool:
+    """True when a Dask task failed because its worker or its scattered data was lost (not its own error)."""
+    from concurrent.futures import CancelledError as FutureCancelled
+
+    from distributed import KilledWorker
+    from distributed.comm import CommClosedError
+
+    return isinstance(error, (KilledWorker, CommClosedError, FutureCancelled))
+
+
+def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeout: float, key: str,
              arrived: Callable[[int, DataFrame], None]) -> dict:  # fmt: skip
-    """The blocks ``todo`` on a Dask cluster: one task per block, each worker one task thread with
-    one Numba thread, its kernels warmed first; lost blocks are recomputed by Dask (retries)."""
+    """The blocks ``todo`` on a Dask cluster: one task per block, each worker one task thread with one Numba
+    thread, its kernels warmed first. A block lost with its worker is retried by Dask; when every worker is
+    lost (and the scattered set-up with them), the set-up is scattered again to the workers that come back and
+    the blocks not yet arrived are sent again, up to DASK_ROUNDS rounds in a row without a block, then a
+    ModelError (the blocks that arrived stay in out)."""
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -719,8 +1035,9 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
     cluster = None
     if scheduler == "local-cluster":
         workers = inputs.integer(workers, "workers", 1, 4 * (os.cpu_count() or 1), " (4 per core)")
+        # no NUMBA_NUM_THREADS here: the Nanny sets its env after the worker imported Numba (see _worker_threads)
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
-                               env={"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"})  # fmt: skip
+                               env={"OMP_NUM_THREADS": "1"})  # fmt: skip
         address = cluster.scheduler_address
     elif isinstance(scheduler, str) and re.fullmatch(r"(tcp|tls)://[\w.\-]+:\d+", scheduler):
         address = scheduler
@@ -736,13 +1053,37 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
                          "was lost: the blocks already written stay in out") from None  # fmt: skip
     try:
         link = client.dashboard_link
-        client.run(_warm, 1)  # every worker loads its compiled kernels before work arrives
-        shared = client.scatter(setup, broadcast=True)
-        futures = {client.submit(run_block, shared, index, 1, key=f"armdyn-block-{setup.seed}-{index}",
-                                 retries=3): index for index in todo}  # fmt: skip
-        for future in as_completed(futures):
-            arrived(futures[future], future.result())
-        return {"dashboard": link, "workers": len(client.scheduler_info()["workers"])}
+        remaining, idle, attempt = list(todo), 0, 0
+        while remaining:
+            if idle >= DASK_ROUNDS:
+                raise ModelError(f"the Dask workers were lost {idle} times in a row before blocks "
+                                      f"{remaining[:5]} arrived; the blocks that arrived stay in out")  # fmt: skip
+            attempt += 1
+            try:
+                client.wait_for_workers(1, timeout=timeout)
+                client.run(_warm, 1)  # every worker loads its compiled kernels before work arrives
+                shared = client.scatter(setup, broadcast=True)
+            except Exception as error:  # workers lost while starting: the next round
+                if isinstance(error, TimeoutError) and not client.scheduler_info()["workers"]:
+                    raise ModelError(f"no Dask worker came back within {timeout:g} s; the blocks that "
+                                          "arrived stay in out") from None  # fmt: skip
+                idle += 1
+                continue
+            futures = {client.submit(_remote_block, shared, index, key=f"armdyn-block-{key}-{index}-{attempt}",
+                                     retries=3): index for index in remaining}  # fmt: skip
+            arrivals = 0
+            for future in as_completed(futures):
+                try:
+                    table = future.result()
+                except Exception as error:  # a block's own error is raised; a lost one retried
+                    if not _lost(error):
+                        raise
+                    continue
+                arrived(futures[future], table)
+                remaining.remove(futures[future])
+                arrivals += 1
+            idle = 0 if arrivals else idle + 1
+        return {"dashboard": link, "workers": len(client.scheduler_info()["workers"]), "rounds": attempt}
     finally:
         client.close()
         if cluster is not None:
