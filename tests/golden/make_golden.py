@@ -627,9 +627,18 @@ def scenarios() -> dict[str, Callable[[], dict[str, np.ndarray]]]:
     return cases
 
 
-def main() -> None:
-    stored = {}
-    for name, compute in scenarios().items():
+def main(only: list[str]) -> None:
+    """Record every scenario, or only the named ones (the others kept as recorded): a deliberate change of
+    a result is recorded by name, never by recording everything again."""
+    stored = dict(np.load(GOLDEN)) if only else {}
+    known = scenarios()
+    unknown = set(only) - set(known)
+    if unknown:
+        raise SystemExit(f"no such scenario: {', '.join(sorted(unknown))}")
+    for name, compute in known.items():
+        if only and name not in only:
+            continue
+        stored = {key: value for key, value in stored.items() if not key.startswith(f"{name}/")}
         for key, value in compact(compute()).items():
             stored[f"{name}/{key}"] = value
     np.savez_compressed(GOLDEN, **stored)
@@ -638,4 +647,4 @@ def main() -> None:
 
 if __name__ == "__main__":
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
-    main()
+    main(sys.argv[1:])
