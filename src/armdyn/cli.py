@@ -1174,14 +1174,23 @@ def _trajectory(
     """The desired trajectory of ``simulate``, about ``start`` (default the arm's qz, or zeros)."""
     from armdyn import trajectories
 
-    offset = start if start is not None else np.asarray(arm.configurations.get("qz", np.zeros(arm.n)), dtype=float)
+    lower, upper = arm.qlim
+    offset = start if start is not None else _inside_limits(arm, arm.configurations.get("qz", np.zeros(arm.n)))
     if kind == "sine":  # the book's pattern: sin on odd joints, cos on even ones (Example 4.4-1)
         phase = [0.0 if i % 2 == 0 else np.pi / 2 for i in range(arm.n)]
+        if start is None:  # the default path swings inside the joints' limits: a smaller swing, a centre moved in
+            swing = np.minimum(amplitude, 0.4 * (upper - lower))
+            offset = np.clip(offset, lower + 1.1 * swing, upper - 1.1 * swing)  # a margin for the tracking error
+            return trajectories.Sinusoid(swing, frequency, phase, offset)
         return trajectories.Sinusoid(amplitude, frequency, phase, offset)
     if kind == "quintic":
         if not (np.isfinite(frequency) and frequency > 0):
             _fail(f"--frequency must be positive and finite for a quintic (it lasts 1/frequency s), got {frequency}")
-        return trajectories.Quintic(offset, offset + amplitude, 0.0, 1.0 / frequency)
+        goal = offset + amplitude
+        if start is None:  # the default move ends inside the joints' limits
+            offset = np.clip(offset, lower, upper)
+            goal = np.clip(offset + amplitude, lower, upper)
+        return trajectories.Quintic(offset, goal, 0.0, 1.0 / frequency)
     if kind == "none":
         return None
     _fail(f"--trajectory must be sine, quintic or none, got '{kind}'")
@@ -1190,7 +1199,8 @@ def _trajectory(
 PER_JOINT = "one number for every joint, or one per joint separated by commas"
 Q0_HELP = (
     f"Start positions (rad or m): a configuration of the arm (qz, qn, ...) or {PER_JOINT}. The trajectory runs "
-    "about it. Default: the arm's qz, or zeros."
+    "about it. Default: the arm's qz, or zeros, moved inside the joint limits (the default path then stays inside "
+    "them)."
 )
 ANIMATE_HELP = (
     "Write an animation of the run to this .gif (or .mp4, with ffmpeg installed): the arm moving along the "
@@ -1212,7 +1222,13 @@ SIMULATE_TASK_HELP = (
 
 
 def _default_start(arm: Robot) -> np.ndarray:
-    return np.asarray(arm.configurations.get("qn", arm.configurations.get("qz", np.zeros(arm.n))), dtype=float)
+    return _inside_limits(arm, arm.configurations.get("qn", arm.configurations.get("qz", np.zeros(arm.n))))
+
+
+def _inside_limits(arm: Robot, q: object) -> np.ndarray:
+    """A default configuration moved inside the joints' limits (qz = 0 lies outside some arms' limits)."""
+    lower, upper = arm.qlim
+    return np.clip(np.asarray(q, dtype=float), lower, upper)
 
 
 def _one_number(text: str, option: str) -> float:
@@ -1329,6 +1345,12 @@ def simulate(
     animate: str | None = typer.Option(None, "--animate", help=ANIMATE_HELP),
     output: str | None = typer.Option(None, "--output", "-o", help=SIMULATE_OUTPUT_HELP),
     actuators: str | None = typer.Option(None, "--actuators", help=ACTUATORS_HELP + " " + SIMULATE_DRIVES_HELP),
+    joint_limits: str = typer.Option(
+        "warn",
+        "--joint-limits",
+        help="What the arm's joint limits do: warn (a warning when a joint leaves them), stop (end the run there), "
+        "spring (stiff spring-damper stops, as MuJoCo's soft limits; not with --actuators) or ignore.",
+    ),
 ) -> None:
     """Simulate an arm under control and report the tracking errors (with units); with --task, control
     in task coordinates (Section 3.5) along a line or a circle of the tool; with --actuators, through its
@@ -1374,14 +1396,17 @@ def simulate(
         desired = _trajectory("sine" if trajectory is None else trajectory, arm, amplitude, frequency, start)
     if start is None and desired is not None and controller == "none":
         start = desired(0.0, arm.n)[0]
+    if start is None:  # the arm starts where the path starts from, inside its limits
+        start = _inside_limits(arm, arm.configurations.get("qz", np.zeros(arm.n)))
     if driven is not None:
         _activity.status(f"simulating {t_final:g} s of {arm.name} with its drives (compiled RK4)")
-        result = cast("Result", run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity))
+        result = cast("Result", run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity,
+                                    joint_limits=joint_limits))  # fmt: skip
     else:
         progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
         tau_d_run = None if not np.any(tau_d) else tau_d.copy()
         result = cast("Result", run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
-                                    disturbance=tau_d_run, progress=progress))  # fmt: skip
+                                    disturbance=tau_d_run, progress=progress, joint_limits=joint_limits))  # fmt: skip
     _check_finite(result)
     report = _report(result) if result.task is None else _task_report(result)
     reports = [report] + ([_drive_report(result, driven)] if driven is not None else [])

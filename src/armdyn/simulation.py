@@ -318,25 +318,25 @@ class Result(RunSummaries):
 # ----- the compiled loop ------------------------------------------------------------------------------
 @njit(**NUMBA_OPTIONS)
 def _accelerations(
-    plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
-    tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
+    plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, stops: np.ndarray, work: np.ndarray, q: np.ndarray,
+    qd: np.ndarray, tau: np.ndarray, M: np.ndarray, N: np.ndarray, qdd: np.ndarray,
 ) -> int:  # fmt: skip
-    """qdd = M^-1 (tau - N - Fd_smooth) by CRBA, RNEA and a Cholesky solve; -1, or the joint where
-    M is singular (see _solve).
+    """qdd = M^-1 (tau - N - Fd_smooth + tau_stop) by CRBA, RNEA and a Cholesky solve; -1, or the joint
+    where M is singular (see _solve).
 
     For the arms of this library (n up to about ten) this is faster than the O(n)
     articulated-body algorithm and equal to it to rounding; ``tau`` carries the disturbance.
     """
     mass_matrix_and_bias(plant, work, q, qd, M, N)
-    return _solve(M, N, tau, coulomb, eps, qd, qdd, plant[PIVOT_FLOOR])
+    return _solve(M, N, tau, coulomb, eps, stops, q, qd, qdd, plant[PIVOT_FLOOR])
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def _solve(
-    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, qd: np.ndarray,
-    qdd: np.ndarray, floor: float,
+    M: np.ndarray, N: np.ndarray, tau: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, stops: np.ndarray,
+    q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, floor: float,
 ) -> int:  # fmt: skip
-    """qdd = M^-1 (tau - N - Fd_smooth) by Cholesky factorization (M is overwritten).
+    """qdd = M^-1 (tau - N - Fd_smooth + tau_stop) by Cholesky factorization (M is overwritten).
 
     Returns -1, or the first joint whose pivot is not above ``floor`` (M singular; qdd not
     computed)."""
@@ -344,9 +344,48 @@ def _solve(
     if singular >= 0:
         return singular
     for i in range(qd.shape[0]):
-        qdd[i] = tau[i] - N[i] - smooth_coulomb(coulomb, eps, i, qd[i])
+        qdd[i] = tau[i] - N[i] - smooth_coulomb(coulomb, eps, i, qd[i]) + stop_torque(stops, i, q[i], qd[i])
     cholesky_solve_vector(M, qdd)
     return -1
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def stop_torque(stops: np.ndarray, i: int, q: float, qd: float) -> float:
+    """The torque of joint i's limit stop, a spring-damper beyond [lower, upper] (stops[i] = lower, upper,
+    K, B): -K (q - upper) - B qd past the upper limit, K (lower - q) - B qd below the lower one, never
+    pulling the joint outward; zero inside (MuJoCo's soft joint limit, as a spring-damper)."""
+    if q > stops[i, 1]:
+        return min(0.0, -stops[i, 2] * (q - stops[i, 1]) - stops[i, 3] * qd)
+    if q < stops[i, 0]:
+        return max(0.0, stops[i, 2] * (stops[i, 0] - q) - stops[i, 3] * qd)
+    return 0.0
+
+
+STOP_TIME_CONSTANT = 0.02
+"""The time constant (s) of a joint-limit stop (joint_limits="spring"): MuJoCo's default soft-limit time
+constant, critically damped."""
+
+JOINT_LIMIT_CHOICES = ("warn", "stop", "spring", "ignore")
+
+
+def joint_stops(arm: Robot, q0: np.ndarray, spring: bool) -> np.ndarray:
+    """(n, 4) rows (lower, upper, K, B) of stop_torque: the arm's limits as critically damped
+    spring-dampers of time constant STOP_TIME_CONSTANT on each joint's own inertia M_ii(q0),
+    K = M_ii / tc^2, B = 2 M_ii / tc; limits at infinity (no stop) unless ``spring``."""
+    stops = np.zeros((arm.n, 4))
+    stops[:, 0], stops[:, 1] = -np.inf, np.inf
+    if spring:
+        inertia = np.diag(np.asarray(arm.inertia_matrix(q0)))
+        stops[:, :2] = arm.qlim.T
+        stops[:, 2], stops[:, 3] = inertia / STOP_TIME_CONSTANT**2, 2.0 * inertia / STOP_TIME_CONSTANT
+    return stops
+
+
+def stop_torques(stops: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """stop_torque for every joint at once (NumPy, for the Python loop and solve_ivp's Python route)."""
+    beyond_upper = np.minimum(0.0, -stops[:, 2] * (q - stops[:, 1]) - stops[:, 3] * qd)
+    below_lower = np.maximum(0.0, stops[:, 2] * (stops[:, 0] - q) - stops[:, 3] * qd)
+    return np.where(q > stops[:, 1], beyond_upper, np.where(q < stops[:, 0], below_lower, 0.0))
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -369,7 +408,8 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     """Steps first..last-1 of fixed-step RK4 (the book's TRESP), recording each step's start.
 
     plant = (models (P, L), Coulomb tables (P, n, 2), switch times (P - 1,), disturbance (n,),
-    Coulomb smoothing eps (n,)): the plant in force is models[p] from switch time p - 1 on.
+    Coulomb smoothing eps (n,), joint stops (n, 4): lower, upper, K, B, see stop_torque): the plant in
+    force is models[p] from switch time p - 1 on.
     controller = (kind, model, model Coulomb (n, 2), gain table (4, n), hold, shares plant):
     control.control_law every ``hold`` steps on ``model``; "shares plant" when the model is
     the plant's own, so that the plant reuses the controller's M and N.
@@ -379,7 +419,7 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     The run stops where M becomes singular or the state non-finite: outcome = (rows recorded,
     STOPPED_SINGULAR or STOPPED_DIVERGED, joint); it stays (-1, 0, -1) while all is well.
     """
-    models, coulombs, switches, disturbance, eps = plant
+    models, coulombs, switches, disturbance, eps, stops = plant
     kind, model, model_coulomb, gain, hold, shares_plant = controller
     trajectory_kind, params, q0 = trajectory
     t0, dt, first, last = steps
@@ -412,9 +452,9 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             applied[i] = tau_held[i] - disturbance[i]
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
-            singular = _solve(Mp, Nv, applied, coulomb, eps, qd, k1v, plant_model[PIVOT_FLOOR])
+            singular = _solve(Mp, Nv, applied, coulomb, eps, stops, q, qd, k1v, plant_model[PIVOT_FLOOR])
         else:
-            singular = _accelerations(plant_model, coulomb, eps, work, q, qd, applied, Mp, net, k1v)
+            singular = _accelerations(plant_model, coulomb, eps, stops, work, q, qd, applied, Mp, net, k1v)
         if singular >= 0:
             outcome[0], outcome[1], outcome[2] = k, STOPPED_SINGULAR, singular
             break
@@ -425,17 +465,17 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             k1q[i] = qd[i]
         rk4_stage_state(q, k1q, 0.5, dt, qs)
         rk4_stage_state(qd, k1v, 0.5, dt, vs)
-        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k2v))
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k2v))
         for i in range(n):
             k2q[i] = vs[i]
         rk4_stage_state(q, k2q, 0.5, dt, qs)
         rk4_stage_state(qd, k2v, 0.5, dt, vs)
-        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k3v))
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k3v))
         for i in range(n):
             k3q[i] = vs[i]
         rk4_stage_state(q, k3q, 1.0, dt, qs)
         rk4_stage_state(qd, k3v, 1.0, dt, vs)
-        singular = max(singular, _accelerations(plant_model, coulomb, eps, work, qs, vs, applied, Mp, net, k4v))
+        singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k4v))
         for i in range(n):
             k4q[i] = vs[i]
         rk4_advance(q, k1q, k2q, k3q, k4q, dt)
@@ -704,6 +744,7 @@ def simulate(
     keep: str | int | None = None,
     after: float | None = None,
     threads: int | None = None,
+    joint_limits: str = "warn",
 ) -> Result | Ensemble:
     """Simulate a plant under control from (q0, qd0) for t_final seconds (Lewis, Dawson and Abdallah 2004, Chapter 4).
 
@@ -734,9 +775,8 @@ def simulate(
     t_final : float
         Seconds to simulate (below 1e15).
     dt : float
-        The RK4 step, and the sampling of the result for adaptive methods. The run takes
-        round(t_final / dt) steps, ending at the multiple of dt nearest t_final (so a dt
-        beyond 2 t_final gives the start alone, with every method). It records about
+        The RK4 step, and the sampling of the result for adaptive methods. t_final must be a whole
+        number of steps (to 1e-9 relative; else the error names the nearest valid t_final). It records about
         t_final / dt + 1 samples, at most MAX_SAMPLES (200,000,000), of 8 (1 + 5 n) bytes
         each (8 (1 + 9 n) with an adaptive method), which must fit in the memory available
         (the system's, less where a cgroup or RLIMIT_AS limit leaves less): a longer run is
@@ -776,6 +816,13 @@ def simulate(
         default 1 s, or t_final when the run is shorter.
     threads : int, optional
         Many runs: Numba's thread count for the call (default: as set; all cores).
+    joint_limits : str
+        One run: what the arm's joint limits (``arm.qlim``) do. "warn" (default): the run ignores them
+        and a JointLimitWarning names the first joint that left its limits, when and where; "stop":
+        a SimulationError at that sample (its ``result`` holds the run up to it); "spring": each limit
+        is a critically damped spring-damper stop of time constant STOP_TIME_CONSTANT (0.02 s, MuJoCo's
+        soft limit) on the joint's own inertia, which a joint enters only slightly; "ignore": nothing.
+        Many runs ignore the limits. An arm with drives takes "warn", "stop" and "ignore".
 
     Returns
     -------
@@ -808,14 +855,24 @@ def simulate(
         holds the run up to then), or an adaptive solver fails.
     """
     given_events = tuple(events) if isinstance(events, list) else events  # a generator is read once, by _events
+    if not isinstance(joint_limits, str) or joint_limits not in JOINT_LIMIT_CHOICES:
+        raise ModelError(
+            f"joint_limits must be one of {', '.join(JOINT_LIMIT_CHOICES)}, got {reprlib.repr(joint_limits)}"
+        )
+    limits = joint_limits
     single_run_options = {"method": (method, "rk4"), "events": (given_events, ()), "progress": (progress, None),
-                          "coulomb_smoothing": (coulomb_smoothing, "auto")}  # fmt: skip
+                          "coulomb_smoothing": (coulomb_smoothing, "auto"),
+                          "joint_limits": (joint_limits, "warn")}  # fmt: skip
     per_run = {"runs": runs, "plants": plants, "models": models, "gains": gains, "keep": keep, "after": after,
                "threads": threads}  # fmt: skip
     if isinstance(arm, DrivenPlant):
-        _refuse_options(arm, {**single_run_options, "disturbance": (disturbance, None),
+        if limits == "spring":
+            raise ArgumentError("joint_limits='spring' applies to a Robot (an arm with drives takes 'warn', 'stop' "
+                                "or 'ignore')")  # fmt: skip
+        driven_options = {name: value for name, value in single_run_options.items() if name != "joint_limits"}
+        _refuse_options(arm, {**driven_options, "disturbance": (disturbance, None),
                               **{name: (value, None) for name, value in per_run.items()}})  # fmt: skip
-        return _simulate_driven(arm, controller, trajectory, t_final, dt, q0, qd0, step)
+        return within_limits(_simulate_driven(arm, controller, trajectory, t_final, dt, q0, qd0, step), limits)
     inputs.arm_argument(
         arm, Robot, "arm", numeric=True, why=" (simulate takes a numeric Robot or an armdyn.actuators.ActuatedArm)"
     )
@@ -850,8 +907,9 @@ def simulate(
         and (disturbance is None or not callable(disturbance))
         and (spec.model is None or not spec.model.is_symbolic)
     )
+    stops = joint_stops(arm, start, limits == "spring")
     setup = _compiled_setup(arm, arms, plant_events, spec, period, trajectory, start, disturbance, dt,
-                            coulomb_smoothing) \
+                            coulomb_smoothing, stops) \
         if compiled else None  # fmt: skip
     if not compiled and (_users_own(controller) or _users_own(trajectory) or callable(disturbance)):
         warnings.warn(
@@ -867,16 +925,48 @@ def simulate(
     }
     if adaptive:
         result = _adaptive(arms, plant_events, controller, trajectory, start, velocity, disturbance, steps, dt,
-                           method, coulomb_smoothing, progress, setup)  # fmt: skip
+                           method, coulomb_smoothing, progress, setup, stops)  # fmt: skip
     elif compiled:
         result = _compiled_rk4(arm, arms, plant_events, trajectory, start, velocity, steps, dt, progress, setup)
     else:
         result = _python_rk4(arms, plant_events, controller, period, trajectory, start, velocity, disturbance,
-                             steps, dt, coulomb_smoothing)  # fmt: skip
+                             steps, dt, coulomb_smoothing, stops)  # fmt: skip
     result.info.update(described)
     tracking = getattr(law, "tracking", None)
     if callable(tracking):  # a task-space law records its task error
         result.task = tracking(arm, result.t, result.q)
+    return within_limits(result, "ignore" if limits == "spring" else limits)
+
+
+class JointLimitWarning(UserWarning):
+    """A simulated joint left its limits (simulate's joint_limits="warn")."""
+
+
+def within_limits(result: Result, mode: str) -> Result:
+    """The run checked against its arm's joint limits (simulate's ``joint_limits``): unchanged, with a
+    JointLimitWarning naming the first joint that left its limits ("warn"), or a SimulationError holding
+    the run up to that sample ("stop")."""
+    if mode == "ignore" or len(result.t) == 0:
+        return result
+    lower, upper = result.arm.qlim
+    slack = 1e-9 * np.maximum(1.0, np.abs(np.where(np.isfinite(lower), lower, 0.0)))
+    outside = (result.q < lower - slack) | (result.q > upper + slack)
+    if not outside.any():
+        return result
+    row = int(np.argmax(outside.any(axis=1)))
+    joint = int(np.argmax(outside[row]))
+    value, name = result.q[row, joint], result.arm.joint_names[joint]
+    unit = "m" if result.arm.kinds[joint] == "prismatic" else "rad"
+    what = (f"joint '{name}' of '{result.arm.name}' left its limits [{lower[joint]:.6g}, {upper[joint]:.6g}] {unit} at "
+            f"t = {result.t[row]:.6g} s (q = {value:.6g} {unit})")  # fmt: skip
+    if mode == "stop":
+        kept = Result(result.t[: row + 1], result.q[: row + 1], result.qd[: row + 1], result.qdd[: row + 1],
+                      result.tau[: row + 1], None if result.q_d is None else result.q_d[: row + 1], result.arm,
+                      {**result.info, "stopped": "joint limit"}, result.energy_of)  # fmt: skip
+        kept.drives = result.drives
+        raise SimulationError(f"the run stopped: {what} (joint_limits='stop')", kept)
+    warnings.warn(f"{what}; simulation does not enforce joint limits: give joint_limits='spring' to model them as "
+                  "stops, 'stop' to end the run there, or 'ignore'", JointLimitWarning, stacklevel=3)  # fmt: skip
     return result
 
 
@@ -985,7 +1075,7 @@ def law_table(spec: control.Spec, period: float, dt: float, n: int) -> tuple[np.
     return gain, hold
 
 
-def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps):
+def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance, dt, eps, stops):
     """The plant, controller and trajectory tuples of run_rk4 and continuous_rate."""
     n = arm.n
     plants, coulombs = packed_plants(arms)
@@ -999,7 +1089,7 @@ def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance
     tau_d = np.zeros(n) if disturbance is None else np.broadcast_to(np.asarray(disturbance, float), (n,)).copy()
     smoothing = _smoothing(arm, eps, dt, q0)
     return (
-        (plants, coulombs, switches, tau_d, smoothing),
+        (plants, coulombs, switches, tau_d, smoothing, stops),
         (spec.kind, model, model_coulomb, gain, hold, spec.model is None),
         (trajectory_kind, params, q0),
     )
@@ -1081,13 +1171,14 @@ def _plant_at(arms: list[Robot], events: list, t: float) -> Robot:
     return arms[index]
 
 
-def _dynamics(arms, events, eps):
+def _dynamics(arms, events, eps, stops):
     bare = [a.replace([_no_coulomb(link) for link in a.links]) for a in arms]
 
     def qdd(t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         _check_bounded(q, qd, tau)
         index = sum(1 for e in events if t >= e[0])
-        return bare[index].forward_dynamics(q, qd, tau - smooth_coulomb_vector(arms[index].coulomb_friction, eps, qd))
+        friction = smooth_coulomb_vector(arms[index].coulomb_friction, eps, qd)
+        return bare[index].forward_dynamics(q, qd, tau - friction + stop_torques(stops, q, qd))
 
     return qdd
 
@@ -1155,11 +1246,11 @@ def _tau_d(
     return disturbance
 
 
-def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt, eps):
+def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturbance, steps, dt, eps, stops):
     """The same TRESP scheme in Python, for controllers and trajectories of the user's own."""
     n = arms[0].n
     smoothing = _smoothing(arms[0], eps, dt, q0)
-    qdd_of = _dynamics(arms, events, smoothing)
+    qdd_of = _dynamics(arms, events, smoothing, stops)
     hold = max(1, round(period / dt)) if period else 1
     out = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
@@ -1217,12 +1308,13 @@ def _check_bounded(q: np.ndarray, qd: np.ndarray, tau: np.ndarray | None = None)
         raise _DivergedError(int(np.flatnonzero(bad)[0]))
 
 
-def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps, progress, setup):
+def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps, dt, method, eps, progress, setup,
+              stops):  # fmt: skip
     """solve_ivp on x = [q; qd; e_int]; the controller runs at every function evaluation, compiled
     (``continuous_rate``) when the compiled RK4 loop could run it, else in Python."""
     n = arms[0].n
     smoothing = _smoothing(arms[0], eps, dt, q0)
-    qdd_of = _dynamics(arms, events, smoothing)
+    qdd_of = _dynamics(arms, events, smoothing, stops)
     times = np.arange(steps + 1) * dt
     buffers = np.empty(3 * n), np.empty(n)  # the rate, the torque
 
@@ -1287,7 +1379,7 @@ def continuous_rate(
     """d/dt [q; qd; e_int] under continuous control, for the adaptive solvers: the built-in
     controller's compiled law at every evaluation (the same tuples as run_rk4; hold unused).
     Writes the rate and the torque; returns -1, or the joint where M is singular."""
-    models, coulombs, switches, disturbance, eps = plant
+    models, coulombs, switches, disturbance, eps, stops = plant
     kind, model, model_coulomb, gain = controller[0], controller[1], controller[2], controller[3]
     trajectory_kind, params, q0 = trajectory
     n = q0.shape[0]
@@ -1306,7 +1398,7 @@ def continuous_rate(
         control_law(kind, model, model_coulomb, eps, work, q, qd, goal, e_int, gain, u, M, N, tau)
     for i in range(n):
         applied[i] = tau[i] - disturbance[i]
-    singular = _accelerations(models[p], coulombs[p], eps, work, q, qd, applied, M, N, qdd)
+    singular = _accelerations(models[p], coulombs[p], eps, stops, work, q, qd, applied, M, N, qdd)
     for i in range(n):
         rate[i] = qd[i]
         rate[n + i] = qdd[i]
@@ -1532,10 +1624,12 @@ def run_many(
     dt, rows, chunk, every, after = timing
     summaries, outcomes, kept_q, kept_qd, kept_tau, kept_qd_d = outputs
     n = q0s.shape[1]
+    free = np.zeros((n, 4))  # many runs have no joint stops: limits at infinity
+    free[:, 0], free[:, 1] = -np.inf, np.inf
     for r in prange(q0s.shape[0]):
         p, m = plant_of[r], model_of[r]
         eps = _auto_smoothing(plant_rows[p], plant_coulombs[p], q0s[r], qd0s[r], dt)
-        plant = (plant_rows[p : p + 1], plant_coulombs[p : p + 1], np.empty(0), disturbances[r], eps)
+        plant = (plant_rows[p : p + 1], plant_coulombs[p : p + 1], np.empty(0), disturbances[r], eps, free)
         law = (kind, model_rows[m], model_coulombs[m], gains[r], hold, shares[r])
         state = (np.concatenate((q0s[r], qd0s[r])), np.zeros(n), np.zeros(n), outcomes[r])
         record = (np.empty(chunk), np.empty((chunk, n)), np.empty((chunk, n)), np.empty((chunk, n)),
