@@ -59,6 +59,7 @@ if TYPE_CHECKING:
 
 INPUT_ERROR = 2
 INTERNAL_ERROR = 1
+INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-C
 
 
 COMPILING = "compiling kernels (first run only)..."
@@ -214,6 +215,11 @@ class _Group(TyperGroup):
                     _activity.mode = None  # the next command (in this process) decides afresh
             except (typer.Exit, typer.Abort, typer.TyperException, BrokenPipeError):
                 raise  # typer's own: exits and usage errors (handled in main), a closed pipe (exits quietly)
+            except KeyboardInterrupt as stop:  # Ctrl-C: one line saying what was kept (a study's blocks), exit 130
+                if ctx.params.get("debug"):
+                    raise
+                _error_line(str(stop) or "interrupted")
+                raise typer.Exit(INTERRUPTED) from None
             except Exception as error:
                 if ctx.params.get("debug"):
                     raise
@@ -1355,6 +1361,7 @@ def simulate(
     """Simulate an arm under control and report the tracking errors (with units); with --task, control
     in task coordinates (Section 3.5) along a line or a circle of the tool; with --actuators, through its
     drives' dynamics (Section 3.6)."""
+    from armdyn.simulation import RunInterrupted
     from armdyn.simulation import simulate as run
 
     if controller is None:
@@ -1398,15 +1405,26 @@ def simulate(
         start = desired(0.0, arm.n)[0]
     if start is None:  # the arm starts where the path starts from, inside its limits
         start = _inside_limits(arm, arm.configurations.get("qz", np.zeros(arm.n)))
-    if driven is not None:
-        _activity.status(f"simulating {t_final:g} s of {arm.name} with its drives (compiled RK4)")
-        result = cast("Result", run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity,
-                                    joint_limits=joint_limits))  # fmt: skip
-    else:
-        progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
-        tau_d_run = None if not np.any(tau_d) else tau_d.copy()
-        result = cast("Result", run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start, qd0=velocity,
-                                    disturbance=tau_d_run, progress=progress, joint_limits=joint_limits))  # fmt: skip
+    interrupted = False
+    try:
+        if driven is not None:
+            _activity.status(f"simulating {t_final:g} s of {arm.name} with its drives (compiled RK4)")
+            result = cast("Result", run(driven, law, desired, t_final=t_final, dt=dt, q0=start, qd0=velocity,
+                                        joint_limits=joint_limits))  # fmt: skip
+        else:
+            progress = _activity.bar(f"simulating {t_final:g} s of {arm.name} ({method})")
+            tau_d_run = None if not np.any(tau_d) else tau_d.copy()
+            result = cast("Result", run(arm, law, desired, t_final=t_final, dt=dt, method=method, q0=start,
+                                        qd0=velocity, disturbance=tau_d_run, progress=progress,
+                                        joint_limits=joint_limits))  # fmt: skip
+    except RunInterrupted as stop:  # Ctrl-C: what was computed is reported and written, then exit 130
+        _activity.stop()
+        result, interrupted = cast("Result", stop.result), True
+        if len(result.t) < 2:
+            _error_line("interrupted before the first samples: nothing to write")
+            raise typer.Exit(INTERRUPTED) from None
+        _error_line(f"interrupted at t = {result.t[-1]:.6g} s of {t_final:g} s: the report and the files below "
+                    "hold the run up to then")  # fmt: skip
     _check_finite(result)
     report = _report(result) if result.task is None else _task_report(result)
     reports = [report] + ([_drive_report(result, driven)] if driven is not None else [])
@@ -1427,6 +1445,8 @@ def simulate(
         _activity.status(f"writing the animation {animate}")
         result.animate(animation_file)
         console.print(f"wrote {animate}")
+    if interrupted:
+        raise typer.Exit(INTERRUPTED)
 
 
 def _drive_controller(

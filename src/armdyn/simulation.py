@@ -17,9 +17,9 @@ of the error for PID control is accumulated once per controller evaluation.
 from __future__ import annotations
 
 import csv
-import itertools
 import math
 import reprlib
+import time
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -510,17 +510,20 @@ def run_drives(
     torques: np.ndarray,
     accelerations: np.ndarray,
     references: np.ndarray,
+    first: int,
+    stop: int,
 ) -> int:
-    """RK4 on y = [x, z] (the arm with its drives and the law's integrators), ``substeps`` steps of h between
-    samples, the drive-level law evaluated at every stage (armdyn.dynamics.drives.closed_loop), the currents and
-    spools put back within their limits at every stage and step (hold_limits); records each sample (the
-    inputs as applied). Returns -1, or the sample where M(q) was singular or the state
-    stopped being finite. The four stages share one evaluation site, so the inlined model is compiled once."""
+    """Samples first..stop-1 of RK4 on y = [x, z] (the arm with its drives and the law's integrators),
+    ``substeps`` steps of h between samples, the drive-level law evaluated at every stage
+    (armdyn.dynamics.drives.closed_loop), the currents and spools put back within their limits at every
+    stage and step (hold_limits); records each sample (the inputs as applied). Returns -1, or the sample
+    where M(q) was singular or the state stopped being finite. The four stages share one evaluation site,
+    so the inlined model is compiled once."""
     n, size, last = int(model[N_JOINTS]), y.shape[0], states.shape[0] - 1
     rates, stage_y = np.empty((4, size)), np.empty(size)
     u, tau, reference, work = np.empty(n), np.empty(n), np.empty((3, n)), np.empty(2 * n)
     recorded = states.shape[1]
-    for sample in range(last + 1):
+    for sample in range(first, stop):
         t = sample * substeps * h
         for step in range(substeps):
             for stage in range(4):
@@ -1041,20 +1044,30 @@ def _simulate_driven(
     accelerations, references = np.empty((samples, n)), np.empty((samples, n))
     mechanical = arm.mechanical_robot()
     assert mechanical.packed is not None, "an ActuatedArm refuses symbolic arms"
-    stopped = run_drives(mechanical.packed, drives, gains, law, path[0], path[1], start, y, dt / substeps, substeps,
-                         times, states, applied, torques, accelerations, references)  # fmt: skip
-    rows = samples if stopped < 0 else stopped
-    q, qd = states[:rows, :n], states[:rows, n : 2 * n]
+    stopped, packed = [-1], mechanical.packed
+
+    def advance(first: int, last: int) -> bool:
+        stopped[0] = run_drives(packed, drives, gains, law, path[0], path[1], start, y, dt / substeps, substeps,
+                                times, states, applied, torques, accelerations, references, first, last)  # fmt: skip
+        return stopped[0] < 0
+
     info = {"method": "rk4 (compiled, with the drives' dynamics)", "dt": dt, "substeps": substeps,
             "step": dt / substeps, "controller": control.describe_controller(controller),
             "trajectory": trajectories.describe_trajectory(trajectory)}  # fmt: skip
-    result = Result(times[:rows], q, qd, accelerations[:rows], torques[:rows],
-                    references[:rows] if trajectory is not None else None, mechanical, info,
-                    lambda: np.asarray(mechanical.kinetic_energy(q, qd) + mechanical.potential_energy(q)))  # fmt: skip
-    result.drives = arm.drive_record(states[:rows], applied[:rows])
-    if stopped >= 0:
+
+    def recorded(rows: int, extra: dict) -> Result:
+        q, qd = states[:rows, :n], states[:rows, n : 2 * n]
+        run = Result(times[:rows], q, qd, accelerations[:rows], torques[:rows],
+                     references[:rows] if trajectory is not None else None, mechanical, {**info, **extra},
+                     lambda: np.asarray(mechanical.kinetic_energy(q, qd) + mechanical.potential_energy(q)))  # fmt: skip
+        run.drives = arm.drive_record(states[:rows], applied[:rows])
+        return run
+
+    in_chunks(advance, samples, None, lambda rows: recorded(rows, {"stopped": "interrupted"}))
+    result = recorded(samples if stopped[0] < 0 else stopped[0], {})
+    if stopped[0] >= 0:
         raise SimulationError(
-            f"the run of '{arm.name}' with its drives stopped at t = {stopped * dt:.6g} s: M(q) became singular or "
+            f"the run of '{arm.name}' with its drives stopped at t = {stopped[0] * dt:.6g} s: M(q) became singular or "
             "the state not finite (lower the gains, give a smaller step=, or check the drives' limits); the run "
             "up to then is in this error's .result",
             result,
@@ -1101,21 +1114,18 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
     state, tau_held, e_int, outcome = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n), np.array([-1, 0, -1])
-    chunks = 20 if progress is not None else 1
-    bounds = np.linspace(0, steps + 1, chunks + 1).astype(int)
-    for a, b in itertools.pairwise(bounds):
-        run_rk4(
-            plant,
-            controller,
-            desired_path,
-            (0.0, dt, int(a), int(b)),
-            (state, tau_held, e_int, outcome),
-            (times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"]),
-        )
-        if outcome[0] >= 0:
-            break
-        if progress is not None:
-            progress(b / (steps + 1))
+    record = (times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"])
+
+    def advance(first: int, last: int) -> bool:
+        run_rk4(plant, controller, desired_path, (0.0, dt, first, last), (state, tau_held, e_int, outcome), record)
+        return outcome[0] < 0
+
+    def stopped_run(rows: int) -> Result:
+        return Result(times[:rows], arrays["q"][:rows], arrays["qd"][:rows], arrays["qdd"][:rows],
+                      arrays["tau"][:rows], arrays["q_d"][:rows] if trajectory is not None else None, arm,
+                      {"method": "rk4 (compiled)", "dt": dt, "integral": e_int, "stopped": "interrupted"})  # fmt: skip
+
+    in_chunks(advance, steps + 1, progress, stopped_run)
     rows = steps + 1 if outcome[0] < 0 else int(outcome[0])
     q_d = arrays["q_d"][:rows] if trajectory is not None else None
     result = Result(times[:rows], arrays["q"][:rows], arrays["qd"][:rows], arrays["qdd"][:rows], arrays["tau"][:rows],
@@ -1124,6 +1134,44 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
     if outcome[0] >= 0:
         raise _stopped(arm, int(outcome[1]), int(outcome[2]), rows * dt, state[:n], result)
     return result
+
+
+CHUNK_SECONDS = 0.1
+"""The wall time of one compiled call of a long run: between calls Ctrl-C (KeyboardInterrupt) is seen and the
+progress reported."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a run: a KeyboardInterrupt whose ``result`` holds the run computed until then."""
+
+    def __init__(self, message: str, result: object) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+def in_chunks(
+    advance: Callable[[int, int], bool], rows: int, progress: Callable[[float], None] | None,
+    interrupted: Callable[[int], object],
+) -> None:  # fmt: skip
+    """Rows 0..rows-1 of a compiled loop in calls of about CHUNK_SECONDS each (``advance(first, last)``,
+    False when the run stopped), so that Ctrl-C stops a long run within a fraction of a second: it raises
+    RunInterrupted holding ``interrupted(rows done)``. The loop's results do not depend on the chunks."""
+    done, size, reported = 0, min(rows, 256), 0.0
+    try:
+        while done < rows:
+            last = min(rows, done + size)
+            started = time.perf_counter()
+            going = advance(done, last)
+            spent = time.perf_counter() - started
+            done = last
+            if not going:
+                return
+            if progress is not None and (done == rows or done / rows >= reported + 0.05):
+                reported = done / rows
+                progress(reported)
+            size = int(min(max(size * 2, 1), max(1.0, size * CHUNK_SECONDS / max(spent, 1e-6))))
+    except KeyboardInterrupt:
+        raise RunInterrupted(f"interrupted after {done} of {rows} samples", interrupted(done)) from None
 
 
 def _stopped(arm: Robot, reason: int, joint: int, t: float, q: np.ndarray, result: Result) -> SimulationError:
@@ -1255,34 +1303,41 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
     out = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
     q, qd, tau, e_int = q0.copy(), qd0.copy(), np.zeros(n), np.zeros(n)
-    for k in range(steps + 1):
-        t = k * dt
-        plant = _plant_at(arms, events, t)
-        desired = _desired_of(trajectory, t, q0)
-        if k % hold == 0:
-            e_int = e_int + (desired[0] - q) * dt * hold
-            tau = _torque(controller, plant, t, q, qd, desired, e_int, smoothing)
-        applied = tau - _tau_d(disturbance, t, q, qd)
-        try:
-            k1v = qdd_of(t, q, qd, applied)
-        except _DivergedError as diverged:  # the torque itself blew up
-            rows, joint = k, diverged.joint
-            break
-        times[k] = t
-        out["q"][k], out["qd"][k], out["qdd"][k], out["tau"][k], out["q_d"][k] = q, qd, k1v, tau, desired[0]
-        try:
-            k2v = qdd_of(t + dt / 2, q + dt / 2 * qd, qd + dt / 2 * k1v, applied)
-            k3v = qdd_of(t + dt / 2, q + dt / 2 * (qd + dt / 2 * k1v), qd + dt / 2 * k2v, applied)
-            k4v = qdd_of(t + dt, q + dt * (qd + dt / 2 * k2v), qd + dt * k3v, applied)
-            k2q, k3q, k4q = qd + dt / 2 * k1v, qd + dt / 2 * k2v, qd + dt * k3v
-            q = q + dt / 6 * (qd + 2 * k2q + 2 * k3q + k4q)
-            qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-            _check_bounded(q, qd)
-        except _DivergedError as diverged:
-            rows, joint = k + 1, diverged.joint
-            break
-    else:
-        rows = steps + 1
+    k = 0
+    try:
+        for k in range(steps + 1):
+            t = k * dt
+            plant = _plant_at(arms, events, t)
+            desired = _desired_of(trajectory, t, q0)
+            if k % hold == 0:
+                e_int = e_int + (desired[0] - q) * dt * hold
+                tau = _torque(controller, plant, t, q, qd, desired, e_int, smoothing)
+            applied = tau - _tau_d(disturbance, t, q, qd)
+            try:
+                k1v = qdd_of(t, q, qd, applied)
+            except _DivergedError as diverged:  # the torque itself blew up
+                rows, joint = k, diverged.joint
+                break
+            times[k] = t
+            out["q"][k], out["qd"][k], out["qdd"][k], out["tau"][k], out["q_d"][k] = q, qd, k1v, tau, desired[0]
+            try:
+                k2v = qdd_of(t + dt / 2, q + dt / 2 * qd, qd + dt / 2 * k1v, applied)
+                k3v = qdd_of(t + dt / 2, q + dt / 2 * (qd + dt / 2 * k1v), qd + dt / 2 * k2v, applied)
+                k4v = qdd_of(t + dt, q + dt * (qd + dt / 2 * k2v), qd + dt * k3v, applied)
+                k2q, k3q, k4q = qd + dt / 2 * k1v, qd + dt / 2 * k2v, qd + dt * k3v
+                q = q + dt / 6 * (qd + 2 * k2q + 2 * k3q + k4q)
+                qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+                _check_bounded(q, qd)
+            except _DivergedError as diverged:
+                rows, joint = k + 1, diverged.joint
+                break
+        else:
+            rows = steps + 1
+    except KeyboardInterrupt:
+        partial = Result(times[:k], out["q"][:k], out["qd"][:k], out["qdd"][:k], out["tau"][:k],
+                         out["q_d"][:k] if trajectory is not None else None, arms[0],
+                         {"method": "rk4 (Python)", "dt": dt, "stopped": "interrupted"})  # fmt: skip
+        raise RunInterrupted(f"interrupted after {k} of {steps + 1} samples", partial) from None
     q_d = out["q_d"][:rows] if trajectory is not None else None
     result = Result(times[:rows], out["q"][:rows], out["qd"][:rows], out["qdd"][:rows], out["tau"][:rows], q_d,
                     arms[0], {"method": "rk4 (Python)", "dt": dt, "integral": e_int},

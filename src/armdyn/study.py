@@ -711,15 +711,18 @@ class Study:
                 "computed": len(todo), "read": len(done), "fingerprint": identity[0]}  # fmt: skip
 
         def arrived(index: int, table: DataFrame) -> None:
-            done[index] = table
-            if folder is not None:
+            if folder is not None:  # written before counted: a block interrupted while written is not done
                 _write_block(folder, index, table, expected(index))
+            done[index] = table
             if progress is not None:
                 progress(len(done) / blocks)
 
         if scheduler is None or scheduler == "local":
-            for index in todo:
-                arrived(index, run_block(setup, index))
+            try:
+                for index in todo:
+                    arrived(index, run_block(setup, index))
+            except KeyboardInterrupt:  # Ctrl-C: seen when the block under way ends; the blocks done are kept
+                raise _interrupted(folder, done, blocks) from None
         else:
             info |= _on_dask(setup, todo, scheduler, workers, timeout, identity[0][:16], arrived)
         _check_ranges(done, setup, blocks)
@@ -727,6 +730,21 @@ class Study:
         table["holds"] = self.spec.holds(table)
         estimate = clopper_pearson(int(table["holds"].sum()), len(table), confidence)
         return StudyResult(table, estimate, self.spec, info)
+
+
+def _interrupted(folder: Path | None, done: dict[int, DataFrame], blocks: int) -> KeyboardInterrupt:
+    """The KeyboardInterrupt (armdyn.simulation.RunInterrupted) of a study stopped by Ctrl-C: what was done,
+    how to resume, and the runs done (a DataFrame, in ``result``)."""
+    import pandas
+
+    from armdyn.simulation import RunInterrupted
+
+    if folder is not None:
+        resume = f"the blocks done are in {folder}: run the same study with the same out= (--out) to resume"
+    else:
+        resume = "give out= (--out) to keep the blocks done and resume"
+    table = pandas.concat([done[b] for b in sorted(done)], ignore_index=True) if done else None
+    return RunInterrupted(f"the study was interrupted after {len(done)} of {blocks} blocks; {resume}", table)
 
 
 def _parquet_writer() -> None:
