@@ -76,3 +76,23 @@ def test_derive_in_task_coordinates_prints_example_3_5_1(tmp_path: Path) -> None
     assert "\\bar{M}(q)" in (tmp_path / "mbar.tex").read_text()
     assert_one_error_line(invoke("derive", "puma560", "--task", "pose"), "ToolPose is not supported")
     assert_one_error_line(invoke("derive", "cylindrical", "--task", "position", "--code", "c"), "--task and --code")
+
+
+def test_task_at_a_singular_pose_advises_the_commands_own_options() -> None:
+    """Before, the advice named the Python options (max_condition, damping=...) and the command had no
+    --max-condition; now it names --max-condition and --damping, and both work (oracle: the damped value)."""
+    import numpy as np
+
+    import armdyn as ad
+    from armdyn import task_space
+
+    singular = invoke("task", "puma560", "--q", "qz", "--coordinates", "pose")
+    assert singular.exit_code == 2
+    assert "raise --max-condition, or give --damping VALUE" in singular.output
+    assert "max_condition =" in singular.output and "damping=..." not in singular.output
+    damped = invoke("task", "puma560", "--q", "qz", "--coordinates", "pose", "--damping", "0.01")
+    assert damped.exit_code == 0, damped.output
+    expected = task_space.task_gravity(ad.models.puma560(), task_space.ToolPose(), np.zeros(6), damping=0.01)
+    assert f"{expected[2]:.6g}"[:5] in damped.output
+    looser = invoke("task", "puma560", "--q", "qz", "--coordinates", "pose", "--max-condition", "1e14")
+    assert looser.exit_code == 2 and "exceeds max_condition = 1e+14" in looser.output  # cond J is 1e17 there

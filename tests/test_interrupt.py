@@ -104,3 +104,19 @@ def test_ctrl_c_stops_a_study_after_its_block_and_says_how_to_resume(tmp_path: P
     done = int(stderr.split("interrupted after ")[1].split(" of ")[0])
     assert len(list(folder.glob("block-*.parquet"))) == done
     assert not [p for p in folder.iterdir() if p.name.startswith(".")], "a temporary file was left"
+
+
+def test_a_compile_announces_itself_once_where_no_spinner_shows(capsys: pytest.CaptureFixture[str]) -> None:
+    """With stderr a log or a pipe (as under CI or `make run > log`), the first compile prints one line."""
+    from armdyn import cli
+
+    listener = cli._Compiling()
+    announced, cli._activity.announced = cli._activity.announced, False
+    try:
+        for _ in range(3):
+            listener.on_start(None)
+            listener.on_end(None)
+    finally:
+        cli._activity.announced = announced
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [cli.COMPILING_LINE]

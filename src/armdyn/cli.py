@@ -39,7 +39,7 @@ from typer._click.exceptions import NoArgsIsHelpError  # typer's own click names
 from typer.core import TyperGroup
 
 from armdyn import models as catalog
-from armdyn.errors import MissingDependencyError, ModelError, SimulationError
+from armdyn.errors import MissingDependencyError, ModelError, SimulationError, SingularError
 from armdyn.files import atomic_write, write_text
 from armdyn.robot import Robot
 
@@ -63,6 +63,10 @@ INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-
 
 
 COMPILING = "compiling kernels (first run only)..."
+COMPILING_LINE = (
+    "armdyn: compiling its kernels (the first run after installing or changing armdyn: about 3 to 5 minutes on "
+    "2 cores, all at once for `armdyn demo`, less for one command); they are cached for later runs"
+)
 
 
 class _Activity:
@@ -80,6 +84,7 @@ class _Activity:
         self.mode: bool | None = None
         self.command = ""
         self.compiling = 0  # the depth of the Numba compilations under way
+        self.announced = False  # the one line that says kernels compile, where no spinner shows it
         self._message = ""
         self._live: Any = None  # a rich Status or Progress while shown
         self._task: Any = None  # the Progress task
@@ -168,6 +173,9 @@ class _Compiling(numba_events.Listener):
     def on_start(self, event: object) -> None:
         _activity.compiling += 1
         if _activity.compiling == 1:
+            if _activity.mode is not False and _activity._console() is None and not _activity.announced:
+                _activity.announced = True  # a log or a pipe: one line, so a long silence is explained
+                print(COMPILING_LINE, file=sys.stderr, flush=True)
             _activity.refresh()
 
     def on_end(self, event: object) -> None:
@@ -1746,13 +1754,15 @@ def task(
     q: str | None = typer.Option(None, "--q", help=f"The configuration (rad or m): a named one, or {PER_JOINT}."),
     qd: str | None = typer.Option(None, "--qd", help=f"Joint velocities (rad/s or m/s): {PER_JOINT}. Default 0."),
     damping: float | None = typer.Option(None, "--damping", help="Damped least-squares inverse near a singular J."),
+    max_condition: float | None = typer.Option(
+        None, "--max-condition", help="The largest cond J computed without --damping (default 1e8)."
+    ),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
     output: str | None = typer.Option(
         None, "--output", "-o", help="Also write the tables to this file: .csv, .md or .txt (by its suffix)."
     ),
 ) -> None:
     """The robot equation in task coordinates (Section 3.5): Mbar, Nbar and Gbar at a state, and cond J."""
-    from armdyn import task_space
 
     target = _table_file(output, "--output") if output else None
     arm = _arm(name, strict)
@@ -1760,6 +1770,22 @@ def task(
     start = _joint_state(q, "--q", arm) if q is not None else np.zeros(arm.n)
     rates = np.broadcast_to(_per_joint(qd, "--qd", arm.n), (arm.n,)).copy() if qd is not None else np.zeros(arm.n)
     options: dict[str, Any] = {} if damping is None else {"damping": damping}
+    if max_condition is not None:
+        options["max_condition"] = max_condition
+    try:
+        _task_tables(arm, coordinates, chosen, start, rates, options, target)
+    except SingularError as singular:  # the advice in the command's own options
+        advice = str(singular).replace("raise max_condition", "raise --max-condition")
+        _fail(advice.replace("pass damping=...", "give --damping VALUE"))
+
+
+def _task_tables(
+    arm: Robot, coordinates: str, chosen: TaskOutput, start: np.ndarray, rates: np.ndarray, options: dict[str, Any],
+    target: Path | None,
+) -> None:  # fmt: skip
+    """The tables of ``armdyn task``: the task-space inertia, bias and gravity at a state, and cond J."""
+    from armdyn import task_space
+
     labels = {"position": ["x", "y", "z"], "pose": ["x", "y", "z", "wx", "wy", "wz"], "planar": ["x", "y"]}[coordinates]
     if len(labels) < arm.n:  # a redundant arm: Khatib's operational space
         space = task_space.operational_space(arm, chosen, start, rates, **options)
@@ -1790,7 +1816,8 @@ def task(
     for sheet in sheets:
         console.print(sheet.rich())
     state = f"q = {_vector(start)}, qd = {_vector(rates)}"
+    damping = options.get("damping")
     console.print(f"{state}; cond J = {condition:.4g}" + ("" if damping is None else f" (damping {damping:g})"))
     if target is not None:
         _write_sheets(target, sheets, [state, f"cond J = {condition:.6g}"])
-        console.print(f"wrote {output}")
+        console.print(f"wrote {target}")
