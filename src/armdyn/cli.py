@@ -479,7 +479,7 @@ def _number(value: object, digits: int = 4) -> str:
     number = float(cast("SupportsFloat", value))
     if np.isinf(number):
         return "inf" if number > 0 else "-inf"
-    return f"{number:.{digits}g}"
+    return f"{number + 0.0:.{digits}g}"  # + 0.0: -0 prints as 0
 
 
 def _vector(values: object, digits: int = 4) -> str:
@@ -1482,7 +1482,8 @@ def _drive_controller(
 def _drive_report(result: Result, driven: ActuatedArm) -> _Sheet:
     """Print what the drives did (peak input, current, load pressure) and return it as a sheet."""
     record, joints = cast("DriveRecord", result.drives), driven.robot.joint_names
-    columns = ["joint", "drive", "max |input| (V or A)", "input limit", "max |i| (A)", "max |P_L| (MPa)"]
+    columns = ["joint", "drive", "max |input| (V or A)", "input limit", "max |i| (A)", "i limit (A)",
+               "max |P_L| (MPa)"]  # fmt: skip
     sheet = _Sheet(f"{driven.name}: drives ({result.info['substeps']} RK4 steps per sample)", columns, [])
     names = record.names
     for j, drive in enumerate(driven.drives):
@@ -1492,6 +1493,7 @@ def _drive_report(result: Result, driven: ActuatedArm) -> _Sheet:
         sheet.rows.append([
             joints[j], drive.name, f"{np.abs(record.v[:, j]).max():.4g}", _number(limit),
             f"{np.abs(record.x[:, names.index(f'i {joints[j]}')]).max():.4g}" if current else "-",
+            _number(drive.current_limit) if current else "-",
             f"{np.abs(record.x[:, names.index(f'PL {joints[j]}')]).max() / 1e6:.4g}" if pressure else "-",
         ])  # fmt: skip
     console.print(sheet.rich())

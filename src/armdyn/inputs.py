@@ -190,7 +190,7 @@ def integer(value: object, name: str, minimum: int, maximum: int | None = None, 
     """An int (or NumPy integer, not a bool) from ``minimum`` to ``maximum``, or an error naming
     it (``why`` says what the maximum protects)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {_shown(value)} ({type(value).__name__})")
+        raise ArgumentError(f"{name} must be an integer, got {_shown(value)} ({type(value).__name__})")
     if value < minimum:
         raise ModelError(f"{name} must be at least {minimum}, got {_shown(value)}")
     if maximum is not None and value > maximum:

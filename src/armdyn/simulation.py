@@ -252,7 +252,7 @@ class Result(RunSummaries):
 
     def to_csv(self, path: str | Path) -> None:
         """One row per time: t, q_i, qd_i, qdd_i, tau_i (and q_d_i, e_i with a trajectory), energy; with
-        drives also their inputs v_i and states (q_M, qd_M, i, x_v, P_L by name)."""
+        drives also their inputs v_i and states qM_i, qdM_i, i_i, xv_i, PL_i (joint i's drive)."""
         n = self.q.shape[1]
         columns = {"t": self.t[:, None]}
         for name, values in (("q", self.q), ("qd", self.qd), ("qdd", self.qdd), ("tau", self.tau)):
@@ -266,7 +266,9 @@ class Result(RunSummaries):
             header += [f"{name}{i + 1}" for name, values in task.items() for i in range(values.shape[1])]
             table = np.hstack([table, *task.values()])
         if self.drives is not None:  # the drives' inputs, then their states by name (e.g. "i q1", "PL q2")
-            header += [f"v{i + 1}" for i in range(n)] + [name for name in self.drives.names[2 * n :]]
+            joint = {name: k + 1 for k, name in enumerate(self.arm.joint_names)}  # "i q2" -> "i2", as tau2 and v2
+            states = [name.split(" ", 1) for name in self.drives.names[2 * n :]]
+            header += [f"v{i + 1}" for i in range(n)] + [f"{key}{joint[name]}" for key, name in states]
             table = np.hstack([table, self.drives.v, self.drives.x[:, 2 * n :]])
         with atomic_write(path, newline="", encoding="utf-8") as handle:  # whole or not at all
             writer = csv.writer(handle)
