@@ -167,7 +167,7 @@ def test_a_c_prefix_that_is_no_identifier_is_refused(prefix: str) -> None:
 
 @pytest.mark.parametrize("functions", [None, 5, [None], [["tau"]], []])
 def test_functions_that_are_no_names_are_refused(functions: object) -> None:
-    with pytest.raises(ModelError, match="functions must be one or more of"):
+    with pytest.raises(ModelError, match="functions must be some of"):
         generate_code(ad.models.two_link_planar(), functions)  # type: ignore[arg-type]
 
 

@@ -1078,7 +1078,7 @@ def generate_code(arm: Robot, functions: Sequence[str] = FUNCTIONS) -> Generated
     except TypeError:
         names = None
     if names is None or not names or any(not isinstance(f, str) or f not in ARGUMENTS for f in names):
-        raise ModelError(f"functions must be one or more of {tuple(ARGUMENTS)}, got {functions!r}")
+        raise ModelError(f"functions must be some of {tuple(ARGUMENTS)} (one or more names), got {functions!r}")
     base = base_parameters(arm, at_rest=True) if "Wb" in names else None
     columns = () if base is None else [int(c) for c in base.columns]
     return GeneratedCode(arm, {name: generate(packed, name, columns) for name in names}, base)
