@@ -203,8 +203,8 @@ def operational_space(
     friction = _mv(JbarT, arm.friction(fqd))
     Nproj = np.eye(n) - Jbar @ J
     b = task.batch
-    parts = tuple(_shaped(x, b) for x in (J, Lambda, Jbar, mu, p, friction, Nproj))
-    return OperationalSpace(*parts) if out is None else _space_into(out, parts)
+    shaped = tuple(_shaped(x, b) for x in (J, Lambda, Jbar, mu, p, friction, Nproj))
+    return OperationalSpace(*shaped) if out is None else _space_into(out, shaped)
 
 
 _SPACE_FIELDS = ("J", "Lambda", "Jbar", "mu", "p", "friction", "Nproj")
