@@ -146,6 +146,36 @@ def result(out: object, shape: tuple[int, ...]) -> np.ndarray:
     return out
 
 
+def results(
+    out: object, shapes: Sequence[tuple[int, ...]], names: Sequence[str], states: Sequence[np.ndarray] = ()
+) -> list[np.ndarray]:
+    """``out`` as one result array per shape (None: new ones): a tuple (or list) of len(shapes) arrays, each
+    checked as ``result`` does, none sharing memory with another (the second result would overwrite the
+    first) or with a state it is computed from (``states``, as the kernel reads them), or a ModelError
+    naming the result (``names``, one per shape)."""
+    if out is None:
+        return [result(None, shape) for shape in shapes]
+    count = len(shapes)
+    if not isinstance(out, (tuple, list)) or len(out) != count:
+        got = f"{len(out)} items" if isinstance(out, (tuple, list)) else type(out).__name__
+        raise ModelError(f"out must be None or a tuple of {count} arrays ({', '.join(names)}), got {got}")
+    arrays = [result(part, shape) for part, shape in zip(out, shapes, strict=True)]
+    for i, array in enumerate(arrays):
+        for j in range(i):
+            if np.shares_memory(array, arrays[j]):
+                raise ModelError(
+                    f"out: the arrays for {names[j]} and {names[i]} share memory; each result needs an array of its "
+                    "own (the second would overwrite the first)"
+                )
+        for state in states:
+            if np.shares_memory(array, state):
+                raise ModelError(
+                    f"out: the array for {names[i]} shares memory with a state it is computed from; give it an "
+                    "array of its own (or pass a copy of the state)"
+                )
+    return arrays
+
+
 def wrenches(f_ext: object, batch: tuple[int, ...]) -> np.ndarray:
     """A tool wrench [force; moment] (6,) or one per state (..., 6), as a (B, 6) C array."""
     try:

@@ -761,22 +761,17 @@ def jacobian_dot(
     """
 
 
-def _pair(out: object, shape: tuple[int, ...], count: int) -> list[np.ndarray]:
-    """``out`` as ``count`` result arrays of ``shape`` (None: new ones)."""
-    if out is None:
-        return [inputs.result(None, shape) for _ in range(count)]
-    if not isinstance(out, (tuple, list)) or len(out) != count:
-        raise ModelError(f"out must be None or a tuple of {count} arrays of shape {shape}")
-    return [inputs.result(part, shape) for part in out]
-
-
 def smoothing_per_joint(arm: Robot, value: object) -> np.ndarray:
-    """coulomb_smoothing as eps >= 0 per joint (n,): None is 0 (the exact sign law)."""
+    """coulomb_smoothing as eps >= 0 per joint (n,): None is 0 (the exact sign law). A bool is
+    refused: True is no smoothing width (rad/s or m/s)."""
     if value is None:
         exact = _EXACT_COULOMB.get(arm.n)
         if exact is None:
             exact = _EXACT_COULOMB[arm.n] = np.zeros(arm.n)
         return exact
+    if isinstance(value, (bool, np.bool_)) or getattr(value, "dtype", None) == np.bool_:
+        raise ModelError(f"coulomb_smoothing must be eps >= 0 (rad/s or m/s), one for all joints or one per joint"
+                         f"{_where(arm)}, got {value!r} (a bool, not a width)")  # fmt: skip
     eps = inputs.numbers(value, "coulomb_smoothing", where=_where(arm))
     if eps.shape not in ((), (arm.n,)) or np.any(eps < 0):
         raise ModelError(f"coulomb_smoothing must be eps >= 0 (rad/s or m/s), one for all joints or one per joint"
@@ -832,7 +827,7 @@ def inverse_dynamics_derivatives(
                 q, qd, qdd = thawed
                 return inverse_dynamics_derivatives(arm, q, qd, qdd, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, _where(arm))
-    results = _pair(out, (*batch, n, n), 2)
+    results = inputs.results(out, [(*batch, n, n)] * 2, ("d tau/dq", "d tau/dqd"), flat)
     if flat[0].shape[0]:
         views = [r.reshape(-1, n, n) for r in results]
         _launch(rnea_derivatives_batch, results[0].size, model, *flat, eps, *views)
@@ -884,7 +879,7 @@ def forward_dynamics_derivatives(
                 q, qd, tau = thawed
                 return forward_dynamics_derivatives(arm, q, qd, tau, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), n, _where(arm))
-    results = _pair(out, (*batch, n, n), 3)
+    results = inputs.results(out, [(*batch, n, n)] * 3, ("d qdd/dq", "d qdd/dqd", "d qdd/dtau"), flat)
     singular = np.full(flat[0].shape[0], -1)
     if singular.size:
         views = [r.reshape(-1, n, n) for r in results]

@@ -13,7 +13,8 @@ import numpy as np
 import symengine as se
 import sympy
 
-from armdyn.errors import ModelError
+from armdyn import inputs
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic import codegen, notebook
 from armdyn.symbolic.algebra import collapse_sums
@@ -451,7 +452,8 @@ class ClosedForm:
         str
             A module defining M(q, out), Vm(q, qd, out), G(q, out) and tau(q, qd, qdd, out),
             each filling and returning ``out``; the arm's symbolic parameters follow ``out``
-            as further arguments, in alphabetical order.
+            as further arguments, in alphabetical order (a name that is no identifier as one
+            made of it, named in a comment: ``codegen.identifiers``).
         """
         return codegen.python_source(self.raw, self._parameter_names())
 
@@ -463,7 +465,9 @@ class ClosedForm:
         str
             void functions M, Vm, G and tau taking ``const double *`` states and a ``double
             *out`` (matrices row major); the arm's symbolic parameters follow ``out`` as
-            further ``double`` arguments, in alphabetical order.
+            further ``double`` arguments, in alphabetical order (named as in ``to_python``).
+            It compiles under -Wall -Wextra -Werror (an argument a function never reads is
+            marked ``(void)``).
         """
         return codegen.c_source(self.raw, self._parameter_names())
 
@@ -493,15 +497,20 @@ class ClosedForm:
         Raises
         ------
         armdyn.ModelError
-            When a symbolic parameter of the arm has no value in ``values``, or when the closed form
-            is too deep for Python's compiler (a 7-joint arm's: ``generate_code`` is the route there).
+            When a symbolic parameter of the arm has no value in ``values`` or one that is not a finite
+            real number, when the closed form holds NaN or infinity, or when it is too deep for Python's
+            compiler (a 7-joint arm's: ``generate_code`` is the route there).
         """
         names = self._parameter_names()
-        given = {str(k): float(v) for k, v in (values or {}).items()}
+        if values is not None and not isinstance(values, dict):
+            raise ArgumentError(f"values must be a dict of parameter values, got {type(values).__name__}")
+        given = {str(k): v for k, v in (values or {}).items()}
         missing = [name for name in names if name not in given]
         if missing:
             raise ModelError(f"compile() needs numeric values for the parameters {missing}")
-        return codegen.compile_closed_form(self.raw, {name: given[name] for name in names})
+        numbers = {name: inputs.number(given[name], f"values[{name!r}]", " (a parameter of the closed form)")
+                   for name in names}  # fmt: skip
+        return codegen.compile_closed_form(self.raw, numbers)
 
 
 _COMPACT_ENTRY, _COMPACT_ROW = 100, 200  # LaTeX characters: a term with entries and rows this short is one matrix

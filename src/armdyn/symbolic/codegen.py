@@ -3,7 +3,9 @@ Python and C source, and Numba-compiled functions that take one state or a batch
 
 from __future__ import annotations
 
+import keyword
 import math
+import re
 from collections.abc import Callable
 from typing import cast
 
@@ -64,13 +66,61 @@ def operation_counts(raw: Derivation, cse: bool) -> dict[str, int]:
     return counts
 
 
+_C_KEYWORDS = frozenset({
+    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum", "extern", "float",
+    "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return", "short", "signed", "sizeof",
+    "static", "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while", "_Bool", "_Complex",
+    "_Imaginary",
+})  # fmt: skip
+_TAKEN = frozenset({"q", "qd", "qdd", "out", "cos", "sin", "sign", "math", "INFINITY", "NAN", *FUNCTIONS})
+
+
+def _free(name: str) -> bool:
+    """Whether ``name`` is a C and Python identifier that the generated code does not use itself."""
+    return (name.isascii() and name.isidentifier() and name not in _TAKEN and name not in _C_KEYWORDS
+            and not keyword.iskeyword(name))  # fmt: skip
+
+
+def identifiers(names: list[str]) -> dict[str, str]:
+    """A C and Python identifier for each name, in the same order: the name itself where it is one (ASCII
+    letters, digits and underscores, not starting with a digit, no keyword of either language and no name
+    the generated code uses itself), else the name with every other character as "_" and "p_" before it
+    where needed, made unique with a number. A model's parameter can then never write code."""
+    chosen: dict[str, str] = {}
+    for name in names:
+        candidate = name
+        if not _free(name):
+            candidate = "".join(c if c.isascii() and (c.isalnum() or c == "_") else "_" for c in name)
+            candidate = candidate if _free(candidate) else f"p_{candidate}"
+        unique, k = candidate, 2
+        while unique in chosen.values() or (unique != name and unique in names):
+            unique, k = f"{candidate}_{k}", k + 1
+        chosen[name] = unique
+    return chosen
+
+
+def comment_text(text: str) -> str:
+    """``text`` safe inside a C block comment and a Python comment: characters that are not printable
+    (a newline among them) as escapes, and the comment delimiters "*/" and "/*" broken by a space."""
+    shown = "".join(c if c.isprintable() else ascii(c)[1:-1] for c in text)
+    while "*/" in shown or "/*" in shown:
+        shown = shown.replace("/*", "/ *").replace("*/", "* /")
+    return shown
+
+
 def literal(expr: se.Basic) -> se.Basic:
     """``expr`` with each constant that is not an integer (109/400, sqrt(2)/4, a double) as a
-    symbol named by its double's shortest round-trip repr, so Python and C read the exact double."""
+    symbol named by its double's shortest round-trip repr, so Python and C read the exact double;
+    a ModelError for a constant that is NaN or infinite (no code computes with it)."""
     if not expr.free_symbols:
         if expr.is_Integer:
             return expr
         value = float(expr)
+        if not math.isfinite(value):
+            raise ModelError(
+                f"the closed form holds {value} (a parameter's value or a term that is not finite): code needs "
+                "finite numbers"
+            )
         named = se.Symbol(repr(abs(value)))
         return -named if value < 0 else named
     if isinstance(expr, se.Mul):
@@ -88,10 +138,15 @@ def _body(
     line: Callable[[str, str], str],
     value: Callable[[se.Basic], str],
     choose: Callable[[list[tuple[str, str]], str], str],
+    renamed: dict[str, str] | None = None,
 ) -> list[str]:
     """Statements: trigonometric and state variables that the expressions use, the Coulomb laws
-    (Tc+ for qd > 0, Tc- for qd < 0, 0 at rest), CSE temporaries, results."""
+    (Tc+ for qd > 0, Tc- for qd < 0, 0 at rest), CSE temporaries, results; the parameters
+    ``renamed`` (name -> identifier) under their identifiers."""
     entries = _entries(raw, name)
+    if renamed:
+        symbols = {se.Symbol(old): se.Symbol(new) for old, new in renamed.items() if old != new}
+        entries = [(index, expr.xreplace(symbols)) for index, expr in entries]
     laws: dict[se.Basic, se.Symbol] = {}
     for _, expr in entries:
         for law in sorted(expr.atoms(se.Piecewise), key=str):
@@ -139,21 +194,38 @@ def _python_choice(cases: list[tuple[str, str]], otherwise: str) -> str:
     return text
 
 
+def _renamings(renamed: dict[str, str], start: str, end: str) -> list[str]:
+    """Comment lines naming each parameter whose identifier is not its own name."""
+    return [f"{start}parameter {new} is {comment_text(repr(old))}{end}" for old, new in renamed.items() if old != new]
+
+
 def python_source(raw: Derivation, parameters: list[str], returns: bool = True) -> str:
-    """The four functions as Python source; ``out`` receives the result (and is returned)."""
-    extra = "".join(f", {p}" for p in parameters)
-    parts = ["from math import cos, sin", "from numpy import sign", ""]
+    """The four functions as Python source; ``out`` receives the result (and is returned). A parameter
+    whose name is no identifier is written as one (``identifiers``), said in a comment."""
+    renamed = identifiers(parameters)
+    extra = "".join(f", {renamed[p]}" for p in parameters)
+    parts = ["from math import cos, sin", "from numpy import sign", *_renamings(renamed, "# ", ""), ""]
     for name, (args, _) in FUNCTIONS.items():
         parts.append(f"def {name}({', '.join(args)}, out{extra}):")
-        parts += [f"    {s}" for s in _body(raw, name, lambda t, v: f"{t} = {v}", _python_value, _python_choice)]
+        parts += [f"    {s}" for s in
+                  _body(raw, name, lambda t, v: f"{t} = {v}", _python_value, _python_choice, renamed)]  # fmt: skip
         parts += ["    return out" if returns else "    return", "", ""]
     return "\n".join(parts).rstrip() + "\n"
 
 
+def _unused(arguments: list[str], lines: list[str]) -> list[str]:
+    """``(void)x;`` for each argument no line reads, so that the C compiles under -Wall -Wextra -Werror
+    (a one-joint arm's G never reads qd, a prismatic-only arm's M never reads q)."""
+    read = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", " ".join(lines)))
+    return [f"(void){a};" for a in arguments if a not in read]
+
+
 def c_source(raw: Derivation, parameters: list[str]) -> str:
-    """The four functions as C99; matrices are row major (out[i * n + j])."""
+    """The four functions as C99; matrices are row major (out[i * n + j]). A parameter whose name
+    is no identifier is written as one (``identifiers``), said in a comment."""
     n = len(raw.q)
-    extra = "".join(f", double {p}" for p in parameters)
+    renamed = identifiers(parameters)
+    extra = "".join(f", double {renamed[p]}" for p in parameters)
 
     def c_line(target: str, value: str) -> str:
         if target.startswith("out["):
@@ -171,11 +243,12 @@ def c_source(raw: Derivation, parameters: list[str]) -> str:
             text = f"(({condition}) ? {result} : {text})"
         return text
 
-    parts = ["#include <math.h>", ""]
+    parts = ["#include <math.h>", *_renamings(renamed, "/* ", " */"), ""]
     for name, (args, _) in FUNCTIONS.items():
         signature = ", ".join(f"const double *{a}" for a in args)
         parts.append(f"void {name}({signature}, double *out{extra}) {{")
-        parts += [f"    {s}" for s in _body(raw, name, c_line, c_value, c_choice)]
+        body = _body(raw, name, c_line, c_value, c_choice, renamed)
+        parts += [f"    {s}" for s in _unused([*args, *(renamed[p] for p in parameters)], body) + body]
         parts += ["}", ""]
     return "\n".join(parts)
 

@@ -140,6 +140,7 @@ def operational_space(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: tuple | OperationalSpace | None = None,
 ) -> OperationalSpace:
     """Lambda, Jbar, mu, p and the null-space projector of an output with m <= n (Khatib 1987).
 
@@ -161,11 +162,15 @@ def operational_space(
         (J M^-1 J^T + damping^2 I)^-1; default None: such states raise.
     max_condition : float, optional
         The condition number above which J counts as singular (default 1e8).
+    out : tuple of seven numpy.ndarray or OperationalSpace, optional
+        Where to write J, Lambda, Jbar, mu, p, friction and Nproj (in that order, or the arrays of an
+        OperationalSpace of the same shapes): each C-contiguous float64 of its result's shape, no two
+        sharing memory.
 
     Returns
     -------
     OperationalSpace
-        The quantities, each with the batch shape in front.
+        The quantities, each with the batch shape in front (the arrays of ``out`` when given).
 
     Raises
     ------
@@ -183,10 +188,10 @@ def operational_space(
                  np.empty((n, n)))  # fmt: skip
         try:
             if operational_one(arm.packed, q, qd, fast[0], fast[1], max_condition, *parts) == 0:
-                return OperationalSpace(*parts)
+                return OperationalSpace(*parts) if out is None else _space_into(out, parts)
         except _NOT_ONE_STATE:
             if (states := inputs.thawed(q, qd)) is not None:
-                return operational_space(arm, output, *states, damping=damping, max_condition=max_condition)
+                return operational_space(arm, output, *states, damping=damping, max_condition=max_condition, out=out)
     arm, output, task = _task(arm, output, ("q", "qd"), (q, qd), damping, max_condition, square=False)
     fq, fqd = task.states
     J, n = task.J, arm.n
@@ -198,7 +203,20 @@ def operational_space(
     friction = _mv(JbarT, arm.friction(fqd))
     Nproj = np.eye(n) - Jbar @ J
     b = task.batch
-    return OperationalSpace(*(_shaped(x, b) for x in (J, Lambda, Jbar, mu, p, friction, Nproj)))
+    shaped = tuple(_shaped(x, b) for x in (J, Lambda, Jbar, mu, p, friction, Nproj))
+    return OperationalSpace(*shaped) if out is None else _space_into(out, shaped)
+
+
+_SPACE_FIELDS = ("J", "Lambda", "Jbar", "mu", "p", "friction", "Nproj")
+
+
+def _space_into(out: object, parts: tuple[np.ndarray, ...]) -> OperationalSpace:
+    """The quantities written into ``out`` (seven arrays, or an OperationalSpace's), each checked."""
+    arrays = tuple(getattr(out, name) for name in _SPACE_FIELDS) if isinstance(out, OperationalSpace) else out
+    targets = inputs.results(arrays, [x.shape for x in parts], _SPACE_FIELDS)
+    for target, value in zip(targets, parts, strict=True):
+        target[...] = value
+    return OperationalSpace(*targets)
 
 
 def operational_coriolis(
@@ -209,6 +227,7 @@ def operational_coriolis(
     *,
     damping: float | None = None,
     max_condition: float = DEFAULT_MAX_CONDITION,
+    out: tuple | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """mu_x = Jbar^T Vm Jbar - Lambda Jdot Jbar and the null-space coupling (Jbar^T Vm - Lambda Jdot) N qd.
 
@@ -229,6 +248,9 @@ def operational_coriolis(
         As for ``operational_space``.
     max_condition : float, optional
         As for ``operational_space``.
+    out : tuple of two numpy.ndarray, optional
+        Where to write mu_x and the coupling: each C-contiguous float64 of its result's shape, the two
+        not sharing memory.
 
     Returns
     -------
@@ -249,4 +271,9 @@ def operational_coriolis(
     Jbar, Lambda, Nproj = (x.reshape(-1, *x.shape[-2:]) for x in (space.Jbar, space.Lambda, space.Nproj))
     K = _T(Jbar, 1, 2) @ arm.coriolis_matrix(fq, fqd) - Lambda @ output._jacobian_dot(arm, fq, fqd)  # (B, m, n)
     mu_x = (K @ Jbar).reshape(*batch, m, m)
-    return mu_x, _mv(K, _mv(Nproj, fqd)).reshape(*batch, m)
+    coupling = _mv(K, _mv(Nproj, fqd)).reshape(*batch, m)
+    if out is None:
+        return mu_x, coupling
+    targets = inputs.results(out, [mu_x.shape, coupling.shape], ("mu_x", "coupling"))
+    targets[0][...], targets[1][...] = mu_x, coupling
+    return targets[0], targets[1]

@@ -31,6 +31,7 @@ PlanarPosition, Camera, and Output for user callables.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, cast
 
@@ -135,15 +136,18 @@ def _task(
 # max_condition and no damping to check; anything else (or a state the kernel cannot certify
 # regular) takes the general path, which checks the arguments and decides at singular states.
 _NOT_ONE_STATE = (TypeError, ValueError, NumbaError)
+_UNUSED = object()  # a state argument the quantity does not take (None is one the caller passed, to refuse)
 
 
 def _compiled(
     arm: object, output: object, m: int | None, damping: object, limit: object
 ) -> tuple[int, np.ndarray] | None:
-    """(target, rows) when the compiled one-state kernels may take the call (with m rows if given)."""
+    """(target, rows) when the compiled one-state kernels may take the call (with m rows if given):
+    only with arguments the general path would take too (a float max_condition from 1 to below
+    infinity, damping None or a positive finite float); any other goes there to be checked."""
     if type(output) not in _ROW_OUTPUTS or not isinstance(arm, Robot) or type(limit) is not float:
         return None
-    if damping is not None and not (type(damping) is float and damping > 0):
+    if not 1.0 <= limit < math.inf or (damping is not None and not (type(damping) is float and 0 < damping < math.inf)):
         return None
     spec = cast(_Rows, output)._compiled()  # one of _ROW_OUTPUTS
     return None if m is not None and spec[1].shape[0] != m else spec
@@ -157,21 +161,24 @@ def _kernel(
     limit: object,
     matrix: bool,
     q: object,
-    qd: object = None,
-    v: object = None,
+    qd: object = _UNUSED,
+    v: object = _UNUSED,
     v_name: str = "",
 ) -> np.ndarray | None:
     """The compiled route of a square quantity (operational.task_one, or task_batch for a batch):
     (n, n) when ``matrix``, else (n,); None when the general path must take the call: another
-    output, an argument to check, or a state the kernel cannot certify regular."""
+    output, an argument to check (a state passed as None among them), or a state the kernel
+    cannot certify regular. A quantity that takes no qd (or no v) leaves it _UNUSED: the kernel
+    then reads q in its place."""
     fast = _compiled(arm, output, getattr(arm, "n", None), damping, limit)
-    if fast is None:
+    if fast is None or q is None or qd is None or v is None:
         return None
     arm = cast(Robot, arm)  # _compiled takes a Robot only
     n = arm.n
     result = np.empty((n, n) if matrix else (1, n))
     try:
-        status = task_one(arm.packed, q, q if qd is None else qd, q if v is None else v, *fast, limit, kind, result)
+        status = task_one(arm.packed, q, q if qd is _UNUSED else qd, q if v is _UNUSED else v, *fast, limit, kind,
+                          result)  # fmt: skip
         if status == 0:
             return result if matrix else result[0]
     except _NOT_ONE_STATE:
@@ -180,14 +187,14 @@ def _kernel(
             return _kernel(arm, output, kind, damping, limit, matrix, q, qd, v, v_name)
     if arm.packed is None:
         return None
-    named = [("q", q)] + ([("qd", qd)] if qd is not None else []) + ([(v_name, v)] if v is not None else [])
+    named = [("q", q)] + ([("qd", qd)] if qd is not _UNUSED else []) + ([(v_name, v)] if v is not _UNUSED else [])
     try:
         batch, flat = inputs.batch_states([name for name, _ in named], [value for _, value in named], n)
     except ModelError:
         return None  # the general path names the argument
     q_flat = flat[0]
-    qd_flat = flat[1] if qd is not None else q_flat
-    v_flat = flat[-1] if v is not None else q_flat
+    qd_flat = flat[1] if qd is not _UNUSED else q_flat
+    v_flat = flat[-1] if v is not _UNUSED else q_flat
     count = q_flat.shape[0]
     out, status = np.empty((count, *result.shape)), np.ones(count, dtype=np.int64)
     if count:
@@ -535,7 +542,7 @@ def task_force(
     ModelError
         As for ``task_inertia``, and when tau is invalid.
     """
-    result = _kernel(arm, output, kernels.TASK_FORCE, damping, max_condition, False, q, None, tau, "tau")
+    result = _kernel(arm, output, kernels.TASK_FORCE, damping, max_condition, False, q, _UNUSED, tau, "tau")
     if result is not None:
         return _into(out, result)
     arm, output, task = _task(arm, output, ("q", "tau"), (q, tau), damping, max_condition, square=True)
