@@ -801,7 +801,7 @@ def derive(
     if code is not None and task is None and method in ("auto", "newton-euler"):
         generated = _generated_code(name, code, method, symbolic, strict, functions)
         if generated is not None:
-            _write_or_print(generated, output)
+            _write_code(generated, output)
             return
     if task is not None and code is not None:
         _fail("--task and --code exclude each other: code is generated for the joint-space equation")
@@ -818,7 +818,9 @@ def derive(
     _activity.status(f"writing the equations of {arm.name}" + (f" as {code} code" if code else ""))
     if code is not None:
         joint = cast("ClosedForm", form)  # the joint-space equation of a Robot: --code excludes --task
-        text = joint.to_python() if code == "python" else joint.to_c()
+        _activity.stop()
+        _write_code((joint.to_python(), None) if code == "python" else (joint.to_c(), joint.to_c_header()), output)
+        return
     elif latex:
         text = cast("ClosedForm", form).latex_document() if target is not None and chosen is None else form.latex()
     else:  # the terminal gets a summary of long entries; a file gets every entry in full
@@ -832,7 +834,7 @@ def derive(
 
 
 def _generated_code(name: str, language: str, method: str, symbolic: bool, strict: bool,
-                    functions: str | None = None) -> str | None:  # fmt: skip
+                    functions: str | None = None) -> tuple[str, str | None] | None:  # fmt: skip
     """Source from armdyn.symbolic.generate_code for ``derive --code`` (method newton-euler, or auto for
     a numeric arm of 5 joints or more); None where the closed form's code is wanted instead."""
     from armdyn.symbolic import generate_code
@@ -853,16 +855,28 @@ def _generated_code(name: str, language: str, method: str, symbolic: bool, stric
         _fail(f"--functions: {error}")
     counts = ", ".join(f"{key} {value['total']}" for key, value in code.operation_counts().items())
     _activity.status(f"generated {language} for {arm.name}: operations {counts}")
-    return code.python() if language == "python" else code.c()
+    return (code.python(), None) if language == "python" else (code.c(), code.c_header())
 
 
-def _write_or_print(text: str, output: str | None) -> None:
-    if output:
-        target = _output_file(output, "--output")
-        write_text(target, text)
+def _write_code(code: tuple[str, str | None], output: str | None) -> None:
+    """Generated source on stdout, or in ``output``: C to a .c file goes with its header, a .h beside it that
+    the .c includes; a .h alone is the header (the declarations)."""
+    source, header = code
+    if not output:
+        print(source)
+        return
+    target = _output_file(output, "--output")
+    if header is not None and target.suffix == ".h":
+        write_text(target, header)
         console.print(f"wrote {output}")
+    elif header is not None:
+        declarations = target.with_suffix(".h")
+        write_text(declarations, header)
+        write_text(target, f'#include "{declarations.name}"\n' + source)
+        console.print(f"wrote {target} and {declarations}")
     else:
-        print(text)
+        write_text(target, source)
+        console.print(f"wrote {output}")
 
 
 CHECK_SAMPLES = 1_000_000
