@@ -172,8 +172,9 @@ def test_every_link_of_the_site_works_from_file_urls(built_site: tuple[subproces
     and the offline search has its inlined index and the Web Worker shim beside it."""
     done, site = built_site
     assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-8000:]
-    pages = sorted(site.rglob("*.html"))
-    assert len(pages) > len(PAGES), "the site has fewer pages than docs/"
+    # 404.html is what a web server answers for a missing address (its links are absolute); file:// never opens it
+    pages = sorted(path for path in site.rglob("*.html") if path.name != "404.html")
+    assert len(pages) >= len(PAGES), "the site has fewer pages than docs/"
     broken = []
     for page in pages:
         text = page.read_text(encoding="utf-8")
