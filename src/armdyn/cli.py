@@ -942,7 +942,7 @@ def check(
     notes = list(report.notes)
     if report.references:
         notes.append(
-            "book values: Example 3.3-1 (BOOK.md section 4), the RR arm of Example 3.2-2 with |theta_i| <= pi/2"
+            "book values: Example 3.3-1 (the book's Section 3.3), the RR arm of Example 3.2-2 with |theta_i| <= pi/2"
         )
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
@@ -986,7 +986,7 @@ def _limits(text: str, arm: Robot) -> list[tuple[float, float]] | None:
 
 
 def _book_values(arm: Robot, ranges: Sequence[tuple[float, float]]) -> dict[str, float]:
-    """The bounds Example 3.3-1 gives (BOOK.md section 4), when ``arm`` is the RR arm of Example 3.2-2
+    """The bounds Example 3.3-1 gives (Lewis, Dawson and Abdallah 2004), when ``arm`` is the RR arm of Example 3.2-2
     (any masses m1, m2 and lengths a1, a2) and the ranges are |theta_i| <= pi/2; else none.
 
     ||M(q)||_1 lies between m1 = (m1+m2) a1^2 + 2 m2 a2^2 and m2 = m1 + 3 m2 a1 a2 (the 1-norm is

@@ -1,4 +1,4 @@
-"""The properties of the robot equation (Table 3.3.1, BOOK.md section 3): checks and bounds.
+"""The properties of the robot equation (Table 3.3.1, Lewis, Dawson and Abdallah 2004): checks and bounds.
 
 Every bound is computed: the quantity is evaluated on random samples of the joint range
 (the arm's limits; the whole circle for revolute joints without limits; a span from the
@@ -7,7 +7,7 @@ extremes are then refined by a bounded local optimizer (scipy.optimize, L-BFGS-B
 from the best samples. The report says for each bound how it was found.
 
 With ``check(..., task=output)`` the properties are evaluated in the coordinates y = h(q) of
-a task output of ``armdyn.task_space`` (BOOK.md section 6): Mbar = J^-T M J^-1, Vmbar, Fbar,
+a task output of ``armdyn.task_space`` (Section 3.5): Mbar = J^-T M J^-1, Vmbar, Fbar,
 Gbar and Wbar for a square output (m = n), Khatib's Lambda = (J M^-1 J^T)^-1 and mu_x for a
 redundant one (m < n). These grow without bound as J(q) approaches a singularity, so the
 bounds are computed over the regular part of the joint ranges only: the sampled
@@ -124,7 +124,7 @@ def _quantity(value: float, unit: str, digits: int) -> str:
 
 @dataclass
 class Report:
-    """The properties of Table 3.3.1 for one arm over a joint range (BOOK.md section 3).
+    """The properties of Table 3.3.1 for one arm over a joint range (Section 3.3).
 
     Parameters
     ----------
@@ -146,7 +146,7 @@ class Report:
         Example 3.3-1's m1 = 4, m2 = 7); shown in the table's "book value" column. Empty
         unless the caller sets them.
     task : str or None, optional
-        For a report in task coordinates (``check(..., task=output)``, BOOK.md section 6), the
+        For a report in task coordinates (``check(..., task=output)``, Section 3.5), the
         output's repr, e.g. "ToolPosition()"; None (default) for joint coordinates.
     max_condition : float or None, optional
         For a report in task coordinates, the condition number of J below which the sampled
@@ -460,7 +460,7 @@ def check(
     L-BFGS-B; passivity is checked along a simulated trajectory (RK4, 1 ms steps, 1 s).
 
     With ``task``, the properties are those of the robot equation in the output's coordinates
-    (BOOK.md section 6), Mbar yddot + Nbar = f with Mbar = J^-T M J^-1. They are evaluated
+    (Section 3.5), Mbar yddot + Nbar = f with Mbar = J^-T M J^-1. They are evaluated
     over the regular part of the joint ranges: the sampled configurations whose condition
     number of J(q) is below ``max_condition`` (the bounds blow up at a singularity), the
     extremes refined by SLSQP under the same constraint; ``Report.notes`` says how many
@@ -480,7 +480,7 @@ def check(
     have their own (Camera, Output).
 
     An ``armdyn.actuators.ActuatedArm`` is checked through its reduced model (its
-    ``reduced_robot()``, BOOK.md section 7), and ``Report.notes`` says so.
+    ``reduced_robot()``, Section 3.6), and ``Report.notes`` says so.
 
     Parameters
     ----------
@@ -530,7 +530,7 @@ def check(
     notes: list[str] = []
     if isinstance(arm, actuators.ActuatedArm):
         notes.append(
-            "evaluated on the reduced arm-plus-actuator model (BOOK.md section 7, inductance neglected) in joint "
+            "evaluated on the reduced arm-plus-actuator model (Section 3.6, inductance neglected) in joint "
             "torques: M' = M + R^-2 J_M, V' = Vm, F' = F + R^-1 F_M + R^-2 B qd, G' = G, input K' v"
         )
         arm = arm.reduced_robot()
@@ -722,7 +722,7 @@ def _passivity_rows(robot: Robot, ranges: list[tuple[float, float]], rows: list[
                             "the same run with the arm's friction", "", "margin"))  # fmt: skip
 
 
-# ----- task coordinates (BOOK.md section 6) ---------------------------------------------------------
+# ----- task coordinates (Section 3.5) ---------------------------------------------------------
 _STEP = 5e-3
 """The central difference's step along the motion: ||h qd|| = _STEP / cond J(q), which keeps the
 stencil as far inside the regular region, relative to the distance to the singularity, everywhere."""
@@ -943,7 +943,7 @@ def _check_task(
     rows: list[Row] = []
     bounds: dict[str, float] = {}
     notes = [
-        f"in task coordinates of {output!r} (BOOK.md section 6): the bounds hold over the configurations of the "
+        f"in task coordinates of {output!r} (Section 3.5): the bounds hold over the configurations of the "
         f"joint ranges where cond J(q) < max_condition = {limit:g}, and grow without bound near singularities; "
         f"{kept} of {samples} samples kept, {samples - kept} rejected as singular or nearly so"
     ]

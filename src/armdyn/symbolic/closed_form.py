@@ -84,7 +84,7 @@ class ClosedForm:
     ----------
     M, Vm, V, G, F, tau : sympy.Matrix
         M(q), Vm(q, qd), V(q, qd) = Vm qd, G(q), F(qd) and
-        tau = M qdd + V + F + G (BOOK.md section 1).
+        tau = M qdd + V + F + G (3.3.1).
     q, qd, qdd : sympy.Matrix
         The joint symbols, (n, 1).
     """
@@ -620,14 +620,14 @@ def derive(
 ) -> ClosedForm | TaskClosedForm | ActuatedClosedForm:
     """The closed-form robot equation of ``robot`` (numeric, symbolic or mixed parameters).
 
-    M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md sections 1 and 4), with the
+    M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (3.3.1; Examples 3.2-1 and 3.2-2), with the
     reflected motor inertias G^2 Jm on the diagonal of M. Numeric parameters are taken as
     the exact values they were written as (0.5 = 1/2, cos(pi/2) = 0, cos(pi/4) = sqrt(2)/2;
     see ``armdyn.symbolic.algebra.exact_float``), so the algebra cancels exactly and no
     round-off terms appear; a numeric arm's coefficients are shown as decimals.
 
     With ``drives`` (or an ActuatedArm), the arm-plus-actuator system
-    M' qdd + V' qd + F' + G' = K' v instead (BOOK.md section 7; see
+    M' qdd + V' qd + F' + G' = K' v instead (Section 3.6; see
     ``armdyn.symbolic.actuated``).
 
     The closed form expands every term into trigonometric polynomials: what reading, LaTeX and
@@ -657,7 +657,7 @@ def derive(
     output : TaskOutput, optional
         An output y = h(q) of ``armdyn.task_space`` (ToolPosition, LinkPoint,
         PlanarPosition or Camera, with as many rows as the arm has joints): the result is
-        then the equation in its coordinates, Mbar yddot + Nbar = f (BOOK.md section 6).
+        then the equation in its coordinates, Mbar yddot + Nbar = f (Section 3.5).
         Default None, the joint-space equation.
     drives : sequence, optional
         One DC motor drive per joint of an arm without motors of its own: a rigid

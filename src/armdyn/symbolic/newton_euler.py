@@ -19,7 +19,7 @@ which needs no linear velocities; M from the composite-rigid-body algorithm and 
 world-frame recursion (Featherstone, Rigid Body Dynamics Algorithms, 2008, 6.2; Echeandia and Wensing
 2021); the base regressor W_b from each link's Newton-Euler force, linear in its ten parameters
 (Atkeson, An and Hollerbach 1986), with only the base columns kept (Gautier 1991). All run on the
-kernels' packed model (BOOK.md section 5): joints along their own z axes, friction and reflected
+kernels' packed model (Section 3.4): joints along their own z axes, friction and reflected
 motor inertia included. Rotation and position entries within
 SNAP of 0 or +-1 are taken as exactly 0 or +-1 (a float twist of pi/2 has cosine 6e-17), and a mass
 property below SNAP times the body's largest of its kind as 0.
@@ -984,7 +984,7 @@ class CompiledCode:
         return self._call("N", (q, qd), out)
 
     def Vm(self, q: object, qd: object, out: np.ndarray | None = None) -> np.ndarray:
-        """The Christoffel-consistent Coriolis matrix Vm(q, qd) (BOOK.md section 3, 3.3.48).
+        """The Christoffel-consistent Coriolis matrix Vm(q, qd) (3.3.48).
 
         Parameters
         ----------
