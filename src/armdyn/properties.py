@@ -794,12 +794,13 @@ def _energy_balance(
 
     speed = amplitude * omega
     typical = 0.5 * speed @ arm.inertia_matrix(q0) @ speed + np.abs(arm.gravity_vector(q0)) @ amplitude
-    atol = rtol * np.concatenate([amplitude, speed, [typical]])
+    atol = rtol * np.maximum(np.concatenate([amplitude, speed, [typical]]), 1e-12)  # a joint held still: not 0
     samples = np.linspace(0.0, PASSIVITY_DURATION, 101)
     start = np.concatenate([q0, np.zeros(n), [0.0]])
     run = solve_ivp(rate, (0.0, PASSIVITY_DURATION), start, "DOP853", samples, rtol=rtol, atol=atol)
     if not run.success:
-        raise SimulationError(f"the motion of '{arm.name}' could not be integrated to rtol = {rtol:g}: {run.message}")
+        message = f"the motion of '{arm.name}' could not be integrated to rtol = {rtol:g}: {run.message}"
+        raise SimulationError(message, run)
     energies = arm.energies(run.y[:n].T, run.y[n : 2 * n].T)
     K, P, W = energies[:, 0], energies[:, 1], run.y[-1]
     flow = float(K.max() + np.abs(P - P[0]).max() + np.abs(W).max()) + _TINY
@@ -1089,8 +1090,8 @@ def _check_task(
     if "inertia" in groups:
         _guarded(["inertia"], lambda: _task_inertia_rows(region, rows, bounds, units["inertia"]), rows)
     if region.square and ("coriolis" in groups or "skew" in groups):
-        named = [group for group in ("coriolis", "skew") if group in groups]
-        _guarded(named, lambda: _task_coriolis_rows(region, rng, rows, bounds, groups, units), rows)
+        chosen = [group for group in ("coriolis", "skew") if group in groups]
+        _guarded(chosen, lambda: _task_coriolis_rows(region, rng, rows, bounds, groups, units), rows)
         if "coriolis" in groups and isinstance(output, task_space.ToolPose):
             notes.append(
                 f"the rate of {output!r} is the twist [v; w], and w is not the derivative of any coordinates, so "
