@@ -224,7 +224,7 @@ def test_check_holds_on_the_seven_joint_panda_of_the_model_page() -> None:
 
 
 def test_passivity_dissipated_work_is_the_closed_form_and_a_negative_viscous_law_fails() -> None:
-    """One joint (the RR arm with its elbow locked) under tau = G + F + M A w^2 cos(w t) moves as
+    """One joint (the RR arm with its elbow locked) under tau = M A w^2 cos(w t) + F + G moves as
     q0 + A (1 - cos w t) exactly, so the work friction c qd dissipates over 1 s is c A^2 w^2 / 2
     (A = 0.3 rad, w = 2 pi): the row's margin H(T) - H(0) - W is minus that, and for c < 0 (energy
     injected) it is positive and the row fails, while the lossless row still holds."""
