@@ -755,12 +755,14 @@ def _linearity_row(arm: Robot, q: np.ndarray, rng: np.random.Generator, rows: li
 def _passivity_motion(robot: Robot, ranges: list[tuple[float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The start q0, amplitudes A and angular frequencies w of the motion the passivity rows drive.
 
-    Each joint starts at rest at 40% of its range and, decoupled, would follow q0 + A (1 - cos w t):
+    Each joint starts at rest at 40% of its range (in a range wider than a turn, at the point
+    nearest 0 that leaves room for the motion) and follows q0 + A (1 - cos w t):
     A is a tenth of its range (at most 0.3 rad or m), w = 2 pi (1 + 0.37 (i mod 8)) rad/s.
     """
     low, high = np.array(ranges).T
-    q0 = low + 0.4 * (high - low)
     amplitude = np.minimum(0.1 * (high - low), 0.3)
+    # in a range wider than a turn (limits of 1e16 stand for none), start at the point nearest 0 instead
+    q0 = np.where(high - low <= 2 * np.pi, low + 0.4 * (high - low), np.clip(0.0, low, high - 2 * amplitude))
     omega = 2 * np.pi * (1.0 + 0.37 * (np.arange(robot.n) % 8))
     return q0, amplitude, omega
 
@@ -791,7 +793,9 @@ def _energy_balance(
 
     speed = amplitude * omega
     typical = 0.5 * speed @ arm.inertia_matrix(q0) @ speed + np.abs(arm.gravity_vector(q0)) @ amplitude
-    atol = rtol * np.maximum(np.concatenate([amplitude, speed, [typical]]), 1e-12)  # a joint held still: not 0
+    # one absolute tolerance for all q, one for all qd: a joint with no range to move in (A = 0) asks no more
+    scales = [np.full(n, max(amplitude.max(), 1e-3)), np.full(n, max(speed.max(), 1e-3)), [max(typical, 1e-12)]]
+    atol = rtol * np.concatenate(scales)
     samples = np.linspace(0.0, PASSIVITY_DURATION, 101)
     start = np.concatenate([q0, np.zeros(n), [0.0]])
     run = solve_ivp(rate, (0.0, PASSIVITY_DURATION), start, "DOP853", samples, rtol=rtol, atol=atol)
