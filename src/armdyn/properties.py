@@ -794,7 +794,11 @@ def _energy_balance(
     speed = amplitude * omega
     typical = 0.5 * speed @ arm.inertia_matrix(q0) @ speed + np.abs(arm.gravity_vector(q0)) @ amplitude
     # one absolute tolerance for all q, one for all qd: a joint with no range to move in (A = 0) asks no more
-    scales = [np.full(n, max(amplitude.max(), 1e-3)), np.full(n, max(speed.max(), 1e-3)), [max(typical, 1e-12)]]
+    scales = [
+        np.full(n, max(amplitude.max(), 1e-3)),
+        np.full(n, max(speed.max(), 1e-3)),
+        np.array([max(typical, 1e-12)]),
+    ]
     atol = rtol * np.concatenate(scales)
     samples = np.linspace(0.0, PASSIVITY_DURATION, 101)
     start = np.concatenate([q0, np.zeros(n), [0.0]])
