@@ -916,11 +916,27 @@ def check(
         help="With --task: keep only the sampled configurations where cond J is below this (default 1000), the "
         "region the bounds hold over (they grow without bound near singularities).",
     ),
+    only: str | None = typer.Option(
+        None,
+        "--only",
+        help="Check only these groups of rows, separated by commas: inertia, coriolis, skew, friction, gravity, "
+        "linearity, passivity (e.g. 'passivity,skew'). Default: all.",
+    ),
 ) -> None:
-    """Check the properties of Table 3.3.1 on an arm and compute its bounds (with units)."""
+    """Check the properties of Table 3.3.1 on an arm and compute its bounds (with units).
+
+    A row that cannot be evaluated on the arm says "could not be checked" and why; the others are
+    still printed, and the exit status is 1, as for a property that fails.
+    """
+    from armdyn.properties import GROUPS
     from armdyn.properties import check as check_properties
 
     target = _table_file(output, "--output") if output else None
+    groups = None if only is None else [group.strip() for group in only.split(",")]
+    unknown = [group for group in groups or [] if group not in GROUPS]
+    if unknown:
+        _fail(f"--only names unknown groups {', '.join(map(repr, unknown))}: give some of {', '.join(GROUPS)}, "
+              "separated by commas")  # fmt: skip
     if max_condition is not None and task is None:
         _fail("--max-condition applies to task coordinates only: give --task with it")
     arm = _arm(name, strict)
@@ -930,7 +946,7 @@ def check(
     where = "" if chosen is None else f" in task coordinates {chosen!r}"
     refined = "L-BFGS-B" if chosen is None else "SLSQP"
     _activity.status(f"checking Table 3.3.1 on {arm.name}{where} ({samples} samples, refined by {refined})")
-    report = check_properties(arm, samples=samples, seed=seed, limits=ranges, **options)
+    report = check_properties(arm, samples=samples, seed=seed, limits=ranges, only=groups, **options)
     if chosen is None:
         report.references.update(_book_values(arm, report.ranges))
     console.print(report.table())
@@ -946,7 +962,13 @@ def check(
         )
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
-    console.print("[green]all properties hold[/green]" if report.all_hold else "[red]some properties fail[/red]")
+    for row in report.unchecked:
+        console.print(f"could not be checked: {row.name}: {row.unchecked}", style="red", highlight=False, markup=False)
+    if report.all_hold:
+        console.print("[green]all properties hold[/green]")
+    elif len(report.unchecked) < len(report.rows):
+        failing = [row for row in report.rows if not row.holds and row.unchecked is None]
+        console.print("[red]some properties fail[/red]" if failing else "[green]all properties checked hold[/green]")
     if target is not None:
         columns, rows = report.records(digits=8)
         sheet = _Sheet(report.title(8), columns, rows)
