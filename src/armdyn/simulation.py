@@ -198,7 +198,7 @@ class Result(RunSummaries):
     """(1, 3): (-1, 0, -1), a run that finished (a run that stops raises SimulationError holding it)."""
 
     def __post_init__(self) -> None:
-        q_d = self.q_d if self.q_d is not None else np.full_like(self.q, np.nan)
+        q_d = self.q_d if self.q_d is not None else np.broadcast_to(self.q[:1], self.q.shape)  # None: hold q0
         after = float(self.info.get("after", min(1.0, self.t[-1] if len(self.t) else 0.0)))
         self.summaries = run_summaries(self.t, self.q, q_d, self.tau, after)[None]
         self.outcome = np.array([[-1, 0, -1]])
