@@ -963,9 +963,9 @@ def within_limits(result: Result, mode: str) -> Result:
         return result
     lower, upper = result.arm.qlim
     slack = 1e-9 * np.maximum(1.0, np.abs(np.where(np.isfinite(lower), lower, 0.0)))
-    if np.all(result.q.min(axis=0) >= lower - slack) and np.all(result.q.max(axis=0) <= upper + slack):
-        return result  # the usual case, checked by the extremes alone
     outside = (result.q < lower - slack) | (result.q > upper + slack)
+    if not outside.any():
+        return result
     row = int(np.argmax(outside.any(axis=1)))
     joint = int(np.argmax(outside[row]))
     value, name = result.q[row, joint], result.arm.joint_names[joint]
