@@ -140,7 +140,7 @@ class Normal:
         mean, std = inputs.number(self.mean, "mean"), inputs.number(self.std, "std")
         if std < 0:
             raise ModelError(f"Normal needs std >= 0, got {std:g}")
-        low, high = float(self.low), float(self.high)
+        low, high = (_bound(value, name) for value, name in ((self.low, "low"), (self.high, "high")))
         if not low < high or math.isnan(low) or math.isnan(high):
             raise ModelError(f"Normal needs low < high, got [{low:g}, {high:g}]")
         if std == 0 and not low <= mean <= high:
@@ -179,6 +179,13 @@ class Normal:
 
 
 Distribution = Uniform | Normal
+
+
+def _bound(value: object, name: str) -> float:
+    """A truncation bound: a real number or an infinity (no bound), or a ModelError naming it."""
+    if isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool) and math.isinf(value):
+        return float(value)
+    return inputs.number(value, name)
 
 
 def _distribution(value: object, name: str) -> Distribution | None:
