@@ -1,4 +1,4 @@
-"""The PUMA 560 driven through its DC motors' electrics (BOOK.md section 7): 10 s under motor-side voltage
+"""The PUMA 560 driven through its DC motors' electrics (Section 3.6): 10 s under motor-side voltage
 PD, armdyn's compiled run against scipy's solve_ivp on a plain NumPy right-hand side.
 
 Run: .venv/bin/python benchmarks/bench_drives.py

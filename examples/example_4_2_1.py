@@ -1,5 +1,5 @@
 """Example 4.2-1: the RR arm (a1 = a2 = 2 m) drawing a circle under computed torque in task
-coordinates, tau = J^T (Mbar (yddot_d + kv edot + kp e) + Nbar) (BOOK.md section 6).
+coordinates, tau = J^T (Mbar (yddot_d + kv edot + kp e) + Nbar) (Section 3.5).
 
 The tool starts 2 cm off the circle (centre (2, 1) m, radius 0.5 m, one turn in 2 s); with
 kp = 400, kv = 40 (wn = 20, critically damped) the path error falls below 1e-4 m within

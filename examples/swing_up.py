@@ -1,5 +1,5 @@
 """What derivatives are for: the RR arm swung up from hanging to upright in 2 s with minimum torque,
-then held there by LQR (BOOK.md section 5; Carpentier and Mansard 2018 for the derivatives).
+then held there by LQR (Section 3.4; Carpentier and Mansard 2018 for the derivatives).
 
 Trajectory optimization by multiple shooting: the torque is held over 40 intervals of 50 ms, each
 integrated by 5 RK4 steps of 10 ms, and the states at the 39 inner knots are variables too; the

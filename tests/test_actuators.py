@@ -1,4 +1,4 @@
-"""Actuator dynamics and the arm-plus-actuator system (armdyn.actuators, BOOK.md section 7)."""
+"""Actuator dynamics and the arm-plus-actuator system (armdyn.actuators, Section 3.6)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""armdyn's DC motor drive against MuJoCo's ``dcmotor`` actuator (Example 3.6-1, BOOK.md section 7).
+"""armdyn's DC motor drive against MuJoCo's ``dcmotor`` actuator (Example 3.6-1, Section 3.6).
 
 The same drive in both: a load inertia J_L on one hinge, no gravity, driven by Example 3.6-1's
 motor (J_m = J_L = 0.1, b_m = 0.2, k_m = k'_m = 1, R = 5, L = 0.5) directly or behind a gear.

@@ -1,4 +1,4 @@
-"""Task-space dynamics (BOOK.md section 6, Khatib 1987) against Pinocchio, closed forms and properties."""
+"""Task-space dynamics (Section 3.5, Khatib 1987) against Pinocchio, closed forms and properties."""
 
 from __future__ import annotations
 

@@ -329,7 +329,7 @@ def test_cli_reads_a_dh_table_in_yaml(tmp_path: Path, monkeypatch: pytest.Monkey
 
 @pytest.mark.slow
 def test_cli_check_limits_reproduce_example_3_3_1(tmp_path: Path) -> None:
-    """Example 3.3-1 (BOOK.md section 4): the RR arm, unit masses and lengths, |theta_i| <= pi/2: the
+    """Example 3.3-1 (Section 3.3): the RR arm, unit masses and lengths, |theta_i| <= pi/2: the
     1-norm bounds m1 = 4 and m2 = 7 (both attained), beside the book's values in the table."""
     import csv
 

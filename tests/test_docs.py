@@ -141,20 +141,73 @@ def _build(config: Path, site: Path) -> subprocess.CompletedProcess:
     return subprocess.run(command, cwd=ROOT, env=QUIET, capture_output=True, text=True, timeout=900)
 
 
-def test_the_site_builds_strict_with_the_whole_api(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def built_site(tmp_path_factory: pytest.TempPathFactory) -> tuple[subprocess.CompletedProcess, Path]:
+    """The site built once, as `make docs` builds it: the build's outcome and its folder."""
+    site = tmp_path_factory.mktemp("docs") / "site"
+    return _build(ROOT / "mkdocs.yml", site), site
+
+
+def test_the_site_builds_strict_with_the_whole_api(built_site: tuple[subprocess.CompletedProcess, Path]) -> None:
     """`mkdocs build --strict` (what `make docs` runs): no warning, every executed block of every page ran, and
     the API reference has an entry for every name of armdyn.__all__."""
-    site = tmp_path / "site"
-    done = _build(ROOT / "mkdocs.yml", site)
+    done, site = built_site
     assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-8000:]
     reference = "".join(path.read_text(encoding="utf-8") for path in (site / "reference").rglob("*.html"))
     missing = [name for name in ad.__all__ if f'id="armdyn.{name}"' not in reference]
     assert not missing, f"the API reference lacks {missing}"
     for page in PAGES:
-        relative = page.relative_to(ROOT / "docs").with_suffix("")
-        html = site / (relative.parent if relative.name == "index" else relative) / "index.html"
+        html = site / page.relative_to(ROOT / "docs").with_suffix(".html")
         assert html.is_file(), f"{page.name} was not built"
         assert "Traceback" not in html.read_text(encoding="utf-8"), f"{page.name} shows a traceback"
+
+
+HREF = re.compile(r'<(?:a|link|script|img|source)\b[^>]*?\b(?:href|src)="([^"]*)"')
+ARITHMATEX = re.compile(r'class="arithmatex"|\$\$')
+
+
+def test_every_link_of_the_site_works_from_file_urls(built_site: tuple[subprocess.CompletedProcess, Path]) -> None:
+    """The site reads from file:// without a server or a network: every relative href and src of every page names
+    an existing file (a folder would open as a listing), no page loads a script or a stylesheet from the network,
+    and the offline search has its inlined index and the Web Worker shim beside it."""
+    done, site = built_site
+    assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-8000:]
+    # 404.html is what a web server answers for a missing address (its links are absolute); file:// never opens it
+    pages = sorted(path for path in site.rglob("*.html") if path.name != "404.html")
+    assert len(pages) >= len(PAGES), "the site has fewer pages than docs/"
+    broken = []
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        for link in HREF.findall(text):
+            if link.startswith(("#", "mailto:", "data:", "javascript:")):
+                continue
+            if link.startswith(("http://", "https://", "//")):
+                tag = text[: text.index(link)].rsplit("<", 1)[-1]
+                if tag.startswith(("script", "link")):
+                    broken.append(f"{page.relative_to(site)}: loads {link} from the network")
+                continue
+            target = (page.parent / link.split("#")[0].split("?")[0]).resolve()
+            if not target.is_file():
+                broken.append(f"{page.relative_to(site)}: {link} -> {'a folder' if target.is_dir() else 'nothing'}")
+    assert not broken, "\n".join(broken[:40])
+    assert (site / "search" / "search_index.js").is_file()
+    assert (site / "assets" / "javascripts" / "iframe-worker.js").is_file()
+
+
+def test_the_equations_are_typeset_as_mathml(built_site: tuple[subprocess.CompletedProcess, Path]) -> None:
+    """Every equation of the pages is MathML in the built site (no script typesets it when the page opens): the
+    robot equation on the home page, the task-space equation with its barred terms, and no formula left as TeX."""
+    done, site = built_site
+    assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-8000:]
+    for page in PAGES:
+        source = page.read_text(encoding="utf-8")
+        html = (site / page.relative_to(ROOT / "docs").with_suffix(".html")).read_text(encoding="utf-8")
+        displayed = len(re.findall(r"^\$\$$", source, re.MULTILINE)) // 2
+        assert html.count('<div class="math-display"><math') == displayed, f"{page.name}: an equation is not MathML"
+        assert not ARITHMATEX.search(html), f"{page.name}: a formula is left as TeX"
+    assert "<msub><mi>V</mi><mi>m</mi></msub>" in (site / "index.html").read_text(encoding="utf-8")
+    task = (site / "task-space.html").read_text(encoding="utf-8")
+    assert task.count("&#x000AF;") >= 10, "the task-space page lacks its barred terms (Mbar, Nbar, ...)"
 
 
 def test_a_broken_page_fails_the_strict_build(tmp_path: Path) -> None:

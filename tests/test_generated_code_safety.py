@@ -184,3 +184,50 @@ def test_compiling_a_closed_form_with_a_value_that_is_not_finite_is_a_model_erro
     q = np.array([0.3, -0.4])
     numeric = ad.models.two_link_planar(m1=2.0, m2=1.0, a1=1.0, a2=0.8, g=9.8)
     np.testing.assert_allclose(closed.compile(values).M(q), numeric.inertia_matrix(q), rtol=1e-12)
+
+
+@pytest.mark.parametrize("route", [["--method", "newton-euler"], ["--no-symbolic"]])
+def test_derive_c_writes_a_header_of_declarations_and_a_source_of_prefixed_definitions(
+    tmp_path: Path, route: list[str]
+) -> None:
+    """Before, `derive --code c` gave bare globals M, Vm, G and tau and save("x.h") wrote definitions: two
+    files including it failed to link. Now: x.h declares, x.c defines armdyn_-prefixed functions; two
+    translation units including the header link into one program whose tau equals the kernels'."""
+    from tests.helpers import invoke
+
+    if COMPILER is None:
+        pytest.skip("no C compiler (cc or gcc) on this machine: the generated C cannot be compiled here")
+    written = invoke("derive", "two_link_planar", "--code", "c", *route, "-o", tmp_path / "arm.c")
+    assert written.exit_code == 0, written.output
+    header = (tmp_path / "arm.h").read_text()
+    assert "#ifndef ARMDYN_" in header and "void armdyn_tau(" in header and "{" not in header
+    assert (tmp_path / "arm.c").read_text().startswith('#include "arm.h"')
+    main = tmp_path / "main.c"
+    main.write_text(
+        '#include <stdio.h>\n#include "arm.h"\nvoid other(void);\nint main(void) {\n'
+        "    double q[2] = {0.3, -0.4}, qd[2] = {0.2, 0.1}, qdd[2] = {-0.5, 0.7}, tau[2];\n"
+        '    armdyn_tau(q, qd, qdd, tau);\n    other();\n    printf("%.17g %.17g\\n", tau[0], tau[1]);\n'
+        "    return 0;\n}\n"
+    )
+    (tmp_path / "other.c").write_text('#include "arm.h"\nvoid other(void) {}\n')
+    program = tmp_path / "program"
+    flags = ["-std=c99", "-Wall", "-Wextra", "-Werror"]
+    sources = [str(tmp_path / name) for name in ("main.c", "other.c", "arm.c")]
+    subprocess.run([COMPILER, *flags, "-o", str(program), *sources, "-lm"], check=True, cwd=tmp_path)
+    printed = np.array(subprocess.run([str(program)], check=True, capture_output=True, text=True).stdout.split(),
+                       dtype=float)  # fmt: skip
+    arm = ad.models.two_link_planar()
+    expected = arm.inverse_dynamics([0.3, -0.4], [0.2, 0.1], [-0.5, 0.7])
+    np.testing.assert_allclose(printed, expected, rtol=1e-12, atol=1e-12)
+
+
+def test_a_closed_forms_header_and_source_agree_and_save_writes_each(tmp_path: Path) -> None:
+    form = derive(ad.models.two_link_planar(symbolic=True))
+    header, source = form.to_c_header("rr_"), form.to_c("rr_")
+    declared = re.findall(r"void (rr_\w+)\(", header)
+    defined = re.findall(r"void (rr_\w+)\(", source)
+    assert declared == defined == ["rr_M", "rr_Vm", "rr_G", "rr_tau"]
+    assert form.save(tmp_path / "rr.h").read_text() == form.to_c_header()
+    assert form.save(tmp_path / "rr.c").read_text() == form.to_c()
+    with pytest.raises(ModelError, match="prefix must be empty or start a C identifier"):
+        form.to_c_header("1x")

@@ -127,3 +127,26 @@ def test_the_default_sine_stays_inside_the_limits_of_a_narrow_joint() -> None:
     assert isinstance(path, tr.Sinusoid)
     samples = np.array([path(t, 2)[0] for t in np.linspace(0, 2, 201)])
     assert np.all(samples >= 0.0) and np.all(samples <= 0.04)
+
+
+@pytest.mark.slow
+def test_the_panda_finger_warns_when_driven_past_its_limit_and_stops_hold_it() -> None:
+    """A sine of 0.1 m on the finger (range 0 to 0.04 m), as the CLI's default path was: a warning naming the
+    finger; with spring stops the finger stays within a few millimetres of its range (the stop's deflection
+    under the controller's push, about tau / K)."""
+    panda = ad.load_urdf(URDFS["panda"])
+    lower, upper = panda.qlim
+    margin = 0.1 * (upper - lower)  # every joint of the Panda has finite limits
+    start = np.clip(np.zeros(panda.n), lower + margin, upper - margin)
+    finger = panda.joint_names.index("panda_finger_joint1")
+    amplitude = np.zeros(panda.n)
+    amplitude[finger] = 0.1
+    path = tr.Sinusoid(amplitude, 0.5, 0.0, start)
+    law = control.ComputedTorque(100.0, 20.0)
+    with pytest.warns(JointLimitWarning, match="joint 'panda_finger_joint1' of 'panda' left its limits"):
+        free = ad.simulate(panda, law, path, t_final=2.0, q0=start)
+    assert free.q[:, finger].max() > upper[finger] + 0.03
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", JointLimitWarning)
+        held = ad.simulate(panda, law, path, t_final=2.0, q0=start, joint_limits="spring")
+    assert held.q[:, finger].max() < upper[finger] + 0.01 and held.q[:, finger].min() > lower[finger] - 0.01

@@ -18,7 +18,7 @@ STATES = [tuple(RNG.uniform(-2, 2, 3) for _ in range(3)) for _ in range(5)]
 TIGHT = {"rtol": 1e-12, "atol": 1e-12}
 
 
-# ----- BOOK.md section 4: the closed forms ----------------------------------------------------
+# ----- Examples 3.2-1, 3.2-2 and Exercise 3.2-3: the closed forms ---------------------------
 @pytest.mark.parametrize("state", STATES)
 @pytest.mark.parametrize(("m1", "m2", "a1", "a2"), [(1.0, 1.0, 1.0, 1.0), (2.5, 0.7, 0.8, 1.3)])
 def test_two_link_planar_equals_example_3_2_2(state: tuple, m1: float, m2: float, a1: float, a2: float) -> None:

@@ -200,7 +200,7 @@ def test_demo_writes_the_animation_of_example_4_4_1(demo_run: tuple) -> None:
     assert result.exit_code == 0, result.output
     assert "demo.gif (the arm moving)" in " ".join(result.output.split())
     frames = _frames(folder / "demo.gif")
-    assert len(frames) == 150 and all(_arm_pixels(frame) > 500 for frame in frames[::30])
+    assert len(frames) == 126 and all(_arm_pixels(frame) > 500 for frame in frames[::30])
 
 
 def test_bad_configurations_arms_and_paths_are_model_errors(rr_run: object, tmp_path: Path) -> None:

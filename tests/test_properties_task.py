@@ -1,4 +1,4 @@
-"""Table 3.3.1 in task coordinates (BOOK.md section 6): ``check(arm, task=output)`` over the regular region.
+"""Table 3.3.1 in task coordinates (Section 3.5): ``check(arm, task=output)`` over the regular region.
 
 Every row holds on the RR arm (PlanarPosition), the cylindrical arm (ToolPosition, Example 3.5-1), the
 PUMA 560 (ToolPose, with friction) and the Panda (ToolPosition, redundant: Lambda); the bounds cover

@@ -207,12 +207,12 @@ def test_generated_c_equals_the_kernels(tmp_path: Path) -> None:
     subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-o", str(library), str(source), "-lm"], check=True)
     lib = ctypes.CDLL(str(library))
     pointer = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
-    lib.tau.argtypes = [pointer, pointer, pointer, pointer]
-    lib.M.argtypes = [pointer, pointer]
+    lib.armdyn_tau.argtypes = [pointer, pointer, pointer, pointer]
+    lib.armdyn_M.argtypes = [pointer, pointer]
     q, qd, qdd = np.array([0.3, -0.4, 0.6, 0.2, 0.5, -0.1]), np.full(6, 0.3), np.full(6, -0.2)
     tau, M = np.zeros(6), np.zeros(36)
-    lib.tau(q, qd, qdd, tau)
-    lib.M(q, M)
+    lib.armdyn_tau(q, qd, qdd, tau)
+    lib.armdyn_M(q, M)
     assert_allclose(tau, arm.inverse_dynamics(q, qd, qdd), atol=1e-10)
     assert_allclose(M.reshape(6, 6), arm.inertia_matrix(q), atol=1e-10)
 

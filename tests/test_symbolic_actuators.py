@@ -1,4 +1,4 @@
-"""Closed forms of the arm-plus-actuator system (BOOK.md section 7): the RR arm with two symbolic
+"""Closed forms of the arm-plus-actuator system (Section 3.6): the RR arm with two symbolic
 motors symbol for symbol, the book's row-scaled and independent-joint forms, numeric drives against
 ActuatedArm, and the drives that are refused."""
 

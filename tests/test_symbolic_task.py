@@ -1,4 +1,4 @@
-"""Closed forms in task coordinates (BOOK.md section 6): Example 3.5-1 symbol for symbol, the
+"""Closed forms in task coordinates (Section 3.5): Example 3.5-1 symbol for symbol, the
 polar arm seen by a camera, symbolic against numeric, and the outputs that are refused."""
 
 from __future__ import annotations

@@ -801,7 +801,7 @@ def derive(
     if code is not None and task is None and method in ("auto", "newton-euler"):
         generated = _generated_code(name, code, method, symbolic, strict, functions)
         if generated is not None:
-            _write_or_print(generated, output)
+            _write_code(generated, output)
             return
     if task is not None and code is not None:
         _fail("--task and --code exclude each other: code is generated for the joint-space equation")
@@ -818,7 +818,9 @@ def derive(
     _activity.status(f"writing the equations of {arm.name}" + (f" as {code} code" if code else ""))
     if code is not None:
         joint = cast("ClosedForm", form)  # the joint-space equation of a Robot: --code excludes --task
-        text = joint.to_python() if code == "python" else joint.to_c()
+        _activity.stop()
+        _write_code((joint.to_python(), None) if code == "python" else (joint.to_c(), joint.to_c_header()), output)
+        return
     elif latex:
         text = cast("ClosedForm", form).latex_document() if target is not None and chosen is None else form.latex()
     else:  # the terminal gets a summary of long entries; a file gets every entry in full
@@ -832,7 +834,7 @@ def derive(
 
 
 def _generated_code(name: str, language: str, method: str, symbolic: bool, strict: bool,
-                    functions: str | None = None) -> str | None:  # fmt: skip
+                    functions: str | None = None) -> tuple[str, str | None] | None:  # fmt: skip
     """Source from armdyn.symbolic.generate_code for ``derive --code`` (method newton-euler, or auto for
     a numeric arm of 5 joints or more); None where the closed form's code is wanted instead."""
     from armdyn.symbolic import generate_code
@@ -853,16 +855,28 @@ def _generated_code(name: str, language: str, method: str, symbolic: bool, stric
         _fail(f"--functions: {error}")
     counts = ", ".join(f"{key} {value['total']}" for key, value in code.operation_counts().items())
     _activity.status(f"generated {language} for {arm.name}: operations {counts}")
-    return code.python() if language == "python" else code.c()
+    return (code.python(), None) if language == "python" else (code.c(), code.c_header())
 
 
-def _write_or_print(text: str, output: str | None) -> None:
-    if output:
-        target = _output_file(output, "--output")
-        write_text(target, text)
+def _write_code(code: tuple[str, str | None], output: str | None) -> None:
+    """Generated source on stdout, or in ``output``: C to a .c file goes with its header, a .h beside it that
+    the .c includes; a .h alone is the header (the declarations)."""
+    source, header = code
+    if not output:
+        print(source)
+        return
+    target = _output_file(output, "--output")
+    if header is not None and target.suffix == ".h":
+        write_text(target, header)
         console.print(f"wrote {output}")
+    elif header is not None:
+        declarations = target.with_suffix(".h")
+        write_text(declarations, header)
+        write_text(target, f'#include "{declarations.name}"\n' + source)
+        console.print(f"wrote {target} and {declarations}")
     else:
-        print(text)
+        write_text(target, source)
+        console.print(f"wrote {output}")
 
 
 CHECK_SAMPLES = 1_000_000
@@ -902,11 +916,27 @@ def check(
         help="With --task: keep only the sampled configurations where cond J is below this (default 1000), the "
         "region the bounds hold over (they grow without bound near singularities).",
     ),
+    only: str | None = typer.Option(
+        None,
+        "--only",
+        help="Check only these groups of rows, separated by commas: inertia, coriolis, skew, friction, gravity, "
+        "linearity, passivity (e.g. 'passivity,skew'). Default: all.",
+    ),
 ) -> None:
-    """Check the properties of Table 3.3.1 on an arm and compute its bounds (with units)."""
+    """Check the properties of Table 3.3.1 on an arm and compute its bounds (with units).
+
+    A row that cannot be evaluated on the arm says "could not be checked" and why; the others are
+    still printed, and the exit status is 1, as for a property that fails.
+    """
+    from armdyn.properties import GROUPS
     from armdyn.properties import check as check_properties
 
     target = _table_file(output, "--output") if output else None
+    groups = None if only is None else [group.strip() for group in only.split(",")]
+    unknown = [group for group in groups or [] if group not in GROUPS]
+    if unknown:
+        _fail(f"--only names unknown groups {', '.join(map(repr, unknown))}: give some of {', '.join(GROUPS)}, "
+              "separated by commas")  # fmt: skip
     if max_condition is not None and task is None:
         _fail("--max-condition applies to task coordinates only: give --task with it")
     arm = _arm(name, strict)
@@ -916,7 +946,7 @@ def check(
     where = "" if chosen is None else f" in task coordinates {chosen!r}"
     refined = "L-BFGS-B" if chosen is None else "SLSQP"
     _activity.status(f"checking Table 3.3.1 on {arm.name}{where} ({samples} samples, refined by {refined})")
-    report = check_properties(arm, samples=samples, seed=seed, limits=ranges, **options)
+    report = check_properties(arm, samples=samples, seed=seed, limits=ranges, only=groups, **options)
     if chosen is None:
         report.references.update(_book_values(arm, report.ranges))
     console.print(report.table())
@@ -928,11 +958,17 @@ def check(
     notes = list(report.notes)
     if report.references:
         notes.append(
-            "book values: Example 3.3-1 (BOOK.md section 4), the RR arm of Example 3.2-2 with |theta_i| <= pi/2"
+            "book values: Example 3.3-1 (the book's Section 3.3), the RR arm of Example 3.2-2 with |theta_i| <= pi/2"
         )
     for note in notes:
         console.print(f"note: {note}", highlight=False, markup=False)
-    console.print("[green]all properties hold[/green]" if report.all_hold else "[red]some properties fail[/red]")
+    for row in report.unchecked:
+        console.print(f"could not be checked: {row.name}: {row.unchecked}", style="red", highlight=False, markup=False)
+    if report.all_hold:
+        console.print("[green]all properties hold[/green]")
+    elif len(report.unchecked) < len(report.rows):
+        failing = [row for row in report.rows if not row.holds and row.unchecked is None]
+        console.print("[red]some properties fail[/red]" if failing else "[green]all properties checked hold[/green]")
     if target is not None:
         columns, rows = report.records(digits=8)
         sheet = _Sheet(report.title(8), columns, rows)
@@ -972,7 +1008,7 @@ def _limits(text: str, arm: Robot) -> list[tuple[float, float]] | None:
 
 
 def _book_values(arm: Robot, ranges: Sequence[tuple[float, float]]) -> dict[str, float]:
-    """The bounds Example 3.3-1 gives (BOOK.md section 4), when ``arm`` is the RR arm of Example 3.2-2
+    """The bounds Example 3.3-1 gives (Lewis, Dawson and Abdallah 2004), when ``arm`` is the RR arm of Example 3.2-2
     (any masses m1, m2 and lengths a1, a2) and the ranges are |theta_i| <= pi/2; else none.
 
     ||M(q)||_1 lies between m1 = (m1+m2) a1^2 + 2 m2 a2^2 and m2 = m1 + 3 m2 a1 a2 (the 1-norm is

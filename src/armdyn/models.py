@@ -1,6 +1,6 @@
 """The built-in arms, looked up by name: the book's examples and classic industrial arms.
 
-The book's three examples (BOOK.md section 4) take ``symbolic=True`` to carry SymPy
+The book's three examples (Examples 3.2-1 and 3.2-2, Exercise 3.2-3) take ``symbolic=True`` to carry SymPy
 symbols (m1, m2, a1, a2, g, ...) as parameters, ready for closed-form derivation.
 ``load_dh_file`` reads an arm of one's own from a DH table in a JSON or YAML file.
 """

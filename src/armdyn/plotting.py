@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import io
 import math
-import textwrap
+import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +38,35 @@ if TYPE_CHECKING:
     from armdyn.study import StudyResult
 
 TITLE_WIDTH = 100  # characters per title line: a 9 inch figure at 10 points holds about 110
+SEPARATORS = (": ", "; ", ", ")  # where a title may break, the first the strongest
+
+
+def wrap(title: str, width: int = TITLE_WIDTH) -> str:
+    """``title`` in lines of at most ``width`` characters, each broken after a ": ", "; " or ", " rather
+    than mid-phrase: the break outside parentheses and the strongest separator preferred, among those
+    that fill at least half a line; between words when there is none."""
+    lines, rest = [], title.strip()
+    while len(rest) > width:
+        cut = _break(rest, width)
+        lines.append(rest[:cut].rstrip())
+        rest = rest[cut:].lstrip()
+    return "\n".join([*lines, rest])
+
+
+def _break(text: str, width: int) -> int:
+    """Where the first line of ``text`` ends: after the best separator in its second half (the least
+    parenthesised, the strongest, the latest), else after its last space, else at ``width``."""
+    depth, candidates = 0, []  # (depth, strength, -end)
+    for k, character in enumerate(text[: width + 1]):
+        depth += (character in "([{") - (character in ")]}")
+        for strength, separator in enumerate(SEPARATORS):
+            end = k + len(separator)
+            if text.startswith(separator, k) and width // 2 <= end - 1 <= width:
+                candidates.append((depth, strength, -end))
+    if candidates:
+        return -min(candidates)[2]
+    space = text.rfind(" ", 1, width + 1)
+    return space + 1 if space > 0 else width
 
 
 def units(kinds: list[str], revolute: str, prismatic: str) -> str:
@@ -96,7 +125,7 @@ def plot_result(result: Result, path: str | Path | None = None, title: str | Non
     # an axes legend anchored outside the top plot: constrained layout makes room for it beside the
     # data, and it stays below the title (a figure legend shares the title's top edge)
     axes[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
-    fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
+    fig.suptitle(wrap(title or _title(result)), fontsize=10)
     if path is not None:
         save_figure(fig, path)
         plt.close(fig)
@@ -136,16 +165,16 @@ def _title(result: Result) -> str:
     return ": ".join(parts[:2]) + (f", {parts[2]}" if len(parts) > 2 else "") + step
 
 
-def _task_units(output: str) -> str:
-    """The unit of a task output's coordinates, from its description."""
-    if output.startswith("Camera"):
-        return "px"
-    return "output units" if output.startswith("Output") else "m"
-
-
 def plot_task(result: Result, path: str | Path | None = None, title: str | None = None) -> Figure:
-    """The task-space path drawn over the desired one (the first two coordinates), and the size of
-    the task error over time on a log scale (a pose task: its position and orientation parts apart)."""
+    """The task-space path drawn over the desired one, beside the task error y_d - y per coordinate
+    against time and its size |y_d - y| on a log scale.
+
+    The path is in 3-D for an output with three or more coordinates (a tool or link point, a pose's
+    position), with axes named by them (x, y, z in m); in 2-D for two (a PlanarPosition's world axes,
+    a camera's u, v in px); against time for one. A pose's error is in two panels, its position (x, y,
+    z in m) and its orientation (rx, ry, rz in rad: the rotation vector of R_d R^T), and its size
+    in each part apart.
+    """
     import matplotlib
 
     if path is not None:
@@ -153,37 +182,74 @@ def plot_task(result: Result, path: str | Path | None = None, title: str | None 
     import matplotlib.pyplot as plt
 
     task = cast("Tracking", result.task)
-    unit = _task_units(task.output)
-    fig, (plane, error) = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
-    plane.plot(task.y_d[:, 0], task.y_d[:, 1], "k--", lw=1, label="desired")
-    plane.plot(task.y[:, 0], task.y[:, 1], color="C0", label="actual")
-    plane.plot(task.y[0, 0], task.y[0, 1], "o", color="C1", label="start")
-    plane.set(xlabel=f"y1 ({unit})", ylabel=f"y2 ({unit})", title=f"path of {task.output}")
-    plane.set_aspect("equal", adjustable="datalim")  # a straight path keeps a readable box
-    plane.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False, fontsize=8)
-
-    def size(e: np.ndarray) -> np.ndarray:  # a zero error (a start on the path) has no place on a log scale
-        norm = np.linalg.norm(e, axis=1)
-        return np.where(norm > 0, norm, np.nan)
-
-    if task.output.startswith("ToolPose"):
-        error.semilogy(result.t, size(task.error[:, :3]), label="position (m)")
-        error.semilogy(result.t, size(task.error[:, 3:]), label="orientation (rad)")
-        error.legend(frameon=False, fontsize=8)
-        error.set_ylabel("task error |e|")
+    coordinates = _task_coordinates(task.output, task.y.shape[1])
+    series = _time_values(result)
+    fig = plt.figure(figsize=(12, 2.3 * (len(series) + 1) + 0.8), layout="constrained")
+    grid = fig.add_gridspec(len(series) + 1, 3, width_ratios=[1.0, 0.06, 1.1])  # a gap for a 3-D axes' labels
+    shown = min(3, len(coordinates))
+    plane = fig.add_subplot(grid[:, 0], projection="3d" if shown == 3 else None)
+    axes_names = [f"{name} ({unit})" for name, unit in coordinates[:shown]]
+    if shown == 1:  # one coordinate: its path is its value against time
+        plane.plot(result.t, task.y_d[:, 0], "k--", lw=1, label="desired")
+        plane.plot(result.t, task.y[:, 0], color="C0", label="actual")
+        plane.plot(result.t[0], task.y[0, 0], "o", color="C1", label="start")
+        plane.set(xlabel="time (s)", ylabel=axes_names[0])
     else:
-        error.semilogy(result.t, size(task.error), color="C0")
-        error.set_ylabel(f"task error |y_d - y| ({unit})")
-    error.set(xlabel="time (s)", title="task error", xlim=(result.t[0], result.t[-1]))
+        plane.plot(*task.y[:, :shown].T, color="C0", label="actual", gid="path")
+        plane.plot(*task.y_d[:, :shown].T, "k--", lw=1, label="desired", gid="desired path")  # over the actual
+        plane.plot(*task.y[:1, :shown].T, "o", color="C1", label="start")
+        plane.set_xlabel(axes_names[0])
+        plane.set_ylabel(axes_names[1])
+        if shown == 3:
+            _equal_box(plane, np.vstack([task.y[:, :3], task.y_d[:, :3]]))
+            cast("Axes3D", plane).set_zlabel(axes_names[2])
+            _fewer_ticks(plane)
+        else:
+            plane.set_aspect("equal", adjustable="datalim")  # a straight path keeps a readable box
+            plane.grid(True, alpha=0.3)
+    plane.set_title(f"path of {task.output}", fontsize=10)
+    plane.legend(loc="upper left", bbox_to_anchor=(0.0, -0.06 if shown == 3 else -0.12), ncols=3, frameon=False,
+                 fontsize=8)  # fmt: skip
+    panels = [fig.add_subplot(grid[k, 2]) for k in range(len(series) + 1)]
+    for ax, (values, names, label, _) in zip(panels, series, strict=False):
+        for i, name in enumerate(names):
+            ax.plot(result.t, values[:, i], color=f"C{i % 10}", label=name)
+        ax.axhline(0.0, color="0.6", linewidth=0.8)
+        ax.set_ylabel(label)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=8)
+    panels[0].set_title(f"task error of {task.output}", fontsize=10)
+    size = panels[-1]
+    for values, _, label, _ in series:
+        norm = np.linalg.norm(values, axis=1)
+        unit = label[label.rindex("(") + 1 : -1]
+        part = "orientation" if label.startswith("orientation") else "position" if len(series) > 1 else "size"
+        size.semilogy(result.t, np.where(norm > 0, norm, np.nan), label=f"{part} ({unit})")  # 0 has no place on it
+    size.set_ylabel("|y_d - y|" + (f" ({series[0][2][series[0][2].rindex('(') + 1 : -1]})" if len(series) == 1 else ""))
+    size.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=8)
     sizes = np.linalg.norm(task.error, axis=1)
     if np.any(sizes > 0):  # eight decades below the largest error: a start on the path is not a scale
-        error.set_ylim(bottom=max(sizes[sizes > 0].min() * 0.5, sizes.max() * 1e-8))
-    error.grid(True, alpha=0.3)
-    fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
+        size.set_ylim(bottom=max(sizes[sizes > 0].min() * 0.5, sizes.max() * 1e-8))
+    for ax in panels:
+        ax.grid(True, alpha=0.3)
+        ax.set_xlim(result.t[0], result.t[-1])
+    for ax in panels[:-1]:
+        ax.tick_params(labelbottom=False)
+    size.set_xlabel("time (s)")
+    fig.suptitle(wrap(title or _title(result)), fontsize=10)
     if path is not None:
         save_figure(fig, path)
         plt.close(fig)
     return fig
+
+
+def _equal_box(ax: Axes, points: np.ndarray) -> None:
+    """Equal scales on 3-D axes around ``points`` (a path undistorted), a tenth of its extent to spare."""
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre, half = 0.5 * (low + high), 0.55 * float((high - low).max()) or 0.05
+    space = cast("Axes3D", ax)
+    for setter, middle in zip((space.set_xlim, space.set_ylim, space.set_zlim), centre, strict=True):
+        setter(middle - half, middle + half)
+    space.set_box_aspect((1.0, 1.0, 1.0))
 
 
 def plot_ensemble(ensemble: Ensemble, path: str | Path | None, quantity: str, row: int) -> Figure:
@@ -232,7 +298,7 @@ def plot_ensemble(ensemble: Ensemble, path: str | Path | None, quantity: str, ro
     fig.supxlabel(f"{quantity.replace('_', ' ')} ({position})", fontsize=9)
     title = (f"{arm.name}: {ensemble.runs} runs, {ensemble.info['controller']}, error after "
              f"{ensemble.info['after']:g} s")  # fmt: skip
-    fig.suptitle(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
+    fig.suptitle(wrap(title), fontsize=10)
     if path is not None:
         save_figure(fig, path)
         plt.close(fig)
@@ -267,7 +333,7 @@ def plot_study(result: StudyResult, path: str | Path | None = None) -> Figure:
         axis.legend(fontsize=8, frameon=False)
         axis.grid(True, alpha=0.3)
     width = min(TITLE_WIDTH, int(12 * fig.get_figwidth()))
-    fig.suptitle(textwrap.fill(f"{result.spec.text}: {result.estimate}", width), fontsize=10)
+    fig.suptitle(wrap(f"{result.spec.text}: {result.estimate}", width), fontsize=10)
     if path is not None:
         save_figure(fig, path)
         plt.close(fig)
@@ -286,7 +352,10 @@ JOINT_STYLES: dict[str, dict[str, Any]] = {
 DESIRED_PATH_STYLE: dict[str, Any] = {"color": "0.45", "linestyle": "--", "linewidth": 1.2}
 ACTUAL_PATH_STYLE: dict[str, Any] = {"color": "tab:cyan", "linewidth": 1.8}
 PLANE_TOLERANCE = 1e-9  # m, and for the cosines between joint axes
-MAX_FRAMES = 150
+MAX_FRAMES = 200  # an animation's default most frames
+GIF_TICK = 0.01  # s: a GIF's frame delays are whole hundredths of a second
+FASTEST, SLOWEST = 0.04, 0.1  # s per frame of a real-time playback by default: 25 to 10 frames per second
+FEWEST_FRAMES = 25  # a short run is slowed down to this many frames rather than shown in a few
 ANIMATION_FORMATS = (".gif", ".mp4")
 
 
@@ -383,8 +452,42 @@ class _ArmDrawing:
         self.frames = {name: [self._line(gid=f"{name} {'xyz'[k]}", zorder=5, color=FRAME_COLOURS[k], linewidth=2.0)
                               for k in range(3)] for name in ("base", "tool")}  # fmt: skip
         self.labels = {name: self._label(name) for name in ("base", "tool")}
-        self.down = -(basis[1] if basis is not None else np.eye(3)[2])  # labels go below their frame's origin
         self.show(scene)
+
+    def _screen(self) -> np.ndarray:
+        """The world directions of the picture's right and up, (2, 3): the plane's basis, or the 3-D
+        axes' view (its azimuth and elevation)."""
+        if self.basis is not None:
+            return self.basis
+        space = cast("Axes3D", self.ax)
+        azimuth, elevation = np.radians(space.azim), np.radians(space.elev)
+        return np.array([[-np.sin(azimuth), np.cos(azimuth), 0.0],
+                         [-np.sin(elevation) * np.cos(azimuth), -np.sin(elevation) * np.sin(azimuth),
+                          np.cos(elevation)]])  # fmt: skip
+
+    def _place_label(self, label: Text, origin: np.ndarray, directions: np.ndarray) -> None:
+        """A frame's name beside its origin, in the widest free angle between the lines drawn from it
+        (its axes, its links) as the picture shows them: never over its axes."""
+        screen = self._screen()
+        shown = directions @ screen.T  # (k, 2)
+        length = np.linalg.norm(shown, axis=1)
+        keep = length > 0.2 * np.linalg.norm(directions, axis=1)  # a line towards the viewer hides nothing
+        angles = np.sort(np.arctan2(shown[keep, 1], shown[keep, 0]))
+        if len(angles):
+            gaps = np.diff(np.append(angles, angles[0] + 2 * np.pi))
+            widest = int(np.argmax(gaps))
+            angle = angles[widest] + 0.5 * gaps[widest]
+        else:
+            angle = -0.5 * np.pi  # below
+        right, up = np.cos(angle), np.sin(angle)
+        corner = origin + 0.3 * self.size * (right * screen[0] + up * screen[1])
+        label.set_horizontalalignment("left" if right > 0.4 else "right" if right < -0.4 else "center")
+        label.set_verticalalignment("bottom" if up > 0.4 else "top" if up < -0.4 else "center")
+        if self.basis is not None:
+            x, y = self._coordinates(corner[None])[:, 0]
+            label.set_position((x, y))
+        else:
+            cast("Text3D", label).set_position_3d(corner)
 
     def _coordinates(self, points: np.ndarray) -> np.ndarray:
         """Points (k, 3) as the axes' coordinates: (2, k) in the plane, else (3, k)."""
@@ -420,17 +523,33 @@ class _ArmDrawing:
         for name, pose in (("base", scene.base), ("tool", scene.tool)):
             for k, line in enumerate(self.frames[name]):
                 self._put(line, np.array([pose[:3, 3], pose[:3, 3] + self.size * pose[:3, k]]))
-            corner = pose[:3, 3] + 0.3 * self.size * self.down
-            if self.basis is not None:
-                x, y = self._coordinates(corner[None])[:, 0]
-                self.labels[name].set_position((x, y))
-            else:
-                cast("Text3D", self.labels[name]).set_position_3d(corner)
+            self._place_label(
+                self.labels[name], pose[:3, 3], np.vstack([pose[:3, :3].T, _lines_from(scene, pose[:3, 3])])
+            )
 
     def artists(self) -> list[Any]:
         """Every artist of the figure (for an animation's frame)."""
         frames = [line for lines in self.frames.values() for line in lines]
         return [*self.links, *self.joints, self.tool_line, *frames, *self.labels.values()]
+
+
+def _lines_from(scene: _Scene, point: np.ndarray) -> np.ndarray:
+    """The directions (k, 3) of the figure's lines that leave ``point``: each link's and the tool's, from
+    a vertex at ``point`` to the next vertex elsewhere, and the axes of the joints at ``point``."""
+    tolerance = 1e-9 * max(1.0, float(np.abs(point).max()))
+    directions = []
+    polylines = [*scene.links, np.array([scene.links[scene.tool_link][-1], scene.tool[:3, 3]])]
+    for vertices in polylines:
+        away = np.linalg.norm(vertices - point, axis=1) > tolerance
+        for k in np.flatnonzero(~away):
+            for step in (-1, 1):
+                others = [j for j in range(k + step, -1 if step < 0 else len(vertices), step) if away[j]]
+                if others:
+                    directions.append(vertices[others[0]] - point)
+    for joint, axis, kind in zip(scene.joints, scene.axes, scene.kinds, strict=True):
+        if np.linalg.norm(joint - point) <= tolerance:  # a joint's axis drawn through the point
+            directions += [axis, -axis] if kind == "revolute" else [axis]
+    return np.array(directions).reshape(-1, 3)
 
 
 def _legend_handles(scene: _Scene, basis: np.ndarray | None) -> list[Line2D]:
@@ -620,8 +739,10 @@ def plot_arm(
     _ArmDrawing(ax, scene, basis, size)
     _set_limits(ax, np.vstack([scene.points(), _frame_tips(scene, size)]), basis, 0.6 * size)
     _label_axes(ax, basis, names)
+    if basis is None:
+        _fewer_ticks(ax)
     _legend(ax, scene, basis)
-    ax.set_title(textwrap.fill(title or _q_title(arm, q, name), 70), fontsize=10)
+    ax.set_title(wrap(title or _q_title(arm, q, name), 70), fontsize=10)
     fig = cast("Figure", ax.figure)  # the axes of a figure (a subfigure's cannot save)
     if target is not None:
         save_figure(fig, target)
@@ -680,31 +801,59 @@ def _positive(value: object, name: str, integer: bool = False) -> float:
     return float(value)
 
 
-def _frame_rate(fps: object, times: np.ndarray, frames: int) -> float:
-    """The frames per second: ``fps`` checked (at most 50, what GIF viewers show), or real time (the frames'
-    intervals over the run's duration) within 2 to 30."""
+@dataclass(frozen=True)
+class Playback:
+    """How an animation plays a run: ``frames`` frames, each shown ``delay`` seconds, the run's time
+    passing ``speed`` times as fast as the viewer's (1: real time)."""
+
+    frames: int
+    delay: float
+    speed: float
+
+    @property
+    def label(self) -> str:
+        """The speed as the animation says it: "" in real time (within 5 %), else e.g. "x4 speed"."""
+        return "" if abs(self.speed - 1.0) <= 0.05 else f"x{self.speed:.2g} speed"
+
+
+def _playback(duration: float, samples: int, fps: object, frames: object) -> Playback:
+    """Frames and their delay: real time by default (a frame every 40 ms, up to every 100 ms for a run
+    longer than MAX_FRAMES such frames, within the run's samples), a longer run sped up and a run
+    shorter than FEWEST_FRAMES frames slowed down; ``fps`` and ``frames`` checked and kept when given.
+    Delays are whole GIF ticks (10 ms), what a GIF can hold."""
+    most = min(samples, MAX_FRAMES if frames is None else int(_positive(frames, "frames", integer=True)))
     if fps is not None:
         rate = _positive(fps, "fps")
         if rate > 50:
             raise ModelError(f"fps must be at most 50 (GIF viewers slow faster frames down), got {fps!r}")
-        return rate
-    duration = float(times[-1] - times[0]) if len(times) else 0.0
-    return float(np.clip((frames - 1) / duration, 2.0, 30.0)) if duration > 0 else 10.0
+        delay = max(GIF_TICK, round(1.0 / rate / GIF_TICK) * GIF_TICK)
+        count = most if frames is not None else min(most, round(duration / delay) + 1)
+    elif frames is not None:
+        count = most
+        delay = min(0.5, max(FASTEST, round(duration / max(count - 1, 1) / GIF_TICK) * GIF_TICK))
+    else:
+        slowest = SLOWEST if samples > MAX_FRAMES else 1.0  # a run of few samples: each its own time
+        delay = min(slowest, max(FASTEST, math.ceil(duration / max(most - 1, 1) / GIF_TICK - 1e-9) * GIF_TICK))
+        count = min(most, max(round(duration / delay) + 1, FEWEST_FRAMES))
+    count = max(count, 1)
+    speed = duration / ((count - 1) * delay) if count > 1 and duration > 0 else 1.0
+    return Playback(count, delay, speed)
 
 
 @dataclass
 class _Panels:
-    """What moves in an animation: the stick figure, the tool's path so far, the time cursor and the
-    error's dots, with the run's numbers they are moved to."""
+    """What moves in an animation: the stick figure, the tool's path so far, a time cursor and the
+    values' dots on each time panel, with the run's numbers they are moved to."""
 
     drawing: _ArmDrawing
-    path: Line2D  # the tool's path so far
-    cursor: Line2D
-    dots: Line2D
+    path: Line2D  # the tool's (or the task point's) path so far
+    cursors: list[Line2D]
+    dots: list[Line2D]
     times: np.ndarray
-    values: np.ndarray  # (samples, n): what the right panel plots
-    actual: np.ndarray  # (k, 3): the tool's positions at ``samples``
+    values: list[np.ndarray]  # (samples, k) each: what each time panel plots
+    actual: np.ndarray  # (k, 3): the path's points at ``samples``
     samples: np.ndarray
+    speed: str = ""  # the playback's speed when not real time, e.g. "x4 speed"
 
     def show(self, scene: _Scene, index: int) -> list[Any]:
         """Move everything to sample ``index`` (the arm at ``scene``); the artists moved."""
@@ -712,36 +861,91 @@ class _Panels:
         shown = self.actual[self.samples <= index]
         self.drawing._put(self.path, shown if len(shown) else self.actual[:1])
         t = self.times[index]
-        self.cursor.set_xdata([t, t])
-        self.dots.set_data(np.full(self.values.shape[1], t), self.values[index])
-        self.drawing.ax.title.set_text(f"t = {t:.2f} s")
-        return [*self.drawing.artists(), self.path, self.cursor, self.dots, self.drawing.ax.title]
+        for cursor, dots, values in zip(self.cursors, self.dots, self.values, strict=True):
+            cursor.set_xdata([t, t])
+            dots.set_data(np.full(values.shape[1], t), values[index])
+        self.drawing.ax.title.set_text(f"t = {t:.2f} s" + (f" (played at {self.speed})" if self.speed else ""))
+        return [*self.drawing.artists(), self.path, *self.cursors, *self.dots, self.drawing.ax.title]
 
 
-def _tool_paths(result: Result, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """The tool's actual and desired positions (forward kinematics of q and q_d) at ``samples``, (k, 3)."""
+def _task_coordinates(output: str, count: int) -> list[tuple[str, str]]:
+    """The names and units of a task output's ``count`` coordinates, from its description (Tracking.output):
+    x, y, z (m) of a point, then rx, ry, rz (rad) of a pose's orientation (the rotation vector); the world
+    axes a PlanarPosition keeps; u, v (px) of a camera; y1, y2, ... of any other output."""
+    if output.startswith(("ToolPosition", "ToolPose", "LinkPoint")):
+        names = [("x", "m"), ("y", "m"), ("z", "m"), ("rx", "rad"), ("ry", "rad"), ("rz", "rad")]
+    elif output.startswith("PlanarPosition"):
+        axes = [int(a) for a in re.findall(r"\d", output)] or [0, 1]
+        names = [("xyz"[a], "m") for a in axes]
+    elif output.startswith("Camera"):
+        names = [("u", "px"), ("v", "px")]
+    else:
+        names = []
+    return (names + [(f"y{i + 1}", "output units") for i in range(len(names), count)])[:count]
+
+
+def _task_paths(result: Result, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray, str] | None:
+    """The task point's actual and desired world positions at ``samples`` ((k, 3) each: y and y_d of a
+    point, a pose's position, a PlanarPosition's two axes with the tool's third) and its name; None for
+    an output that is no point of the arm (a camera's image, any other output)."""
+    task = cast("Tracking", result.task)
+    output = task.output
+    if output.startswith(("ToolPosition", "ToolPose", "LinkPoint")):
+        name = f"link {output[len('LinkPoint(') : -1]}" if output.startswith("LinkPoint") else "tool"
+        return task.y[samples, :3], task.y_d[samples, :3], name
+    if output.startswith("PlanarPosition"):
+        axes = [int(a) for a in re.findall(r"\d", output)]
+        actual = result.arm.tool_pose(result.q[samples])[:, :3, 3]
+        desired = actual.copy()
+        desired[:, axes] = task.y_d[samples][:, : len(axes)]
+        actual[:, axes] = task.y[samples][:, : len(axes)]
+        return actual, desired, "tool"
+    return None
+
+
+def _tool_paths(result: Result, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, str]:
+    """The actual and desired path at ``samples``, (k, 3) each, and whose: the task point's y and y_d under
+    a task-space law, else the tool's (forward kinematics of q and q_d; no desired path without q_d)."""
+    if result.task is not None:
+        paths = _task_paths(result, samples)
+        if paths is not None:
+            return paths
     actual = result.arm.tool_pose(result.q[samples])[:, :3, 3]
     desired = None if result.q_d is None else result.arm.tool_pose(result.q_d[samples])[:, :3, 3]
-    return actual, desired
+    return actual, desired, "tool"
 
 
-def _time_panel(ax: Axes, result: Result) -> tuple[Line2D, Line2D]:
-    """The tracking error per joint against time (the joint positions for a run without a desired
-    trajectory), with a time cursor and a dot per joint that animate moves."""
-    error = result.error  # None without a desired trajectory
-    values = result.q if error is None else error
+def _time_values(result: Result) -> list[tuple[np.ndarray, list[str], str, str]]:
+    """What the time panels plot: (values, names, y label, title) per panel. The task error y_d - y per
+    coordinate of a task-space run (a pose's position and orientation apart: their units differ); else
+    the tracking error per joint, or the joint positions of a run without a desired trajectory."""
+    if result.task is not None:
+        task = result.task
+        coordinates = _task_coordinates(task.output, task.error.shape[1])
+        panels = []
+        for unit in dict.fromkeys(unit for _, unit in coordinates):
+            columns = [k for k, (_, u) in enumerate(coordinates) if u == unit]
+            part = "orientation " if unit == "rad" and len(columns) < len(coordinates) else ""
+            panels.append((task.error[:, columns], [coordinates[k][0] for k in columns],
+                           f"{part or 'task '}error y_d - y ({unit})", f"task error of {task.output}"))  # fmt: skip
+        return panels
     position = units(list(result.arm.kinds), "rad", "m")
-    for i, name in enumerate(result.arm.joint_names):
-        ax.plot(result.t, values[:, i], color=f"C{i % 10}", label=name)
-    (dots,) = ax.plot(
-        result.t[:1].repeat(values.shape[1]), values[0], "o", color="0.2", markersize=4, zorder=5, clip_on=False
-    )
-    cursor = ax.axvline(result.t[0], color="0.3", linewidth=1.0)
+    names = list(result.arm.joint_names)
+    error = result.error
+    if error is None:
+        return [(result.q, names, f"joint position ({position})", "joint positions (no desired trajectory)")]
+    return [(error, names, f"error q_d - q ({position})", "tracking error")]
+
+
+def _time_panel(ax: Axes, t: np.ndarray, values: np.ndarray, names: list[str], label: str) -> tuple[Line2D, Line2D]:
+    """``values`` against time, one line per name, with a time cursor and a dot per line that animate moves."""
+    for i, name in enumerate(names):
+        ax.plot(t, values[:, i], color=f"C{i % 10}", label=name)
+    (dots,) = ax.plot(t[:1].repeat(values.shape[1]), values[0], "o", color="0.2", markersize=4, zorder=5,
+                      clip_on=False)  # fmt: skip
+    cursor = ax.axvline(t[0], color="0.3", linewidth=1.0)
     ax.axhline(0.0, color="0.6", linewidth=0.8)
-    label = f"error q_d - q ({position})" if result.q_d is not None else f"joint position ({position})"
-    ax.set(xlabel="time (s)", ylabel=label, xlim=(result.t[0], result.t[-1]))
-    ax.set_title("tracking error" if result.q_d is not None else "joint positions (no desired trajectory)",
-                 fontsize=10)  # fmt: skip
+    ax.set(ylabel=label, xlim=(t[0], t[-1]))
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper right", fontsize=8, ncols=2 if values.shape[1] > 3 else 1)
     return cursor, dots
@@ -750,7 +954,7 @@ def _time_panel(ax: Axes, result: Result) -> tuple[Line2D, Line2D]:
 def _animation_figure(
     result: Result, scenes: list[_Scene], samples: np.ndarray, title: str | None, dpi: int
 ) -> tuple[Figure, _Panels]:
-    """The figure of an animation at its first frame: the arm (left), the error against time (right)."""
+    """The figure of an animation at its first frame: the arm (left), the errors against time (right)."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
@@ -759,11 +963,12 @@ def _animation_figure(
     fig = plt.figure(figsize=(11.5, 5.4), dpi=dpi, layout="constrained")
     grid = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])
     left = fig.add_subplot(grid[0], projection=None if basis is not None else "3d")
-    right = fig.add_subplot(grid[1])
-    actual, desired = _tool_paths(result, samples)
+    series = _time_values(result)
+    right = grid[1].subgridspec(len(series), 1).subplots(sharex=True, squeeze=False)[:, 0]
+    actual, desired, whose = _tool_paths(result, samples)
     size = _figure_size(scenes[0])
     handles = _legend_handles(scenes[0], basis)
-    styles = {"desired tool path": DESIRED_PATH_STYLE, "tool path so far": ACTUAL_PATH_STYLE}
+    styles = {f"desired {whose} path": DESIRED_PATH_STYLE, f"{whose} path so far": ACTUAL_PATH_STYLE}
     if desired is not None:
         left.plot(*(desired @ basis.T if basis is not None else desired).T, gid="desired tool path", zorder=2,
                   **DESIRED_PATH_STYLE)  # fmt: skip
@@ -774,26 +979,47 @@ def _animation_figure(
     reach = [scene.points() for scene in scenes] + [_frame_tips(scene, size) for scene in scenes] + [actual]
     _set_limits(left, np.vstack(reach + ([desired] if desired is not None else [])), basis, 0.6 * size)
     _label_axes(left, basis, names)
+    if basis is None:
+        _fewer_ticks(left)
     left.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncols=3, fontsize=7, frameon=False)
-    cursor, dots = _time_panel(right, result)
-    fig.suptitle(textwrap.fill(title or _title(result), TITLE_WIDTH), fontsize=10)
-    error = result.error
-    values = result.q if error is None else error
-    return fig, _Panels(drawing, path, cursor, dots, result.t, values, actual, samples)
+    moving = [_time_panel(ax, result.t, values, labels, label) for ax, (values, labels, label, _) in
+              zip(right, series, strict=True)]  # fmt: skip
+    right[0].set_title(series[0][3], fontsize=10)
+    right[-1].set_xlabel("time (s)")
+    fig.suptitle(wrap(title or _title(result)), fontsize=10)
+    cursors, dots = [cursor for cursor, _ in moving], [dot for _, dot in moving]
+    return fig, _Panels(drawing, path, cursors, dots, result.t, [values for values, *_ in series], actual, samples)
+
+
+def _fewer_ticks(ax: Axes) -> None:
+    """Four ticks a side and small labels on 3-D axes, whose tick labels crowd otherwise."""
+    from matplotlib.ticker import MaxNLocator
+
+    space = cast("Axes3D", ax)
+    for axis in (space.xaxis, space.yaxis, space.zaxis):
+        axis.set_major_locator(MaxNLocator(4))
+    space.tick_params(labelsize=7)
 
 
 def animate(
     result: Result,
     path: str | Path,
     fps: float | None = None,
-    frames: int = MAX_FRAMES,
+    frames: int | None = None,
     dpi: int = 90,
     title: str | None = None,
 ) -> Path:
     """An animation of a simulated run (Chapter 4): the arm's stick figure moving (as plot_arm draws
     it) with the desired tool path (q_d through the forward kinematics, when the run has a desired
     trajectory) and the tool's path so far, beside the tracking error e = q_d - q of every joint
-    against time with a moving time cursor.
+    against time with a moving time cursor. A run under a task-space law (``result.task``) shows its
+    task point's desired path y_d and its path y so far, beside the task error y_d - y per coordinate
+    (a pose's position, m, and orientation, rad, in two panels).
+
+    It plays in real time by default: a frame every 40 ms (25 per second) for a run of at most 8 s,
+    fewer and longer frames (up to 100 ms) for a longer one, at most 200 frames; a run longer than
+    20 s plays faster, and one shorter than 1 s slower, and the arm's title then says how much
+    (e.g. "t = 12.00 s (played at x4 speed)").
 
     Parameters
     ----------
@@ -802,10 +1028,11 @@ def animate(
     path : str or Path
         The file: .gif (Pillow) or .mp4 (ffmpeg, when installed).
     fps : float, optional
-        Frames per second, at most 50; default real time (frames over the run's duration),
-        kept within 2 to 30.
+        Frames per second, at most 50 (a GIF holds delays in whole hundredths of a second); default
+        real time as above.
     frames : int, optional
-        The most frames (default 150), spread evenly over the run: a 10 s run writes in a few seconds.
+        The most frames, spread evenly over the run; default as above (at most 200, within the run's
+        samples). Given alone, the frames' delay spreads them over the run's duration (40 ms to 0.5 s).
     dpi : int, optional
         Pixels per inch of the 11.5 x 5.4 inch figure (default 90).
     title : str, optional
@@ -824,13 +1051,12 @@ def animate(
         (a whole one for ``frames`` and ``dpi``), or the run has no samples.
     """
     target = check_animation_path(path)
-    count = int(_positive(frames, "frames", integer=True))
     resolution = int(_positive(dpi, "dpi", integer=True))
     if len(result.t) == 0:
         raise ModelError("the run has no samples to animate")
+    playback = _playback(float(result.t[-1] - result.t[0]), len(result.t), fps, frames)
     _checked_arm(result.arm)
-    indices = _frame_indices(len(result.t), count)
-    rate = _frame_rate(fps, result.t[indices], len(indices))
+    indices = _frame_indices(len(result.t), playback.frames)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -838,12 +1064,13 @@ def animate(
 
     scenes = [_scene(result.arm, result.q[k]) for k in indices]
     fig, panels = _animation_figure(result, scenes, _frame_indices(len(result.t), 2000), title, resolution)
+    panels.speed = playback.label
     try:
         with atomic_path(target) as temporary:  # whole or not at all
             if target.suffix.lower() == ".gif":
-                _write_gif(temporary, _blitted_frames(fig, panels, scenes, indices), rate)
+                _write_gif(temporary, _blitted_frames(fig, panels, scenes, indices), playback.delay)
             else:
-                _write_mp4(temporary, fig, panels, scenes, indices, rate)
+                _write_mp4(temporary, fig, panels, scenes, indices, 1.0 / playback.delay)
     finally:
         plt.close(fig)
     return target
@@ -867,7 +1094,7 @@ def _blitted_frames(fig: Figure, panels: _Panels, scenes: list[_Scene], indices:
         yield np.asarray(canvas.buffer_rgba())
 
 
-def _write_gif(target: Path, frames: Iterator[np.ndarray], fps: float) -> None:
+def _write_gif(target: Path, frames: Iterator[np.ndarray], delay: float) -> None:
     """A looping GIF of the frames, each reduced to one palette (made from the first frame, the
     figure's colours) so that colours do not flicker between frames."""
     from PIL import Image
@@ -876,7 +1103,7 @@ def _write_gif(target: Path, frames: Iterator[np.ndarray], fps: float) -> None:
     palette = first.quantize(colors=256, method=Image.Quantize.MEDIANCUT)
     images = [palette] + [Image.fromarray(frame).convert("RGB").quantize(palette=palette, dither=Image.Dither.NONE)
                           for frame in frames]  # fmt: skip
-    images[0].save(target, save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0)
+    images[0].save(target, save_all=True, append_images=images[1:], duration=round(1000 * delay), loop=0)
 
 
 def _write_mp4(target: Path, fig: Figure, panels: _Panels, scenes: list[_Scene], indices: np.ndarray,

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 
 class Robot(ArmModel):
     """An arm: links in a kinematic tree with gravity, base and tool, friction, motors and limits,
-    with the robot equation M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md section 1).
+    with the robot equation M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (3.3.1).
 
     Build one with ``Robot.from_dh``, ``armdyn.load_urdf`` or ``armdyn.models``; the
     constructor takes a list of Links (see ArmModel). Every array method takes one state

@@ -385,9 +385,10 @@ def joint_stops(arm: Robot, q0: np.ndarray, spring: bool) -> np.ndarray:
 
 def stop_torques(stops: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """stop_torque for every joint at once (NumPy, for the Python loop and solve_ivp's Python route)."""
-    beyond_upper = np.minimum(0.0, -stops[:, 2] * (q - stops[:, 1]) - stops[:, 3] * qd)
-    below_lower = np.maximum(0.0, stops[:, 2] * (stops[:, 0] - q) - stops[:, 3] * qd)
-    return np.where(q > stops[:, 1], beyond_upper, np.where(q < stops[:, 0], below_lower, 0.0))
+    above, below = q > stops[:, 1], q < stops[:, 0]  # gaps taken only there: an infinite limit has none
+    beyond_upper = np.minimum(0.0, -stops[:, 2] * np.where(above, q - stops[:, 1], 0.0) - stops[:, 3] * qd)
+    below_lower = np.maximum(0.0, stops[:, 2] * np.where(below, stops[:, 0] - q, 0.0) - stops[:, 3] * qd)
+    return np.where(above, beyond_upper, np.where(below, below_lower, 0.0))
 
 
 @njit(inline="always", **NUMBA_OPTIONS)

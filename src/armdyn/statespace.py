@@ -1,4 +1,4 @@
-"""State-variable forms of the robot equation (BOOK.md section 5, the book's Section 3.4).
+"""State-variable forms of the robot equation (Lewis, Dawson and Abdallah 2004, Section 3.4).
 
 - position/velocity form, x = [q; qd]: xdot = f(x) + g(x) tau with
   f = [qd; -M^-1 N], g = [0; M^-1];
@@ -72,7 +72,7 @@ def _split(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
 
 
 def state_derivative(arm: Robot, x: ArrayLike, tau: ArrayLike) -> np.ndarray:
-    """xdot = [qd; M^-1 (tau - N)] in the position/velocity form, batched (BOOK.md section 5).
+    """xdot = [qd; M^-1 (tau - N)] in the position/velocity form, batched (Section 3.4).
 
     Parameters
     ----------
@@ -108,7 +108,7 @@ def state_derivative(arm: Robot, x: ArrayLike, tau: ArrayLike) -> np.ndarray:
 def drift_and_input(arm: Robot, x: object) -> tuple[np.ndarray, np.ndarray]:
     """(f(x), g(x)) with xdot = f(x) + g(x) tau: f = [qd; -M^-1 N], g = [0; M^-1].
 
-    The position/velocity form of BOOK.md section 5 (N = Vm qd + F + G), batched.
+    The position/velocity form of Section 3.4 (N = Vm qd + F + G), batched.
 
     Parameters
     ----------
@@ -145,7 +145,7 @@ def brunovsky(n: int) -> tuple[np.ndarray, np.ndarray]:
     """(A, B) of the Brunovsky canonical form: n double integrators.
 
     xdot = A x + B u with A = [[0, I], [0, 0]], B = [0; I], the form feedback
-    linearization gives (BOOK.md section 5).
+    linearization gives (Section 3.4).
 
     Parameters
     ----------
@@ -191,7 +191,7 @@ def linearizing_torque(
 
     Without an output, y = q and tau = M u + N (computed torque). A non-square J uses
     the pseudo-inverse J^+ (for y of lower dimension the motion within J's null space is
-    left to the dynamics). Feedback linearization, BOOK.md section 5.
+    left to the dynamics). Feedback linearization, Section 3.4.
 
     Parameters
     ----------
@@ -248,7 +248,7 @@ def linearizing_torque(
 
 
 def hamiltonian(arm: Robot, q: object, p: object) -> float:
-    """H = 1/2 p^T M^-1 p + P(q), the total energy (Hamiltonian form, BOOK.md section 5).
+    """H = 1/2 p^T M^-1 p + P(q), the total energy (Hamiltonian form, Section 3.4).
 
     Parameters
     ----------
@@ -283,7 +283,7 @@ def hamiltonian(arm: Robot, q: object, p: object) -> float:
 def hamiltonian_rates(arm: Robot, q: object, p: object, tau: object) -> tuple[np.ndarray, np.ndarray]:
     """(qdot, pdot): qdot = dH/dp = M^-1 p, pdot = -dH/dq + tau = Vm^T qd - G - F + tau.
 
-    The Hamiltonian form of BOOK.md section 5, friction included.
+    The Hamiltonian form of Section 3.4, friction included.
 
     Parameters
     ----------
@@ -366,7 +366,7 @@ class Linearization:
 def linearize(arm: Robot, q0: object, qd0: object, tau0: object, coulomb_smoothing: object = None) -> Linearization:
     """A, B of the position/velocity form about (q0, qd0, tau0) (see the module docstring).
 
-    A = [[0, I], [-M^-1 dID/dq, -M^-1 dID/dqd]], B = [0; M^-1] (BOOK.md section 5), with
+    A = [[0, I], [-M^-1 dID/dq, -M^-1 dID/dqd]], B = [0; M^-1] (Section 3.4), with
     the analytic derivatives of the recursive Newton-Euler algorithm
     (``Robot.forward_dynamics_derivatives``).
 
@@ -449,7 +449,7 @@ def rk4_step(
     x+ = x + dt/6 (k1 + 2 k2 + 2 k3 + k4), k1 = f(x), k2 = f(x + dt/2 k1), k3 = f(x + dt/2 k2),
     k4 = f(x + dt k3) (the book's TRESP, as simulate runs it; the Coulomb law smoothed as simulate
     smooths it when ``coulomb_smoothing`` gives eps); A_d and B_d
-    follow the stages by the chain rule through the analytic Jacobians of f (BOOK.md section 5,
+    follow the stages by the chain rule through the analytic Jacobians of f (Section 3.4,
     Carpentier and Mansard 2018): the derivative of the step itself, as MPC needs it.
 
     Parameters

@@ -1,4 +1,4 @@
-"""Actuator dynamics and the arm-plus-actuator system (BOOK.md section 7, the book's Section 3.6).
+"""Actuator dynamics and the arm-plus-actuator system (Lewis, Dawson and Abdallah 2004, Section 3.6).
 
 ``motors``: the DC motor behind a gear (rigid or flexible shaft), its transfer function and Example
 3.6-1; ``hydraulics``: the servo valve and piston; ``arm``: the arm with a drive on every joint

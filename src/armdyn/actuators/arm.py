@@ -1,4 +1,4 @@
-"""Actuator dynamics and the arm-plus-actuator system (BOOK.md section 7, the book's Section 3.6).
+"""Actuator dynamics and the arm-plus-actuator system (Lewis, Dawson and Abdallah 2004, Section 3.6).
 
 Drives:
 
@@ -56,7 +56,7 @@ Drive = DCMotor | Hydraulic
 def _armature_rate(
     v: np.ndarray, i: np.ndarray, w_M: np.ndarray, L: np.ndarray, R_a: np.ndarray, K_b: np.ndarray
 ) -> np.ndarray:
-    """di/dt from L di/dt + R_a i + K_b qd_M = v (BOOK.md section 7)."""
+    """di/dt from L di/dt + R_a i + K_b qd_M = v (Section 3.6)."""
     return (v - R_a * i - K_b * w_M) / L
 
 
@@ -70,19 +70,19 @@ def _rotor_acceleration(
     K_M: np.ndarray,
     r: np.ndarray,
 ) -> np.ndarray:
-    """qdd_M from J_M qdd_M + B_M qd_M + F_M + r tau = K_M i (BOOK.md section 7)."""
+    """qdd_M from J_M qdd_M + B_M qd_M + F_M + r tau = K_M i (Section 3.6)."""
     return (K_M * i - B_M * w_M - F_M - r * tau) / J_M
 
 
 def _shaft_torque(
     q: np.ndarray, qd: np.ndarray, q_M: np.ndarray, w_M: np.ndarray, r: np.ndarray, K: np.ndarray, B_s: np.ndarray
 ) -> np.ndarray:
-    """tau = K (r q_M - q) + B_s (r qd_M - qd): the flexible shaft (BOOK.md section 7)."""
+    """tau = K (r q_M - q) + B_s (r qd_M - qd): the flexible shaft (Section 3.6)."""
     return K * (r * q_M - q) + B_s * (r * w_M - qd)
 
 
 def _valve_rate(u: np.ndarray, x_v: np.ndarray, tau_v: np.ndarray, K_v: np.ndarray) -> np.ndarray:
-    """dx_v/dt from tau_v dx_v/dt + x_v = K_v i (Merritt 1967; BOOK.md section 7)."""
+    """dx_v/dt from tau_v dx_v/dt + x_v = K_v i (Merritt 1967; Section 3.6)."""
     return (K_v * u - x_v) / tau_v
 
 
@@ -137,7 +137,7 @@ def _joint_sense(coulomb: tuple[float, float], r: float) -> tuple[float, float]:
 
 
 class ActuatedArm:
-    """An arm with a drive on every joint: the arm-plus-actuator system (BOOK.md section 7).
+    """An arm with a drive on every joint: the arm-plus-actuator system (Section 3.6).
 
     Made by ``with_actuators``. A user treats it like an arm: the reduced model's
     ``inertia_matrix``, ``coriolis_matrix``, ``gravity_vector``, ``friction``, ``input_matrix``,
@@ -309,7 +309,7 @@ class ActuatedArm:
 
         The rigid DC drives become the links' motors (Jm = J_M, G = 1/r, viscous B_M + K_b K_M / R_a
         and Coulomb friction on the motor side) and the hydraulic drives add the damping A^2 / K_ce
-        to the joint friction (BOOK.md section 7). ``armdyn.properties.check`` evaluates Table 3.3.1
+        to the joint friction (Section 3.6). ``armdyn.properties.check`` evaluates Table 3.3.1
         on it.
 
         Returns
@@ -330,7 +330,7 @@ class ActuatedArm:
         return self._reduced
 
     def inertia_matrix(self, q: ArrayLike) -> np.ndarray:
-        """M'(q) = M(q) + R^-2 J_M (BOOK.md section 7, in joint torques).
+        """M'(q) = M(q) + R^-2 J_M (Section 3.6, in joint torques).
 
         Parameters
         ----------
@@ -350,7 +350,7 @@ class ActuatedArm:
         return self.reduced_robot().inertia_matrix(q)
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
-        """V'(q, qd) = Vm(q, qd), the Christoffel form: M'dot - 2 V' is skew (BOOK.md section 7).
+        """V'(q, qd) = Vm(q, qd), the Christoffel form: M'dot - 2 V' is skew (Section 3.6).
 
         Parameters
         ----------
@@ -390,7 +390,7 @@ class ActuatedArm:
         return self.reduced_robot().inertia_matrix_dot(q, qd)
 
     def gravity_vector(self, q: ArrayLike) -> np.ndarray:
-        """G'(q) = G(q) (BOOK.md section 7, in joint torques).
+        """G'(q) = G(q) (Section 3.6, in joint torques).
 
         Parameters
         ----------
@@ -410,7 +410,7 @@ class ActuatedArm:
         return self.reduced_robot().gravity_vector(q)
 
     def friction(self, qd: ArrayLike) -> np.ndarray:
-        """F'(qd) = F(qd) + R^-1 F_M(qd / r) + R^-2 B qd, B = B_M + K_b K_M / R_a (BOOK.md section 7).
+        """F'(qd) = F(qd) + R^-1 F_M(qd / r) + R^-2 B qd, B = B_M + K_b K_M / R_a (Section 3.6).
 
         A hydraulic joint's share of R^-2 B qd is A^2 qd / K_ce.
 
@@ -617,7 +617,7 @@ class ActuatedArm:
         K (r q_M - q) + B_s (r qd_M - qd) for a flexible one and A P_L for a hydraulic one; the
         rotors of flexible drives J_M qdd_M + B_M qd_M + F_M + r tau = K_M i; the armatures
         L di/dt + R_a i + K_b qd_M = v; the valves and the continuity equation of Merritt (1967)
-        (BOOK.md section 7). v is clipped to the voltage (valve current) limits, and the currents
+        (Section 3.6). v is clipped to the voltage (valve current) limits, and the currents
         and spools are held within theirs: at a limit the rate that points out is zero (the
         amplifier's current loop applies R_a i + K_b qd_M there; the spool meets its stop), the
         projected dynamics of a state kept in a box (Dupuis and Nagurney 1993). A state past a
@@ -682,7 +682,7 @@ class ActuatedArm:
         The links' and rotors' kinetic energy, the potential energy, the armatures' magnetic
         energy, the shafts' elastic energy and the oil's compression energy: what the full model
         stores, so that d/dt of it is the power supplied, sum v i + sum P_L Q_L, less the power
-        dissipated (BOOK.md section 7).
+        dissipated (Section 3.6).
 
         Parameters
         ----------
@@ -918,7 +918,7 @@ def _checked_drives(arm: Robot, drives: object) -> tuple[Drive, ...]:
 
 
 def with_actuators(arm: Robot, drives: Sequence[Drive]) -> ActuatedArm:
-    """The arm-plus-actuator system: ``robot`` with a drive on every joint (BOOK.md section 7).
+    """The arm-plus-actuator system: ``robot`` with a drive on every joint (Section 3.6).
 
     Parameters
     ----------

@@ -1,5 +1,5 @@
 """The hydraulic drive: a servo valve and a piston (or rotary motor) after Merritt (1967), with the
-linearized or the square-root orifice flow (BOOK.md section 7)."""
+linearized or the square-root orifice flow (Section 3.6)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from armdyn.errors import ArgumentError, ModelError
 
 @dataclass(frozen=True)
 class Hydraulic:
-    """A servo valve and a piston (or rotary motor) after Merritt (1967) (BOOK.md section 7).
+    """A servo valve and a piston (or rotary motor) after Merritt (1967) (Section 3.6).
 
     Valve: tau_v xd_v + x_v = K_v i. Load flow: Q_L = K_q x_v - K_c P_L (``orifice="linear"``)
     or the square-root orifice of a critically centred four-way valve,

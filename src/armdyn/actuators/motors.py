@@ -1,5 +1,5 @@
-"""The armature-controlled DC motor behind a gear, with an optional flexible shaft (BOOK.md section 7, the
-book's Section 3.6), its transfer function and Example 3.6-1."""
+"""The armature-controlled DC motor behind a gear, with an optional flexible shaft (Lewis, Dawson and
+Abdallah 2004, Section 3.6), its transfer function and Example 3.6-1."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from armdyn.errors import ArgumentError, ModelError
 
 @dataclass(frozen=True)
 class DCMotor:
-    """An armature-controlled DC motor with a gear, optionally with a flexible shaft (BOOK.md section 7).
+    """An armature-controlled DC motor with a gear, optionally with a flexible shaft (Section 3.6).
 
     Electrical: L di/dt + R_a i + K_b qd_M = v; mechanical: J_M qdd_M + B_M qd_M + F_M + r tau =
     K_M i, with tau the torque (force) the gear delivers to the link. The gear follows the book:
@@ -121,7 +121,7 @@ class DCMotor:
 
 # ----- Example 3.6-1 ----------------------------------------------------------------------------------------
 def transfer_function(motor: DCMotor, load_inertia: float, load_damping: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """H(s) = qd(s) / v(s): one DC motor driving an inertia through its gear (BOOK.md section 7).
+    """H(s) = qd(s) / v(s): one DC motor driving an inertia through its gear (Section 3.6).
 
     Rigid shaft (Example 3.6-1): H = r K_M / ((L s + R_a)(J s + b) + K_M K_b) with the inertia and
     damping at the rotor J = J_M + r^2 J_L, b = B_M + r^2 b_L. Flexible shaft (K, B_s at the link
@@ -175,7 +175,7 @@ def example_3_6_1(flexible: bool = False) -> tuple[np.ndarray, np.ndarray]:
 
     J_m = J_L = 0.1 (so J = J_m + J_L = 0.2), b_m = 0.2 on the motor, k_m = k'_m = 1, L = 0.5,
     R = 5, direct drive: H = 1 / (0.1 s^2 + 1.1 s + 2) = 10 / (s^2 + 11 s + 20)
-    = 10 / ((s + 2.298)(s + 8.702)), the book's 10 / ((s + 2.3)(s + 8.7)) (BOOK.md section 7).
+    = 10 / ((s + 2.298)(s + 8.702)), the book's 10 / ((s + 2.3)(s + 8.7)) (Section 3.6).
     ``flexible``: the shaft is a spring k = 2 with damping b = 0.2 between motor and load, and
     H, from voltage to load speed, is fourth order (see ``transfer_function``).
 

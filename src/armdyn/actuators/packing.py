@@ -80,7 +80,7 @@ def stable_step(arm: ActuatedArm, q: ArrayLike, bandwidth: ArrayLike | None = No
     hydraulic joint's pressure pole K_ce / C and each joint's viscous b / m. The oscillations: each
     flexible shaft's sqrt(K / m') + B_s / m' (1/m' = 1/m + r^2 / J_M) and each hydraulic joint's
     oil column sqrt(A^2 / (C m)) (Merritt 1967), with m = 1 / (M(q)^-1)_jj the smallest inertia
-    the joint's drive meets (BOOK.md section 7). At these steps RK4 (stable to about 2.8 / lambda)
+    the joint's drive meets (Section 3.6). At these steps RK4 (stable to about 2.8 / lambda)
     keeps a first-order transient to about 1e-4 per time constant and an oscillation's phase to
     about 1e-5 per step. ``simulate`` takes its step from here at the start.
 

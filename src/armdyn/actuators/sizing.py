@@ -1,5 +1,5 @@
 """Representative drives for an arm: DC motors or valves sized from the torques and speeds its links
-need over sampled configurations (BOOK.md section 7)."""
+need over sampled configurations (Section 3.6)."""
 
 from __future__ import annotations
 

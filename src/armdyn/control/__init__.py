@@ -1,4 +1,4 @@
-"""Controllers (Chapter 4 and BOOK.md sections 5-7): ``joint`` holds the joint-space laws (computed
+"""Controllers (Chapter 4 and Sections 3.4 to 3.6): ``joint`` holds the joint-space laws (computed
 torque, PD plus gravity, PID, digital, saturated), each beside its compiled law; ``task`` the laws in
 task coordinates (computed torque on a square output, operational-space control); ``drives`` the laws
 on the drives' inputs of an arm with actuators."""

@@ -1,4 +1,4 @@
-"""Drive-level laws (BOOK.md section 7): independent joint PID on each drive's input and computed torque
+"""Drive-level laws (Section 3.6): independent joint PID on each drive's input and computed torque
 through current commands; their compiled forms are in armdyn.dynamics.drives, which the simulation's
 stepper evaluates at every RK4 stage. ``drive_law`` gives the stepper a law's code and gains."""
 
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class DrivePID:
-    """Independent joint control on each drive's input (BOOK.md section 7): u = kp e + kv de/dt + ki z,
+    """Independent joint control on each drive's input (Section 3.6): u = kp e + kv de/dt + ki z,
     dz/dt = e, with e the error on the drive's own coordinate.
 
     For a DC drive u is the voltage and e the motor angle's error: (q_d - q) / r for a rigid
@@ -105,7 +105,7 @@ class DrivePID:
 
 @dataclass(frozen=True)
 class CurrentComputedTorque:
-    """Computed torque turned into current commands through the motor model (BOOK.md sections 5 and 7).
+    """Computed torque turned into current commands through the motor model (Sections 3.4 and 3.6).
 
     The outer loop is the arm's computed torque on the joints, tau_c = M(q) (qdd_d + kv de/dt +
     kp e + ki z) + N(q, qd) with e = q_d - q, from the mechanical model (links and rotors); each

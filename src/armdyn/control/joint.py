@@ -154,7 +154,7 @@ class Spec:
 
 @dataclass
 class ComputedTorque:
-    """tau = M(q) (qdd_d + kv edot + kp e + ki int e) + N(q, qd) (BOOK.md section 5).
+    """tau = M(q) (qdd_d + kv edot + kp e + ki int e) + N(q, qd) (Section 3.4).
 
     ``model``: the arm the controller believes in (default: the plant itself), for
     robustness studies.

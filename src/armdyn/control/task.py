@@ -1,4 +1,4 @@
-"""Control in task coordinates (BOOK.md section 6; Khatib 1987): computed torque on a square output
+"""Control in task coordinates (Section 3.5; Khatib 1987): computed torque on a square output
 and operational-space control of a redundant arm, with the task-space record of a run."""
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ class Tracking:
 
 
 class TaskComputedTorque:
-    """Computed-torque control in task coordinates (BOOK.md section 6):
+    """Computed-torque control in task coordinates (Section 3.5):
     tau = J^T (Mbar (yddot_d + Kv edot + Kp e) + Nbar), e = y_d - y, edot = yd_d - J qd.
 
     It decouples the task coordinates into double integrators with PD feedback, for a square,

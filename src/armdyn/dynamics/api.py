@@ -307,7 +307,7 @@ def inverse_dynamics(
     f_ext: ArrayLike | None = None,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Joint torques tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (BOOK.md section 1, 3.3.1).
+    """Joint torques tau = M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) (3.3.1).
 
     The recursive Newton-Euler algorithm, O(n) (Featherstone 2008, 5.3); friction and the
     reflected motor inertia G^2 Jm included. With a wrench the tool exerts on its
@@ -341,7 +341,7 @@ def inverse_dynamics(
 
 @_public
 def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
-    """N(q, qd) = Vm(q, qd) qd + F(qd) + G(q), so that M qdd + N = tau (BOOK.md section 1).
+    """N(q, qd) = Vm(q, qd) qd + F(qd) + G(q), so that M qdd + N = tau (3.3.1).
 
     Parameters
     ----------
@@ -366,7 +366,7 @@ def nonlinear_terms(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
 
 @_public
 def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
-    """V(q, qd) = Vm(q, qd) qd, the Coriolis and centripetal torques (BOOK.md section 1).
+    """V(q, qd) = Vm(q, qd) qd, the Coriolis and centripetal torques (3.3.1).
 
     Parameters
     ----------
@@ -391,7 +391,7 @@ def coriolis_vector(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
 
 @_public
 def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
-    """G(q), the gravity torques, dP/dq (BOOK.md section 2, 3.2.43).
+    """G(q), the gravity torques, dP/dq (3.2.43).
 
     Parameters
     ----------
@@ -417,7 +417,7 @@ def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
 @_public
 def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """F(qd) = Fv qd + Fd(qd), joint side: G^2 B qd plus |G| Tc+ (qd > 0) or |G| Tc- (qd < 0)
-    (BOOK.md section 1, Table 3.3.1 property 6).
+    (Table 3.3.1, property 6).
 
     Parameters
     ----------
@@ -442,7 +442,7 @@ def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.nda
 
 @_public
 def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
-    """M(q), symmetric positive definite, with G^2 Jm on the diagonal (BOOK.md section 2, 3.2.31).
+    """M(q), symmetric positive definite, with G^2 Jm on the diagonal (3.2.31).
 
     The composite-rigid-body algorithm (Featherstone 2008, 6.2).
 
@@ -469,7 +469,7 @@ def inertia_matrix(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
 
 @_public
 def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
-    """The Christoffel form Vm(q, qd) (BOOK.md section 3, 3.3.48): Mdot - 2 Vm is skew symmetric.
+    """The Christoffel form Vm(q, qd) (3.3.48): Mdot - 2 Vm is skew symmetric.
 
     Echeandia and Wensing (2021), Algorithm 2, O(n d) for depth d.
 
@@ -498,7 +498,7 @@ def coriolis_matrix(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | N
 def forward_dynamics(
     arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: np.ndarray | None = None
 ) -> np.ndarray:
-    """Joint accelerations qdd = M(q)^-1 (tau - N(q, qd)) (BOOK.md section 5).
+    """Joint accelerations qdd = M(q)^-1 (tau - N(q, qd)) (Section 3.4).
 
     The articulated-body algorithm, O(n) (Featherstone 2008, 7.3).
 
@@ -539,7 +539,7 @@ def _singular(arm: Robot, q: np.ndarray, singular: np.ndarray, batch: tuple[int,
 
 @_public
 def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
-    """Kinetic and potential energy together, [K, P] (BOOK.md section 2, 3.2.29 and 3.2.35).
+    """Kinetic and potential energy together, [K, P] (3.2.29 and 3.2.35).
 
     Parameters
     ----------
@@ -563,7 +563,7 @@ def energies(arm: Robot, q: ArrayLike, qd: ArrayLike, out: np.ndarray | None = N
 
 
 def kinetic_energy(arm: Robot, q: ArrayLike, qd: ArrayLike) -> float | np.ndarray:
-    """K = 1/2 qd^T M(q) qd (BOOK.md section 2, 3.2.29), with the motor rotors' 1/2 G^2 Jm qd^2.
+    """K = 1/2 qd^T M(q) qd (3.2.29), with the motor rotors' 1/2 G^2 Jm qd^2.
 
     Parameters
     ----------
@@ -587,7 +587,7 @@ def kinetic_energy(arm: Robot, q: ArrayLike, qd: ArrayLike) -> float | np.ndarra
 
 
 def potential_energy(arm: Robot, q: ArrayLike) -> float | np.ndarray:
-    """P(q) = -sum_i m_i g^T p_ci (BOOK.md section 2, 3.2.35).
+    """P(q) = -sum_i m_i g^T p_ci (3.2.35).
 
     Parameters
     ----------
@@ -782,7 +782,7 @@ def smoothing_per_joint(arm: Robot, value: object) -> np.ndarray:
 def inverse_dynamics_derivatives(
     arm: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, out: tuple | None = None, coulomb_smoothing: object = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """d tau/dq and d tau/dqd of tau = M qdd + Vm qd + F + G, analytic (BOOK.md section 5).
+    """d tau/dq and d tau/dqd of tau = M qdd + Vm qd + F + G, analytic (Section 3.4).
 
     The recursive Newton-Euler algorithm differentiated along with itself in the world frame
     (Carpentier and Mansard, RSS 2018; armdyn.dynamics.derivatives), compiled, one state or a
@@ -837,7 +837,7 @@ def inverse_dynamics_derivatives(
 def forward_dynamics_derivatives(
     arm: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, out: tuple | None = None, coulomb_smoothing: object = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """d qdd/dq, d qdd/dqd and d qdd/dtau of qdd = M^-1 (tau - N), analytic (BOOK.md section 5).
+    """d qdd/dq, d qdd/dqd and d qdd/dtau of qdd = M^-1 (tau - N), analytic (Section 3.4).
 
     qdd = FD(q, qd, tau) by the articulated-body algorithm, the inverse dynamics' derivatives
     there, and one Cholesky factorization of M (Carpentier and Mansard 2018): d qdd/dq =

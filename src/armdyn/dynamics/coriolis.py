@@ -1,4 +1,4 @@
-"""The Christoffel-consistent Coriolis matrix Vm(q, qd) (BOOK.md section 3, 3.3.48), in O(n d)
+"""The Christoffel-consistent Coriolis matrix Vm(q, qd) (3.3.48), in O(n d)
 for depth d (Echeandia and Wensing, "Numerical methods to compute the Coriolis matrix and
 Christoffel symbols for rigid-body systems", J. Comput. Nonlinear Dyn. 16, 2021, Algorithm 2).
 """

@@ -1,6 +1,6 @@
 """Analytic derivatives of the robot equation: d tau/dq, d tau/dqd (and M = d tau/dqdd) of the
 inverse dynamics, and d qdd/dq, d qdd/dqd, d qdd/dtau of the forward dynamics (Carpentier and
-Mansard, "Analytical Derivatives of Rigid Body Dynamics Algorithms", RSS 2018; BOOK.md section 5).
+Mansard, "Analytical Derivatives of Rigid Body Dynamics Algorithms", RSS 2018; Section 3.4).
 
 World frame, joint k moving along S_k (a motion vector that depends on q through the joints
 above k). Turning joint k moves its whole subtree rigidly: every vector attached to it is

@@ -1,4 +1,4 @@
-"""The arm with its drives, compiled (BOOK.md section 7; Merritt 1967): the full model's state
+"""The arm with its drives, compiled (Section 3.6; Merritt 1967): the full model's state
 derivative under a drive-level control law (``closed_loop``), which the simulation's compiled stepper
 integrates.
 

@@ -1,4 +1,4 @@
-"""Kinetic and potential energy, K = 1/2 qd^T M qd and P = -sum m_i g^T p_ci (BOOK.md section 2,
+"""Kinetic and potential energy, K = 1/2 qd^T M qd and P = -sum m_i g^T p_ci (Lewis, Dawson and Abdallah 2004, eqs.
 3.2.29 and 3.2.35), from the link velocities and centres of mass.
 """
 

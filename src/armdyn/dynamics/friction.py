@@ -1,4 +1,4 @@
-"""F(qd) = Fv qd + Fd(qd) (BOOK.md section 1, 3.3.2): the one compiled home of the friction law.
+"""F(qd) = Fv qd + Fd(qd) (3.3.2): the one compiled home of the friction law.
 
 Per joint, joint side: viscous Fv_j qd_j and Coulomb Fd_j = Tc+_j for qd_j > 0, Tc-_j for
 qd_j < 0, 0 at rest (Tc- <= 0 <= Tc+). Simulation smooths the Coulomb step through zero

@@ -1,4 +1,4 @@
-"""The book's Lagrange-Euler formulation, numerically (BOOK.md section 2 and 3).
+"""The book's Lagrange-Euler formulation, numerically (Lewis, Dawson and Abdallah 2004, Sections 3.2 and 3.3).
 
 Readable NumPy, batched over leading dimensions: the reference the recursive kernels
 are tested against. Link i contributes through its transform T_i(q), its derivatives

@@ -1,4 +1,4 @@
-"""Operational-space quantities of one state in one compiled pass (Khatib 1987; BOOK.md section 6).
+"""Operational-space quantities of one state in one compiled pass (Khatib 1987; Section 3.5).
 
 For an output made of rows of a frame's world Jacobian [v; w] (the tool point, the tool pose,
 a link frame's origin, two of the tool's coordinates): J, M (CRBA), the Cholesky factors of M

@@ -1,6 +1,6 @@
 """Mass properties of one link: mass, centre of mass, inertia; the pseudo-inertia matrix.
 
-BOOK.md section 2 (3.2.20 to 3.2.27). Inertia tensors are given about the centre of
+Lewis, Dawson and Abdallah 2004, Section 3.2, eqs. (3.2.20) to (3.2.27). Inertia tensors are given about the centre of
 mass, expressed in the link frame, as URDF and the Robotics Toolbox give them.
 
 The model classes check their parameters with the helpers here (``parameter``,
@@ -189,7 +189,7 @@ def inertia_from_vector(values: object) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Inertial:
-    """Mass properties of a rigid link (BOOK.md section 2, 3.2.20 to 3.2.27).
+    """Mass properties of a rigid link (Section 3.2, eqs. (3.2.20) to (3.2.27)).
 
     SymPy expressions are accepted as parameters (for closed-form work); numeric checks
     apply to numeric values only. ``a + b`` joins two bodies described in one frame.

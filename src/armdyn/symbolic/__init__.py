@@ -1,4 +1,4 @@
-"""Closed-form equations: symbolic derivation, LaTeX, and code generation (BOOK.md sections 4, 6 and 7)."""
+"""Closed-form equations: symbolic derivation, LaTeX, and code generation (Sections 3.2, 3.5 and 3.6)."""
 
 from armdyn.symbolic.actuated import ActuatedClosedForm, SymbolicMotor, motor_symbols
 from armdyn.symbolic.closed_form import ClosedForm, derive

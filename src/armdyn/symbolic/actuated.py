@@ -1,4 +1,4 @@
-"""The arm-plus-actuator system in closed form: M', V', F', G' and K' (BOOK.md section 7).
+"""The arm-plus-actuator system in closed form: M', V', F', G' and K' (Section 3.6).
 
 With a rigid DC motor drive on every joint and the armature inductance neglected, the arm
 and its drives obey, in the link coordinates q with the rows in joint torques (as
@@ -77,7 +77,7 @@ def _parameter(value: object, what: str, where: str, rule: str) -> sympy.Expr:
 
 @dataclass(frozen=True)
 class SymbolicMotor:
-    """A rigid DC motor drive whose parameters may be SymPy expressions (BOOK.md section 7).
+    """A rigid DC motor drive whose parameters may be SymPy expressions (Section 3.6).
 
     The counterpart of ``armdyn.actuators.DCMotor`` for closed forms: the parameters of the
     reduced model only (no inductance, limits or flexible shaft), each a finite real number or
@@ -165,7 +165,7 @@ class SymbolicMotor:
 
 
 def motor_symbols(n: int, coulomb: bool = False) -> list[SymbolicMotor]:
-    """n DC motors with symbolic parameters J_Mi, B_Mi, K_Mi, K_bi, R_ai, r_i (BOOK.md section 7).
+    """n DC motors with symbolic parameters J_Mi, B_Mi, K_Mi, K_bi, R_ai, r_i (Section 3.6).
 
     Every symbol is made with ``positive=True`` (so a gear ratio r_i > 0: a gear that reverses
     the motor needs a SymbolicMotor of one's own).
@@ -244,7 +244,7 @@ def _motor(drive: object, joint: str) -> SymbolicMotor:
 
 
 def checked_motors(arm: Robot, drives: object) -> list[SymbolicMotor]:
-    """The drives as SymbolicMotors, one per joint of an arm without motors (BOOK.md section 7).
+    """The drives as SymbolicMotors, one per joint of an arm without motors (Section 3.6).
 
     Parameters
     ----------
@@ -299,7 +299,7 @@ def _rotor_friction(qd: sympy.Symbol, motor: SymbolicMotor) -> sympy.Expr:
 
 # ----- the closed form -----------------------------------------------------------------------------
 class ActuatedClosedForm:
-    """M', V', F', G' and K' of an arm with a rigid DC motor on every joint, as SymPy matrices (BOOK.md section 7).
+    """M', V', F', G' and K' of an arm with a rigid DC motor on every joint, as SymPy matrices (Section 3.6).
 
     Made by ``derive(robot, drives=[...])`` or ``derive(actuated_arm)``:
     M' qdd + V' qd + F' + G' = K' v in the link coordinates, rows in joint torques, with
@@ -364,7 +364,7 @@ class ActuatedClosedForm:
 
     # ----- the book's forms ---------------------------------------------------------------------
     def book_form(self) -> dict[str, sympy.Matrix]:
-        """The book's printed form, each row i multiplied by r_i^2 (BOOK.md section 7).
+        """The book's printed form, each row i multiplied by r_i^2 (Section 3.6).
 
         (J_M + R^2 M) qdd + (B + R^2 Vm) qd + R F_M + R^2 F + R^2 G = R K_M v: the same equation
         as M' qdd + V' qd + F' + G' = K' v (R^2 M' = J_M + R^2 M, and so on), symmetric in its
@@ -400,7 +400,7 @@ class ActuatedClosedForm:
         )
 
     def independent_joint(self) -> list[sympy.Eq]:
-        """The book's independent-joint equations, one per joint (BOOK.md section 7).
+        """The book's independent-joint equations, one per joint (Section 3.6).
 
         (J_Mi + r_i^2 m_ii) qdd_i + B_i qd_i + r_i F_Mi = (r_i K_Mi / R_ai) v_i - r_i^2 d_i, with
         d_i a symbol d_i standing for the coupling from the other joints (``d`` gives it); row i
@@ -447,7 +447,7 @@ class ActuatedClosedForm:
         return expr.xreplace({symbol: sympy.Symbol(name) for symbol, name in names.items()})
 
     def pretty(self, limit: int | None = 150, independent: bool = False) -> str:
-        """The terms for the terminal (SymPy's pretty printer, c12 = cos(q1 + q2)) (BOOK.md section 7).
+        """The terms for the terminal (SymPy's pretty printer, c12 = cos(q1 + q2)) (Section 3.6).
 
         Parameters
         ----------
@@ -479,7 +479,7 @@ class ActuatedClosedForm:
         return "\n\n".join(blocks)
 
     def latex(self, independent: bool = False) -> str:
-        r"""The terms as LaTeX, c_{12} = cos(q1 + q2), one ``align*`` block (BOOK.md section 7).
+        r"""The terms as LaTeX, c_{12} = cos(q1 + q2), one ``align*`` block (Section 3.6).
 
         Parameters
         ----------
@@ -702,7 +702,7 @@ def derive_actuated(
     progress: Callable[[float, str], object] | None = None,
     joint_space: Callable[..., object] | None = None,
 ) -> ActuatedClosedForm:
-    """The arm-plus-actuator system in closed form: ``derive``'s route for drives (BOOK.md section 7).
+    """The arm-plus-actuator system in closed form: ``derive``'s route for drives (Section 3.6).
 
     Parameters
     ----------

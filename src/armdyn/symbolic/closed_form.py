@@ -84,7 +84,7 @@ class ClosedForm:
     ----------
     M, Vm, V, G, F, tau : sympy.Matrix
         M(q), Vm(q, qd), V(q, qd) = Vm qd, G(q), F(qd) and
-        tau = M qdd + V + F + G (BOOK.md section 1).
+        tau = M qdd + V + F + G (3.3.1).
     q, qd, qdd : sympy.Matrix
         The joint symbols, (n, 1).
     """
@@ -376,7 +376,7 @@ class ClosedForm:
         """Write the full equations to a file, in the form its suffix names.
 
         ".tex": ``latex_document()``; ".txt": ``pretty(limit=None)``; ".py": ``to_python()``;
-        ".c" or ".h": ``to_c()``. The text is UTF-8.
+        ".c": ``to_c()`` (the definitions); ".h": ``to_c_header()`` (their declarations). The text is UTF-8.
 
         Parameters
         ----------
@@ -400,7 +400,7 @@ class ClosedForm:
             ".txt": lambda: self.pretty(limit=None),
             ".py": self.to_python,
             ".c": self.to_c,
-            ".h": self.to_c,
+            ".h": self.to_c_header,
         }
         writer = writers.get(target.suffix.lower())
         if writer is None:
@@ -457,19 +457,53 @@ class ClosedForm:
         """
         return codegen.python_source(self.raw, self._parameter_names())
 
-    def to_c(self) -> str:
-        """C99 source of the same four functions, with CSE.
+    def to_c(self, prefix: str = "armdyn_") -> str:
+        """C99 source of the same four functions, with CSE: their definitions (``to_c_header`` declares them).
+
+        Parameters
+        ----------
+        prefix : str, optional
+            Put before each function's name (default "armdyn_": ``armdyn_M``), as generate_code's C names
+            its functions: empty or the start of a C identifier.
 
         Returns
         -------
         str
-            void functions M, Vm, G and tau taking ``const double *`` states and a ``double
+            void functions prefix + M, Vm, G and tau taking ``const double *`` states and a ``double
             *out`` (matrices row major); the arm's symbolic parameters follow ``out`` as
             further ``double`` arguments, in alphabetical order (named as in ``to_python``).
             It compiles under -Wall -Wextra -Werror (an argument a function never reads is
             marked ``(void)``).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``prefix`` is not empty or the start of a C identifier.
         """
-        return codegen.c_source(self.raw, self._parameter_names())
+        return codegen.c_source(self.raw, self._parameter_names(), codegen.c_prefix(prefix))
+
+    def to_c_header(self, prefix: str = "armdyn_") -> str:
+        """A C header declaring the functions ``to_c(prefix)`` defines, between an include guard.
+
+        Parameters
+        ----------
+        prefix : str, optional
+            As ``to_c``'s.
+
+        Returns
+        -------
+        str
+            The four declarations; a program includes it and links ``to_c``'s source.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When ``prefix`` is not empty or the start of a C identifier.
+        """
+        prefix = codegen.c_prefix(prefix)
+        declarations = codegen.c_declarations(self._parameter_names(), prefix)
+        return codegen.c_header(declarations, codegen.header_guard(self.robot.name, prefix),
+                                f"{self.robot.name}: M, Vm, G and tau in closed form, declarations")  # fmt: skip
 
     def _parameter_names(self) -> list[str]:
         present = set()
@@ -586,14 +620,14 @@ def derive(
 ) -> ClosedForm | TaskClosedForm | ActuatedClosedForm:
     """The closed-form robot equation of ``robot`` (numeric, symbolic or mixed parameters).
 
-    M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (BOOK.md sections 1 and 4), with the
+    M(q) qdd + Vm(q, qd) qd + F(qd) + G(q) = tau (3.3.1; Examples 3.2-1 and 3.2-2), with the
     reflected motor inertias G^2 Jm on the diagonal of M. Numeric parameters are taken as
     the exact values they were written as (0.5 = 1/2, cos(pi/2) = 0, cos(pi/4) = sqrt(2)/2;
     see ``armdyn.symbolic.algebra.exact_float``), so the algebra cancels exactly and no
     round-off terms appear; a numeric arm's coefficients are shown as decimals.
 
     With ``drives`` (or an ActuatedArm), the arm-plus-actuator system
-    M' qdd + V' qd + F' + G' = K' v instead (BOOK.md section 7; see
+    M' qdd + V' qd + F' + G' = K' v instead (Section 3.6; see
     ``armdyn.symbolic.actuated``).
 
     The closed form expands every term into trigonometric polynomials: what reading, LaTeX and
@@ -623,7 +657,7 @@ def derive(
     output : TaskOutput, optional
         An output y = h(q) of ``armdyn.task_space`` (ToolPosition, LinkPoint,
         PlanarPosition or Camera, with as many rows as the arm has joints): the result is
-        then the equation in its coordinates, Mbar yddot + Nbar = f (BOOK.md section 6).
+        then the equation in its coordinates, Mbar yddot + Nbar = f (Section 3.5).
         Default None, the joint-space equation.
     drives : sequence, optional
         One DC motor drive per joint of an arm without motors of its own: a rigid

@@ -15,7 +15,7 @@ import symengine as se
 import sympy
 
 from armdyn import inputs
-from armdyn.errors import ModelError
+from armdyn.errors import ArgumentError, ModelError
 from armdyn.symbolic.derive import Derivation
 
 FUNCTIONS = {  # name -> (state arguments, shape of the result)
@@ -220,12 +220,49 @@ def _unused(arguments: list[str], lines: list[str]) -> list[str]:
     return [f"(void){a};" for a in arguments if a not in read]
 
 
-def c_source(raw: Derivation, parameters: list[str]) -> str:
-    """The four functions as C99; matrices are row major (out[i * n + j]). A parameter whose name
-    is no identifier is written as one (``identifiers``), said in a comment."""
-    n = len(raw.q)
+def c_prefix(prefix: object) -> str:
+    """A prefix of generated C function names: empty or the start of a C identifier, else a ModelError (an
+    ArgumentError when it is not a string)."""
+    if not isinstance(prefix, str):
+        raise ArgumentError(f"prefix must be a string, got {type(prefix).__name__}")
+    if prefix and not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix):
+        raise ModelError(
+            f"prefix must be empty or start a C identifier (ASCII letters, digits and underscores, not starting "
+            f"with a digit), as the default 'armdyn_', got {prefix!r}"
+        )
+    return prefix
+
+
+def header_guard(name: str, prefix: str) -> str:
+    """An include guard from an arm's name: PREFIX + the name's letters and digits, upper case, + _H."""
+    letters = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").upper() or "ARM"
+    return f"{prefix.upper()}{letters}_H" if prefix else f"ARMDYN_{letters}_H"
+
+
+def c_header(declarations: list[str], guard: str, comment: str) -> str:
+    """A C header: the declarations between an include guard, under a comment."""
+    return (f"/* {comment_text(comment)} */\n#ifndef {guard}\n#define {guard}\n\n" + "\n".join(declarations)
+            + f"\n\n#endif /* {guard} */\n")  # fmt: skip
+
+
+def _c_signature(name: str, parameters: list[str], prefix: str) -> str:
     renamed = identifiers(parameters)
     extra = "".join(f", double {renamed[p]}" for p in parameters)
+    signature = ", ".join(f"const double *{a}" for a in FUNCTIONS[name][0])
+    return f"void {prefix}{name}({signature}, double *out{extra})"
+
+
+def c_declarations(parameters: list[str], prefix: str = "armdyn_") -> list[str]:
+    """The declarations of c_source's four functions, for a header."""
+    return [_c_signature(name, parameters, prefix) + ";" for name in FUNCTIONS]
+
+
+def c_source(raw: Derivation, parameters: list[str], prefix: str = "armdyn_") -> str:
+    """The four functions as C99, named ``prefix`` + M, Vm, G, tau; matrices are row major
+    (out[i * n + j]). A parameter whose name is no identifier is written as one (``identifiers``),
+    said in a comment."""
+    n = len(raw.q)
+    renamed = identifiers(parameters)
 
     def c_line(target: str, value: str) -> str:
         if target.startswith("out["):
@@ -245,8 +282,7 @@ def c_source(raw: Derivation, parameters: list[str]) -> str:
 
     parts = ["#include <math.h>", *_renamings(renamed, "/* ", " */"), ""]
     for name, (args, _) in FUNCTIONS.items():
-        signature = ", ".join(f"const double *{a}" for a in args)
-        parts.append(f"void {name}({signature}, double *out{extra}) {{")
+        parts.append(_c_signature(name, parameters, prefix) + " {")
         body = _body(raw, name, c_line, c_value, c_choice, renamed)
         parts += [f"    {s}" for s in _unused([*args, *(renamed[p] for p in parameters)], body) + body]
         parts += ["}", ""]

@@ -2,7 +2,7 @@
 
 Both routes work on trigonometric polynomials (algebra.py):
 
-- "lagrange", the book's own (BOOK.md section 2): world transforms T_i, their partials
+- "lagrange", the book's own (Section 3.2): world transforms T_i, their partials
   dT_i/dq_j, the pseudo-inertia matrices J_i, the trace formula
   m_jk = sum_i tr(dT_i/dq_j J_i dT_i/dq_k^T) (3.2.30), the potential
   P = -sum_i g^T T_i J_i e4 (3.2.36) and G = dP/dq (3.2.43);

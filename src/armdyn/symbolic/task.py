@@ -1,6 +1,6 @@
 """TaskClosedForm: the robot equation in the coordinates of an output y = h(q), in closed form.
 
-BOOK.md section 6 (the book's section 3.5, Example 3.5-1). For an output with a square
+Lewis, Dawson and Abdallah 2004, Section 3.5 and Example 3.5-1. For an output with a square
 Jacobian J = dh/dq (m = n, ydot = J qd), the arm obeys Mbar yddot + Nbar = f with
 
     Mbar  = J^-T M J^-1,                 Vmbar = J^-T (Vm - M J^-1 Jdot) J^-1,
@@ -56,7 +56,7 @@ _MATRICES = ("h", "J", "J_inv", "Mbar", "Vmbar", "Gbar", "Fbar", "Nbar")
 
 
 def check_output(arm: Robot, output: object) -> TaskOutput:
-    """``output`` checked as a point output with a square Jacobian for ``robot`` (BOOK.md section 6).
+    """``output`` checked as a point output with a square Jacobian for ``robot`` (Section 3.5).
 
     Parameters
     ----------
@@ -130,7 +130,7 @@ def _adjugate(m: se.DenseMatrix) -> se.DenseMatrix:
 class TaskClosedForm:
     """The robot equation of an arm in the coordinates of an output y = h(q), as SymPy matrices.
 
-    Made by ``derive(robot, output=...)`` (BOOK.md section 6): Mbar yddot + Nbar = f, with
+    Made by ``derive(robot, output=...)`` (Section 3.5): Mbar yddot + Nbar = f, with
     every term written in the joint symbols ``q`` and ``qd`` (ydot = J qd). Entries are
     simplified (common factors cancelled, c12 for cos(q1 + q2)) for arms of the book's
     size; ``pretty`` and ``latex`` print them, ``compile`` evaluates them with NumPy.

@@ -1,6 +1,6 @@
 """Task-space (Cartesian) dynamics: the robot equation in the coordinates of an output y = h(q).
 
-BOOK.md section 6 (the book's section 3.5, Example 3.5-1) and Khatib 1987. ``outputs``: the task
+Lewis, Dawson and Abdallah 2004, Section 3.5 (Example 3.5-1) and Khatib 1987. ``outputs``: the task
 outputs y = h(q), the condition number of J and the damped inverse; ``quantities``: Mbar, Vmbar,
 Gbar, Nbar and the task-space forward and inverse dynamics of a square output; ``operational``:
 Khatib's operational space of an output with m <= n.

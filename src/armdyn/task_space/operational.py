@@ -1,7 +1,7 @@
 """Khatib's operational space of an output with m <= n: Lambda, Jbar, mu, p and the null-space
 projector (Khatib 1987, "A unified approach for motion and force control of robot manipulators:
 the operational space formulation", IEEE Journal of Robotics and Automation 3(1), 43-53;
-BOOK.md section 6)."""
+Section 3.5)."""
 
 from __future__ import annotations
 

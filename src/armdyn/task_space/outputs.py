@@ -1,5 +1,5 @@
 """Task outputs y = h(q) with their Jacobians, Jdot and bias Jdot qd, the condition number of J
-and the damped least-squares inverse (BOOK.md section 6; Nakamura and Hanafusa 1986, Wampler 1986).
+and the damped least-squares inverse (Section 3.5; Nakamura and Hanafusa 1986, Wampler 1986).
 
 Outputs (each a small class with ``value``, ``jacobian``, ``jacobian_dot`` and ``bias`` =
 Jdot qd, all batched over leading dimensions): ToolPosition, ToolPose, LinkPoint,

@@ -1,6 +1,6 @@
 """Task-space (Cartesian) dynamics: the robot equation in the coordinates of an output y = h(q).
 
-BOOK.md section 6 (the book's section 3.5, Example 3.5-1) and Khatib 1987, "A unified
+Lewis, Dawson and Abdallah 2004, Section 3.5 (Example 3.5-1) and Khatib 1987, "A unified
 approach for motion and force control of robot manipulators: the operational space
 formulation" (IEEE Journal of Robotics and Automation 3(1), 43-53).
 
@@ -12,7 +12,7 @@ qdd = J^-1 (yddot - Jdot qd) in M qdd + N = tau and multiplying by J^-T gives
     Nbar  = J^-T (N - M J^-1 Jdot qd),   N = Vm qd + F + G,
     Vmbar = J^-T (Vm - M J^-1 Jdot) J^-1,   Gbar = J^-T G,
 
-with Mbar_dot - 2 Vmbar skew-symmetric (BOOK.md section 6). For m < n (a redundant arm),
+with Mbar_dot - 2 Vmbar skew-symmetric (Section 3.5). For m < n (a redundant arm),
 ``operational_space`` gives Khatib's Lambda = (J M^-1 J^T)^-1, the dynamically consistent
 inverse Jbar = M^-1 J^T Lambda, mu, p and the null-space projector.
 
@@ -204,7 +204,7 @@ def _kernel(
     return out.reshape(*batch, n, n) if matrix else out.reshape(*batch, n)
 
 
-# ----- square outputs: Mbar, Vmbar, Gbar, Nbar (BOOK.md section 6) --------------------------------
+# ----- square outputs: Mbar, Vmbar, Gbar, Nbar (Section 3.5) --------------------------------
 _T = np.swapaxes
 
 
@@ -217,7 +217,7 @@ def task_inertia(
     max_condition: float = DEFAULT_MAX_CONDITION,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Mbar = J^-T M J^-1, the inertia in the output's coordinates (BOOK.md section 6).
+    """Mbar = J^-T M J^-1, the inertia in the output's coordinates (Section 3.5).
 
     Parameters
     ----------
@@ -277,7 +277,7 @@ def task_coriolis(
     max_condition: float = DEFAULT_MAX_CONDITION,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Vmbar = J^-T (Vm - M J^-1 Jdot) J^-1, with Mbar_dot - 2 Vmbar skew (BOOK.md section 6).
+    """Vmbar = J^-T (Vm - M J^-1 Jdot) J^-1, with Mbar_dot - 2 Vmbar skew (Section 3.5).
 
     Vmbar ydot = J^-T (Vm qd - M J^-1 Jdot qd): the Coriolis and centrifugal part of Nbar.
 
@@ -325,7 +325,7 @@ def task_gravity(
     max_condition: float = DEFAULT_MAX_CONDITION,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Gbar = J^-T G (BOOK.md section 6).
+    """Gbar = J^-T G (Section 3.5).
 
     Parameters
     ----------
@@ -370,7 +370,7 @@ def task_nonlinear(
     max_condition: float = DEFAULT_MAX_CONDITION,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Nbar = J^-T (N - M J^-1 Jdot qd), N = Vm qd + F + G (BOOK.md section 6).
+    """Nbar = J^-T (N - M J^-1 Jdot qd), N = Vm qd + F + G (Section 3.5).
 
     Friction included: Nbar = Vmbar ydot + Fbar + Gbar.
 
@@ -419,7 +419,7 @@ def task_friction(
     max_condition: float = DEFAULT_MAX_CONDITION,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Fbar = J^-T F(qd), the friction in output coordinates (BOOK.md section 6).
+    """Fbar = J^-T F(qd), the friction in output coordinates (Section 3.5).
 
     With qd = J^-1 ydot, the viscous part J^-T Fv J^-1 ydot couples the outputs even when
     Fv is diagonal.
@@ -468,7 +468,7 @@ def task_regressor(
     max_condition: float = DEFAULT_MAX_CONDITION,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Wbar = J^-T W(q, qd, qdd) at qdd = J^-1 (yddot - Jdot qd): f = Wbar phi (BOOK.md section 6).
+    """Wbar = J^-T W(q, qd, qdd) at qdd = J^-1 (yddot - Jdot qd): f = Wbar phi (Section 3.5).
 
     The linear parameterization in output coordinates: Mbar yddot + Nbar = Wbar phi with
     phi = arm.parameters(), the same parameters as the joint-space tau = W phi.
