@@ -53,8 +53,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import armdyn as ad
-from armdyn import actuators, control, kinematics, properties, statespace, study, task_space, trajectories
 import armdyn.control.drives
+from armdyn import actuators, control, kinematics, properties, statespace, study, task_space, trajectories
 from armdyn.cli import app
 from armdyn.dynamics import regressor as parameterization
 from tests import fuzz_values as fv
@@ -72,6 +72,7 @@ from tests.fuzz_values import (
     none_is_valid,
     out_values,
     positive,
+    relabel,
     scalar_values,
     state_values,
 )
@@ -1403,7 +1404,7 @@ def _tuple_out_values(shapes: list[tuple[int, ...]], name: str) -> Kinds:
 
     def same_twice() -> Value:
         one = np.empty(shapes[0])
-        return Value("one array for two outputs", (one,) * len(shapes), "bad" if shapes[0] == shapes[1] else "bad")
+        return Value("one array for two outputs", (one,) * len(shapes), "bad")
 
     def overlapping() -> Value:
         if shapes[0] != shapes[1]:
@@ -1423,8 +1424,10 @@ def _tuple_out_values(shapes: list[tuple[int, ...]], name: str) -> Kinds:
         Value("a tuple of None", (None,) * len(shapes), "either"),
     ]
     kinds = [lazy(fresh), lazy(same_twice), lazy(overlapping)]
-    kinds += [lazy(functools.partial(one_dtype, d, f"{label} first array")) for d, label in
-              ((np.float32, "float32"), (np.int64, "int64"), (complex, "complex128"), (">f8", "big-endian"))]  # fmt: skip
+    kinds += [
+        lazy(functools.partial(one_dtype, d, f"{label} first array"))
+        for d, label in ((np.float32, "float32"), (np.int64, "int64"), (complex, "complex128"), (">f8", "big-endian"))
+    ]
     return none_is_valid(kinds + items_values(items + junk(skip=("None",))))
 
 
@@ -1466,12 +1469,25 @@ def task_space_targets() -> list[Target]:
             "task_space.damped_inverse",
             lambda _arm, **kw: task_space.damped_inverse(**kw),
             {
-                "J": Arg(lambda arm: jacobian, lambda arm: state_values(jacobian, bounded=False)),
+                "J": Arg(lambda arm: jacobian, lambda arm: relabel(state_values(jacobian, bounded=False), ANY_SHAPE)),
                 "damping": Arg(lambda arm: 0.1, lambda arm: scalar_values([0.1, 1e-3], positive)),
             },
         )
     )
     return targets
+
+
+ANY_SHAPE = dict.fromkeys(
+    [
+        "shape (n-1,)",
+        "shape (n+1,)",
+        "shape (2, n+1)",
+        "shape (n, 1)",
+        "empty batch (0, n)",
+        "list of 1-element arrays",
+    ],
+    "either",
+)  # a Jacobian of any (m, n) or (..., m, n) shape is valid: the shapes a state's generic rule refuses
 
 
 def _task_call(function: Callable, _arm: ad.Robot, **kwargs: object) -> object:
@@ -1601,7 +1617,7 @@ def _drives_values(arm: ad.Robot) -> Kinds:
             [motor, dataclasses.replace(_valve(), rotary=False)],
             "bad",
             names=("revolute", "rotary"),
-        ),  # fmt: skip
+        ),
         Value("None in the list", [motor, None], "bad"),
         Value("a number in the list", [motor, 1.0], "bad"),
         Value("the DCMotor class", [motor, actuators.DCMotor], "bad"),
@@ -1624,11 +1640,19 @@ def _driven_arg(key: str, bounded: bool = False, batch: bool = True, none_ok: bo
     return Arg(lambda arm: _driven_state(arm)[key], values, state=batch)
 
 
+ZERO_IS_BAD = {"negative zeros": "bad"}  # -0.0 where the rule is > 0 (a bandwidth, a mass scale)
+PER_VARIANT = {  # (count, n) = (3, 2) factors: one row per variant is valid (a batch of 2 or 1 is not)
+    **ZERO_IS_BAD,
+    "broadcast view (stride 0)": "same",
+    "mismatched batch (3, n) vs (2, n)": "either",
+}
+
+
 def actuator_targets() -> list[Target]:
     no_arm = [("-", None)]
     drives_args = {"arm": _robot_arg(robot_only=True), "drives": Arg(lambda arm: [_motor()] * arm.n, _drives_values)}
-    bandwidth = Arg(lambda arm: None, lambda arm: none_is_valid(
-        state_values(np.full(arm.n, 500.0), batch=False, bounded=False, scalar_ok=True)))  # fmt: skip
+    bandwidth = Arg(lambda arm: None, lambda arm: none_is_valid(relabel(
+        state_values(np.full(arm.n, 500.0), batch=False, bounded=False, scalar_ok=True), ZERO_IS_BAD)))  # fmt: skip
     driven = _driven_arms()
     return [
         Target(
@@ -1638,7 +1662,7 @@ def actuator_targets() -> list[Target]:
             no_arm,
             view=_drive_view,
             combos=10,
-        ),  # fmt: skip
+        ),
         Target(
             "actuators.Hydraulic",
             lambda arm, **kw: actuators.Hydraulic(**kw),
@@ -1646,7 +1670,7 @@ def actuator_targets() -> list[Target]:
             no_arm,
             view=_drive_view,
             combos=10,
-        ),  # fmt: skip
+        ),
         Target(
             "actuators.with_actuators",
             lambda _arm, **kw: actuators.with_actuators(**kw),
@@ -1697,8 +1721,9 @@ def derivative_targets() -> list[Target]:
     targets = []
     for name, third, count in (("inverse_dynamics_derivatives", "qdd", 2), ("forward_dynamics_derivatives", "tau", 3)):
         args = {k: Arg(lambda arm, k=k: states(arm)[k], None) for k in ("q", "qd", third)}
-        args["out"] = Arg(lambda arm, c=count: None, lambda arm, c=count: _tuple_out_values([(arm.n, arm.n)] * c, "out"),
-                          alone=True)  # fmt: skip
+        args["out"] = Arg(
+            lambda arm, c=count: None, lambda arm, c=count: _tuple_out_values([(arm.n, arm.n)] * c, "out"), alone=True
+        )
         args["coulomb_smoothing"] = Arg(lambda arm: None, lambda arm: smoothing)
         targets.append(_method(f"{name} (out=, coulomb_smoothing=)", args, corrupt_two=False))
         targets[-1].call = functools.partial(_call_method, name)
@@ -1789,7 +1814,7 @@ def generated_code_targets() -> list[Target]:
 
 
 @functools.cache
-def CLOSED_FORM() -> object:  # noqa: N802 (a constant made once)
+def CLOSED_FORM() -> object:
     return ad.symbolic.derive(ad.models.two_link_planar(symbolic=True))
 
 
@@ -1833,8 +1858,6 @@ def _distribution_values(valid: object) -> Kinds:
 
 
 def _spec_class_targets() -> list[Target]:
-    bound = scalar_values([0.0, 0.5], finite)
-
     def uniform(_arm: object, low: object, high: object) -> object:
         made = study.Uniform(low, high)
         return np.array([made.low, made.high, *made.sample(np.random.default_rng(0), (3,))])
@@ -1966,8 +1989,7 @@ def study_targets() -> list[Target]:
         kinds = [lazy(fresh), lazy(missing_parent), lazy(a_file), lazy(read_only), lazy(other_study), lazy(damaged)]
         return none_is_valid(kinds + items_values(junk(skip=("None", "str", "bytes"))))
 
-    counts = scalar_values([5, 3], lambda x: "same" if x.is_integer() and 1 <= x <= 100 else "bad" if x < 1 or not
-                           np.isfinite(x) else "either", integer=True, extra=[("10**12 runs", 10**12, "bad")])  # fmt: skip
+    counts = scalar_values([5, 3], _count(1, 100), integer=True, extra=[("10**12 runs", 10**12, "bad")])
     return [
         *_spec_class_targets(),
         Target(
@@ -2086,14 +2108,20 @@ def _driven_simulation_targets() -> list[Target]:
             ]
         )
 
-    step = none_is_valid(scalar_values([1e-4, 2e-4], positive, extra=[("1 s (above dt)", 1.0, "either")]))
+    def step_rule(x: float) -> str:  # more than 10**6 steps per sample of dt = 1 ms is refused
+        return "bad" if x < 1e-9 else positive(x)
+
+    tiny = ("1e-12 s (10**9 steps a sample)", 1e-12, "bad")
+    step = none_is_valid(scalar_values([1e-4, 2e-4], step_rule, extra=[("1 s (above dt)", 1.0, "either"), tiny]))
     seconds = scalar_values(
         [0.01, 0.02], positive, extra=[("1e9 s", 1e9, "either"), ("not whole steps", 0.0105, "bad")]
     )
     args = {
         "controller": Arg(lambda arm: drive_pid, laws),
         "t_final": Arg(lambda arm: 0.01, lambda arm: seconds),
-        "dt": Arg(lambda arm: 1e-3, lambda arm: scalar_values([1e-3], positive, extra=[("1e-12 s", 1e-12, "either")])),
+        "dt": Arg(
+            lambda arm: 1e-3, lambda arm: scalar_values([1e-3], _divides(0.01), extra=[("1e-12 s", 1e-12, "either")])
+        ),
         "step": Arg(lambda arm: None, lambda arm: step),
         "q0": Arg(
             lambda arm: states(arm.robot)["q"],
@@ -2111,8 +2139,32 @@ def _driven_simulation_targets() -> list[Target]:
         ),
     }
     return [
-        Target("simulate (arm with drives)", lambda arm, **kw: ad.simulate(arm, **kw), args, _driven_arms(), combos=10)
+        Target(
+            "simulate (arm with drives)",
+            lambda arm, **kw: ad.simulate(arm, **kw),
+            args,
+            _driven_arms(),
+            view=_driven_run,
+            combos=10,
+        )
     ]
+
+
+def _divides(t_final: float) -> Callable[[float], str]:
+    """A rule for dt: positive, and valid when t_final is a whole number of its steps (else refused or not)."""
+
+    def rule(x: float) -> str:
+        verdict = positive(x)
+        whole = abs(t_final / x - round(t_final / x)) < 1e-9 if verdict != "bad" else False
+        return "either" if verdict == "same" and not whole else verdict
+
+    return rule
+
+
+def _driven_run(result: object) -> tuple[np.ndarray, ...]:
+    """What a run with drives computed: q, qd, qdd, tau and the drives' states and inputs (not their
+    limit tables, whose infinities mean no limit)."""
+    return result.q, result.qd, result.qdd, result.tau, result.drives.x, result.drives.v
 
 
 def _many_run_targets() -> list[Target]:
@@ -2157,7 +2209,9 @@ def _many_run_targets() -> list[Target]:
         return none_is_valid(items_values(items + junk(skip=("None",))))
 
     keep = choice_values(
-        ["summary", "full", 2, 1], ["all", "", 0, -1, 1.5, np.nan, 10**20], ["FULL", np.int64(3), True, 100]
+        ["summary", "full", 2, 1],
+        ["all", "", 0, -1, 1.5, np.nan, 10**20, 10**400, 11],
+        ["FULL", np.int64(3), True, 100],
     )
     after = none_is_valid(
         scalar_values([0.005, 0.0], lambda x: "same" if 0 <= x <= 0.01 else "bad", extra=[("text", "0.005", "either")])
@@ -2170,7 +2224,7 @@ def _many_run_targets() -> list[Target]:
             ),
             integer=True,
             extra=[("10**12 runs", 10**12, "bad"), ("2**62 runs", 2**62, "bad")],
-        )  # fmt: skip
+        )
     )
     threads = none_is_valid(
         scalar_values(
@@ -2214,8 +2268,7 @@ def _many_run_targets() -> list[Target]:
     def view(ensemble: object) -> tuple:
         return ensemble.summaries, ensemble.outcome, tuple(np.asarray(v) for v in ensemble.samples.values())
 
-    count = scalar_values([3, 1], lambda x: "same" if x.is_integer() and 1 <= x <= 1e6 else "bad" if x < 1 or not np.isfinite(x) else "either",
-                          integer=True, extra=[("10**12", 10**12, "bad")])  # fmt: skip
+    count = scalar_values([3, 1], _count(1, 10**6), integer=True, extra=[("10**12", 10**12, "bad")])
     masses = state_values(np.array([0.0, 0.1, 0.2]), batch=False, bounded=False, scalar_ok=True)
     return [
         Target("simulate (many runs)", many, args, [ARMS[0], ARMS[1]], view=view, combos=10),
@@ -2225,9 +2278,11 @@ def _many_run_targets() -> list[Target]:
             {
                 "count": Arg(lambda a: 3, lambda a: count),
                 "payload_mass": Arg(lambda a: 0.0, lambda a: masses, sample=25),
-                "mass_scale": Arg(
+                "mass_scale": Arg(  # one factor per joint (n = 2): a zero (or -0.0) is refused
                     lambda a: 1.0,
-                    lambda a: state_values(np.array([1.0, 0.9, 1.1]), batch=False, bounded=False, scalar_ok=True),
+                    lambda a: relabel(
+                        state_values(np.array([0.9, 1.1]), batch=False, bounded=False, scalar_ok=True), PER_VARIANT
+                    ),
                     sample=25,
                 ),
             },
@@ -2502,10 +2557,10 @@ def _run_child(group: str, skip: int = 0) -> tuple[subprocess.Popen, float, Path
 _CHILDREN: dict[str, tuple[subprocess.Popen, float, Path]] = {}
 
 
-def _start_children() -> None:
-    """Start every group of risky cases at once, each in its own child (they run while the
+def _start_children(groups: list[str]) -> None:
+    """Start the selected groups of risky cases at once, each in its own child (they run while the
     in-process cases do; the test of each group collects it)."""
-    for group in RISKY:
+    for group in groups:
         if group not in _CHILDREN:
             _CHILDREN[group] = _run_child(group)
 
@@ -2871,8 +2926,8 @@ def summary(request: pytest.FixtureRequest) -> Iterator[None]:
     import numba
 
     start = time.perf_counter()
-    if any(item.name.startswith("test_risky") for item in request.session.items):
-        _start_children()
+    risky = [item.callspec.params["group"] for item in request.session.items if item.name.startswith("test_risky")]
+    _start_children(risky)
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
