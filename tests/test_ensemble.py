@@ -185,10 +185,12 @@ def test_keep_beyond_the_steps_and_counts_beyond_memory_are_refused_by_name() ->
     for keep in (11, 10**20, 10**400):
         with pytest.raises(ModelError, match=r"keep must be .* from 1 to the run's 10 steps"):
             simulate(arm, pid, t_final=0.01, runs=2, keep=keep)
-    with pytest.raises(ModelError, match=r"runs = about 10\^400 .* memory available"):
+    with pytest.raises(ModelError, match=r"about 10\^400 runs .* memory available"):
         simulate(arm, pid, t_final=0.01, runs=10**400)
     for count in (10**12, 10**400):
-        with pytest.raises(ModelError, match=r"count = about 10\^\d+ variants needs .* memory available"):
+        with pytest.raises(
+            ModelError, match=r"count = (about 10\^400|1,000,000,000,000) variants needs .* memory available"
+        ):
             plant_variants(arm, count)
 
 

@@ -1886,8 +1886,8 @@ def _paths(trajectory: object, runs: int, n: int) -> tuple[int, np.ndarray]:
 
 
 def _count(count: int) -> str:
-    """A count for a message: 1,000 or, past a trillion, its order of magnitude (10^400)."""
-    return f"{count:,}" if count < 10**12 else f"about 10^{len(str(count)) - 1}"
+    """A count for a message: 1,000 or, past 10^15, its order of magnitude (about 10^400)."""
+    return f"{count:,}" if count <= 10**15 else f"about 10^{len(str(count)) - 1}"
 
 
 def _rows(value: object, ndim: int = 2) -> int | None:
@@ -1963,7 +1963,7 @@ def _simulate_runs(
         raise ModelError(f"runs = {runs}, but {rows_given} rows (give one row or one per run)")
     per_run = 8 * ((17 + 4 * kept) * n + 6)  # starts, disturbance, gains, paths, summaries, outcome, kept samples
     memory.affordable(min(runs, 2**63) * per_run,
-                      f"runs = {_count(runs)} (their starts, gains, summaries and samples kept)")  # fmt: skip
+                      f"{_count(runs)} runs (their starts, gains, summaries and samples kept)")  # fmt: skip
     plant_rows, plant_coulombs, plant_of = _variants(plants, arm, runs, "plants")
     shares = np.full(runs, spec.model is None and models is None)
     model_rows, model_coulombs, model_of = _variants(models if models is not None else spec.model, arm, runs,
