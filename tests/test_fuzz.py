@@ -2465,8 +2465,16 @@ def _simulation_targets() -> list[Target]:
         [Value("None", None, "same", None), Value("print", print, "either"), Value("a string", "bar", "bad")]
         + [Value(v.label, v.value, "either" if callable(v.value) else "bad") for v in junk(skip=("None",))]
     )
-    seconds = scalar_values([0.01, 0.02], positive, extra=[("1e9 s", 1e9, "either")])
-    step = scalar_values([1e-3, 2e-3], positive, extra=[("1e-12 s", 1e-12, "either")])
+
+    def whole_steps(t_final: float, dt: float) -> str:
+        """simulate's rule for the times: positive, and t_final a whole number of steps dt (else refused)."""
+        kind = positive(t_final) if positive(dt) == "same" else positive(dt)
+        if kind == "same" and abs(t_final / dt - round(t_final / dt)) > 1e-9 * (t_final / dt):
+            return "bad"
+        return "bad" if kind == "same" and round(t_final / dt) < 1 else kind
+
+    seconds = scalar_values([0.01, 0.02], lambda x: whole_steps(x, 1e-3), extra=[("1e9 s", 1e9, "either")])
+    step = scalar_values([1e-3, 2e-3], lambda x: whole_steps(0.01, x), extra=[("1e-12 s", 1e-12, "either")])
     args = {
         "controller": Arg(lambda arm: control.PID(10.0, 2.0), controllers, names=("diverged",)),
         "trajectory": Arg(lambda arm: None, trajectory_values),

@@ -102,7 +102,7 @@ def test_ctrl_c_stops_a_study_after_its_block_and_says_how_to_resume(tmp_path: P
     assert code == 130, stderr
     assert "the study was interrupted after" in stderr and f"the blocks done are in {folder}" in stderr, stderr
     done = int(stderr.split("interrupted after ")[1].split(" of ")[0])
-    assert len(list(folder.glob("block-*.parquet"))) == done
+    assert done <= len(list(folder.glob("block-*.parquet"))) <= done + 1  # Ctrl-C may fall between write and count
     assert not [p for p in folder.iterdir() if p.name.startswith(".")], "a temporary file was left"
 
 

@@ -560,7 +560,7 @@ def check(
             "torques: M' = M + R^-2 J_M, V' = Vm, F' = F + R^-1 F_M + R^-2 B qd, G' = G, input K' v"
         )
         arm = arm.reduced_robot()
-    _check_robot(arm)
+    inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (the properties are evaluated numerically)")
     samples = inputs.integer(samples, "samples", 4, MAX_CHECK_SAMPLES, " (each sample is evaluated and refined)")
     seed = inputs.integer(seed, "seed", 0)
     groups = _groups(only)

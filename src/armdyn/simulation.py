@@ -95,10 +95,15 @@ class RunSummaries:
     t: np.ndarray
     info: dict
 
-    summaries: np.ndarray
-    """(runs, 5, n): per run and joint the rows named by SUMMARY_NAMES."""
-    outcome: np.ndarray
-    """(runs, 3) integers: (-1, 0, -1) for a run that finished, else (row it stopped at, reason, joint)."""
+    if TYPE_CHECKING:  # what both give: an Ensemble's fields, a Result's properties (computed when first read)
+
+        @property
+        def summaries(self) -> np.ndarray:
+            """(runs, 5, n): per run and joint the rows named by SUMMARY_NAMES."""
+
+        @property
+        def outcome(self) -> np.ndarray:
+            """(runs, 3) integers: (-1, 0, -1) for a run that finished, else (row it stopped at, reason, joint)."""
 
     @property
     def runs(self) -> int:
@@ -193,17 +198,19 @@ class Result(RunSummaries):
         """e = q_d - q (None without a trajectory)."""
         return None if self.q_d is None else self.q_d - self.q
 
-    summaries: np.ndarray = field(init=False, repr=False, compare=False)
-    """(1, 5, n): the run's summary rows (SUMMARY_NAMES), the error's largest value taken from ``after``
-    seconds on (info["after"], default 1 s as many runs'); NaN errors without a trajectory."""
-    outcome: np.ndarray = field(init=False, repr=False, compare=False)
-    """(1, 3): (-1, 0, -1), a run that finished (a run that stops raises SimulationError holding it)."""
-
-    def __post_init__(self) -> None:
-        q_d = self.q_d if self.q_d is not None else np.full_like(self.q, np.nan)
+    @cached_property
+    def summaries(self) -> np.ndarray:
+        """(1, 5, n): the run's summary rows (SUMMARY_NAMES), the error's largest value taken from ``after``
+        seconds on (info["after"], by default 1 s or t_final when shorter, as many runs'); without a trajectory
+        the error is from the start, held (as the controllers and many runs take it). Computed when first read."""
+        q_d = self.q_d if self.q_d is not None else np.broadcast_to(self.q[:1], self.q.shape)  # None: hold q0
         after = float(self.info.get("after", min(1.0, self.t[-1] if len(self.t) else 0.0)))
-        self.summaries = run_summaries(self.t, self.q, q_d, self.tau, after)[None]
-        self.outcome = np.array([[-1, 0, -1]])
+        return run_summaries(self.t, self.q, q_d, self.tau, after)[None]
+
+    @property
+    def outcome(self) -> np.ndarray:
+        """(1, 3): (-1, 0, -1), a run that finished (a run that stops raises SimulationError holding it)."""
+        return np.array([[-1, 0, -1]])
 
     def plot(self, path: str | Path | None = None, title: str | None = None) -> Figure:
         """Joint values with their desired values, tracking errors and torques (matplotlib figure)."""
@@ -958,9 +965,9 @@ def within_limits(result: Result, mode: str) -> Result:
         return result
     lower, upper = result.arm.qlim
     slack = 1e-9 * np.maximum(1.0, np.abs(np.where(np.isfinite(lower), lower, 0.0)))
+    if np.all(result.q.min(axis=0) >= lower - slack) and np.all(result.q.max(axis=0) <= upper + slack):
+        return result  # the usual case, checked by the extremes alone
     outside = (result.q < lower - slack) | (result.q > upper + slack)
-    if not outside.any():
-        return result
     row = int(np.argmax(outside.any(axis=1)))
     joint = int(np.argmax(outside[row]))
     value, name = result.q[row, joint], result.arm.joint_names[joint]
