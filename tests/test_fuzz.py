@@ -2151,12 +2151,12 @@ def _driven_simulation_targets() -> list[Target]:
 
 
 def _divides(t_final: float) -> Callable[[float], str]:
-    """A rule for dt: positive, and valid when t_final is a whole number of its steps (else refused or not)."""
+    """A rule for dt: positive, and t_final a whole number of its steps (else refused, naming dt)."""
 
     def rule(x: float) -> str:
         verdict = positive(x)
-        whole = abs(t_final / x - round(t_final / x)) < 1e-9 if verdict != "bad" else False
-        return "either" if verdict == "same" and not whole else verdict
+        whole = abs(t_final / x - round(t_final / x)) <= 1e-9 * (t_final / x) if verdict != "bad" else False
+        return "bad" if verdict == "same" and (not whole or round(t_final / x) < 1) else verdict
 
     return rule
 
