@@ -561,6 +561,20 @@ def none_is_valid(kinds: Kinds) -> Kinds:
     return [kind.map(valid) for kind in kinds]
 
 
+def relabel(kinds: Kinds, verdicts: dict[str, str]) -> Kinds:
+    """The kinds with the verdict of each label in ``verdicts`` replaced ("either" keeps no
+    reference; a value the function treats otherwise than the generic rule says)."""
+
+    def changed(value: Value) -> Value:
+        verdict = verdicts.get(value.label)
+        if verdict is None or verdict == value.verdict:
+            return value
+        reference = value.reference if verdict == "same" else NOTHING if verdict == "either" else value.reference
+        return dataclasses.replace(value, verdict=verdict, reference=reference, batch_others=False)
+
+    return [kind.map(changed) for kind in kinds]
+
+
 def choice_values(
     valid: Sequence[object], bad: Sequence[object], either: Sequence[object] = (), junk: str = "bad"
 ) -> Kinds:

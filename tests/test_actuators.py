@@ -471,3 +471,11 @@ def test_the_linear_orifice_is_exactly_the_linearized_model() -> None:
 
 def test_actuators_is_a_lazy_module_of_armdyn() -> None:
     assert ad.actuators.DCMotor is DCMotor
+
+
+def test_a_list_of_drives_that_is_not_one_per_joint_is_refused_naming_drives() -> None:
+    arm = ad.models.two_link_planar()
+    motor = DCMotor(2e-4, 1e-3, 0.2, 0.2, 2.0, 2e-3, 0.02)
+    for drives, rule in (([motor], "one per joint"), ([motor, None], "must be a DCMotor or Hydraulic")):
+        with pytest.raises(ad.ModelError, match=rf"^drives(:| must) .*{rule}"):
+            with_actuators(arm, drives)

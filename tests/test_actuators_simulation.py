@@ -373,3 +373,14 @@ def test_limits_far_away_leave_the_run_unchanged_bit_for_bit() -> None:
     runs = [ad.simulate(arm, DrivePID(0.1, 0.002, 0.05), tr.Sinusoid(0.1, 0.5, 0.0, q0), t_final=0.1, q0=q0)
             for arm in (free, far)]  # fmt: skip
     assert np.array_equal(runs[0].drives.x, runs[1].drives.x) and np.array_equal(runs[0].drives.v, runs[1].drives.v)
+
+
+def test_a_step_needing_more_than_a_million_steps_a_sample_is_refused_naming_step() -> None:
+    motor = act.DCMotor(2e-4, 1e-3, 0.2, 0.2, 2.0, 2e-3, 0.02, voltage_limit=40.0, current_limit=8.0)
+    arm = act.with_actuators(ad.models.two_link_planar(), [motor, motor])
+    law = DrivePID(20.0, 0.5)
+    run = ad.simulate(arm, law, t_final=1e-3, step=2e-9)  # 5 10**5 steps a sample: taken
+    assert run.info["substeps"] == 500_000 and np.all(np.isfinite(run.q))
+    for step in (1e-12, 1e-300):  # 1e-300 once overflowed the step count; 1e-12 ran for hours
+        with pytest.raises(ModelError, match=r"^step = .* RK4 steps per sample .* at most 1,000,000 per sample"):
+            ad.simulate(arm, law, t_final=0.01, step=step)

@@ -175,3 +175,29 @@ def test_the_envelope_figure(puma: ad.Robot, tmp_path) -> None:
     assert (tmp_path / "envelope.png").stat().st_size > 20_000 and (tmp_path / "histograms.png").exists()
     with pytest.raises(ModelError, match="quantity must be one of"):
         runs.plot(quantity="speed")
+
+
+def test_keep_beyond_the_steps_and_counts_beyond_memory_are_refused_by_name() -> None:
+    arm = ad.models.two_link_planar()
+    pid = control.PID(10.0, 2.0)
+    whole = simulate(arm, pid, t_final=0.01, runs=2, keep=10)  # keep = the 10 steps: the start and the end
+    assert whole.samples["q"].shape == (2, 2, 2)
+    for keep in (11, 10**20, 10**400):
+        with pytest.raises(ModelError, match=r"keep must be .* from 1 to the run's 10 steps"):
+            simulate(arm, pid, t_final=0.01, runs=2, keep=keep)
+    with pytest.raises(ModelError, match=r"about 10\^400 runs .* memory available"):
+        simulate(arm, pid, t_final=0.01, runs=10**400)
+    for count in (10**12, 10**400):
+        with pytest.raises(
+            ModelError, match=r"count = (about 10\^400|1,000,000,000,000) variants needs .* memory available"
+        ):
+            plant_variants(arm, count)
+
+
+def test_disagreeing_row_counts_name_the_arguments() -> None:
+    arm = ad.models.two_link_planar()
+    pid = control.PID(10.0, 2.0)
+    with pytest.raises(ModelError, match=r"runs = 3, but q0 has 4 rows"):
+        simulate(arm, pid, t_final=0.01, runs=3, q0=np.zeros((4, 2)))
+    with pytest.raises(ModelError, match=r"disagree .*: q0 has 4, qd0 has 3 rows"):
+        simulate(arm, pid, t_final=0.01, q0=np.zeros((4, 2)), qd0=np.zeros((3, 2)), keep="summary")

@@ -53,7 +53,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import armdyn as ad
-from armdyn import control, kinematics, properties, statespace, trajectories
+import armdyn.control.drives
+from armdyn import actuators, control, kinematics, properties, statespace, study, task_space, trajectories
 from armdyn.cli import app
 from armdyn.dynamics import regressor as parameterization
 from tests import fuzz_values as fv
@@ -71,6 +72,7 @@ from tests.fuzz_values import (
     none_is_valid,
     out_values,
     positive,
+    relabel,
     scalar_values,
     state_values,
 )
@@ -1318,6 +1320,981 @@ def properties_targets() -> list[Target]:
     ]
 
 
+# ----- the surfaces added since: task space, drives, many runs, studies, derivatives, generated code --------
+
+
+def _task_arms(square: bool) -> list[tuple[str, ad.Robot]]:
+    """Arms with an output: square (m = n) for the task_* functions, m <= n for the operational space."""
+    arms = [("two_link_planar", ARMS[0][1]), ("cylindrical", ARMS[1][1])]
+    return arms if square else [*arms, ("puma560", ARMS[2][1])]
+
+
+def _task_output(arm: ad.Robot) -> object:
+    return task_space.PlanarPosition() if arm.n == 2 else task_space.ToolPosition()
+
+
+def _task_rows(arm: ad.Robot) -> int:
+    return 2 if arm.n == 2 else 3
+
+
+def _output_values(arm: ad.Robot) -> Kinds:
+    items = [
+        Value("the output", _task_output(arm), "same", _task_output(arm)),
+        Value("ToolPose (m = 6 rows)", task_space.ToolPose(), "either" if arm.n == 6 else "bad", names=("rows",)),
+        Value("the output's class", type(_task_output(arm)), "bad"),
+        Value("a Robot", arm, "bad"),
+        Value("a string", "tool", "bad"),
+    ]
+    return items_values(items + junk())
+
+
+def _task_state(key: str, m: bool = False, bounded: bool = False) -> Arg:
+    """A state of a task function: q, qd, tau (n values) or yddot, f (m values, from qdd)."""
+
+    def base(arm: ad.Robot) -> np.ndarray:
+        return states(arm)[key][: _task_rows(arm)] if m else states(arm)[key]
+
+    return Arg(base, lambda arm: state_values(base(arm), bounded=bounded), state=True, sample=18)
+
+
+def _max_condition(x: float) -> str:
+    if np.isnan(x) or x <= 0:
+        return "bad"
+    return "same" if 1e4 <= x < 1e15 else "either"
+
+
+TASK_FUNCTIONS = {  # name: (its states (key, m values?), its out= shape from (n, m) or None, takes damping)
+    "task_inertia": ((("q", False),), lambda n, m: (m, m), True),
+    "task_coriolis": ((("q", False), ("qd", False)), lambda n, m: (m, m), True),
+    "task_gravity": ((("q", False),), lambda n, m: (m,), True),
+    "task_nonlinear": ((("q", False), ("qd", False)), lambda n, m: (m,), True),
+    "task_friction": ((("q", False), ("qd", False)), lambda n, m: (m,), True),
+    "task_regressor": ((("q", False), ("qd", False), ("yddot", True)), lambda n, m: (m, 14 * n), True),
+    "task_force": ((("q", False), ("tau", False)), lambda n, m: (m,), True),
+    "task_forward_dynamics": ((("q", False), ("qd", False), ("f", True)), lambda n, m: (m,), False),
+    "task_inverse_dynamics": ((("q", False), ("qd", False), ("yddot", True)), lambda n, m: (n,), True),
+    "operational_inertia": ((("q", False),), lambda n, m: (m, m), True),
+    "operational_space": ((("q", False), ("qd", False)), None, True),
+    "operational_coriolis": ((("q", False), ("qd", False)), None, True),
+    "condition_number": ((("q", False),), None, False),
+}
+TASK_KEYS = {"q": "q", "qd": "qd", "tau": "tau", "yddot": "qdd", "f": "qdd"}
+
+
+def _aliased_pair(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Two arrays of ``shape`` sharing all but their first entry (one buffer)."""
+    size = int(np.prod(shape))
+    buffer = np.empty(size + 1)
+    return buffer[:size].reshape(shape), buffer[1:].reshape(shape)
+
+
+def _tuple_out_values(shapes: list[tuple[int, ...]], name: str) -> Kinds:
+    """Values for an out= that is a tuple of arrays of ``shapes``: fresh ones (the result must be
+    them), one array for two, overlapping ones, wrong lengths, dtypes and junk."""
+
+    def fresh() -> Value:
+        arrays = tuple(np.full(s, np.nan) for s in shapes)
+
+        def check(result: object) -> str | None:
+            parts = tuple(result) if isinstance(result, tuple) else tuple(vars(result).values())
+            used = all(any(p is a for p in parts) for a in arrays)
+            return None if used else f"{name} returned new arrays instead of out's"
+
+        return Value("a tuple of fresh arrays", arrays, "same", None, check=check)
+
+    def same_twice() -> Value:
+        one = np.empty(shapes[0])
+        return Value("one array for two outputs", (one,) * len(shapes), "bad")
+
+    def overlapping() -> Value:
+        if shapes[0] != shapes[1]:
+            return Value("one array for two outputs", tuple(np.empty(s) for s in shapes[:1] * len(shapes)), "bad")
+        a, b = _aliased_pair(shapes[0])
+        return Value("two overlapping views of one buffer", (a, b, *(np.empty(s) for s in shapes[2:])), "bad")
+
+    def one_dtype(dtype: object, label: str) -> Value:
+        return Value(label, tuple(np.empty(s, dtype=dtype if i == 0 else float) for i, s in enumerate(shapes)), "bad")
+
+    items = [
+        Value("one short of a tuple", tuple(np.empty(s) for s in shapes[:-1]), "bad"),
+        Value("one too many", tuple(np.empty(s) for s in [*shapes, shapes[0]]), "bad"),
+        Value("one array, not a tuple", np.empty(shapes[0]), "bad"),
+        Value("a read-only first array", tuple(_readonly_array(s, i == 0) for i, s in enumerate(shapes)), "bad"),
+        Value("a tuple of lists", tuple(np.zeros(s).tolist() for s in shapes), "bad"),
+        Value("a tuple of None", (None,) * len(shapes), "either"),
+    ]
+    kinds = [lazy(fresh), lazy(same_twice), lazy(overlapping)]
+    kinds += [
+        lazy(functools.partial(one_dtype, d, f"{label} first array"))
+        for d, label in ((np.float32, "float32"), (np.int64, "int64"), (complex, "complex128"), (">f8", "big-endian"))
+    ]
+    return none_is_valid(kinds + items_values(items + junk(skip=("None",))))
+
+
+def _readonly_array(shape: tuple[int, ...], readonly: bool) -> np.ndarray:
+    array = np.empty(shape)
+    array.setflags(write=not readonly)
+    return array
+
+
+def _space_shapes(arm: ad.Robot, name: str) -> list[tuple[int, ...]]:
+    n, m = arm.n, _task_rows(arm)
+    if name == "operational_coriolis":
+        return [(m, m), (m,)]
+    return [(m, n), (m, m), (n, m), (m,), (m,), (m,), (n, n)]  # J, Lambda, Jbar, mu, p, friction, Nproj
+
+
+def task_space_targets() -> list[Target]:
+    damping = Arg(lambda arm: None, lambda arm: none_is_valid(scalar_values([1e-3, 0.1], positive)))
+    max_condition = Arg(lambda arm: 1e8, lambda arm: scalar_values([1e8, 1e6], _max_condition))
+    targets = []
+    for name, (keys, shape, damped) in TASK_FUNCTIONS.items():
+        function = getattr(task_space, name)
+        args = {"arm": _robot_arg(robot_only=True), "output": Arg(_task_output, _output_values)}
+        args |= {k: _task_state(TASK_KEYS[k], m, bounded=k == "q") for k, m in keys}
+        if damped:
+            args |= {"damping": damping, "max_condition": max_condition}
+        if shape is not None:
+            args["out"] = _out_arg(lambda arm, s=shape: s(arm.n, _task_rows(arm)))
+        elif name.startswith("operational_"):
+            args["out"] = Arg(lambda arm: None, lambda arm, k=name: _tuple_out_values(_space_shapes(arm, k), k),
+                              alone=True)  # fmt: skip
+        arms = _task_arms(square=not name.startswith("operational_") and name != "condition_number")
+        view = (lambda space: tuple(vars(space).values())) if name == "operational_space" else None
+        call = functools.partial(_task_call, function)
+        targets.append(Target(f"task_space.{name}", call, args, arms, view=view, combos=8))
+    jacobian = np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.2]])
+    targets.append(
+        Target(
+            "task_space.damped_inverse",
+            lambda _arm, **kw: task_space.damped_inverse(**kw),
+            {
+                "J": Arg(lambda arm: jacobian, lambda arm: relabel(state_values(jacobian, bounded=False), ANY_SHAPE)),
+                "damping": Arg(lambda arm: 0.1, lambda arm: scalar_values([0.1, 1e-3], positive)),
+            },
+        )
+    )
+    return targets
+
+
+ANY_SHAPE = dict.fromkeys(
+    [
+        "shape (n-1,)",
+        "shape (n+1,)",
+        "shape (2, n+1)",
+        "shape (n, 1)",
+        "empty batch (0, n)",
+        "list of 1-element arrays",
+    ],
+    "either",
+)  # a Jacobian of any (m, n) or (..., m, n) shape is valid: the shapes a state's generic rule refuses
+
+
+def _task_call(function: Callable, _arm: ad.Robot, **kwargs: object) -> object:
+    return function(**kwargs)
+
+
+# drives
+
+
+SYMBOLS = (
+    "J_M",
+    "B_M",
+    "K_M",
+    "K_b",
+    "R_a",
+    "inductance L",
+    "gear ratio r",
+    "voltage limit",
+    "current limit",
+    "Coulomb",
+    "B_s",
+    "shaft stiffness K",
+    "tau_v",
+    "K_v",
+    "K_q",
+    "K_c",
+    "D_m",
+    "area A",
+    "C_tp",
+    "V_t",
+    "beta_e",
+    "P_s",
+    "stroke",
+)  # how a drive's messages name its parameters (as its docstring does)
+
+
+def _motor_args() -> dict[str, Arg]:
+    def number(valid: float, rule: Callable[[float], str], none: str = "bad", *extra: tuple) -> Arg:
+        return Arg(lambda arm: valid, lambda arm: scalar_values([valid], rule, none=none, extra=extra), names=SYMBOLS)
+
+    def limit(x: float) -> str:
+        return "bad" if np.isnan(x) or x <= 0 else "same" if x < 1e15 or x == np.inf else "either"
+
+    def ratio(x: float) -> str:
+        return "bad" if not np.isfinite(x) or x == 0 else "same" if 1e-200 < abs(x) < 1e15 else "either"
+
+    coulomb_pairs = [("a pair (0.1, -0.1)", (0.1, -0.1), "same"), ("pair with Tc- > 0", (0.1, 0.1), "bad"),
+                     ("pair with NaN", (np.nan, -0.1), "bad"), ("three values", (0.1, -0.1, 0.0), "bad")]  # fmt: skip
+    return {
+        "rotor_inertia": number(2e-4, non_negative),
+        "viscous": number(1e-3, non_negative),
+        "torque_constant": number(0.2, positive),
+        "back_emf": number(0.2, positive),
+        "resistance": number(2.0, positive),
+        "inductance": number(2e-3, non_negative),
+        "gear_ratio": number(0.02, ratio),
+        "voltage_limit": number(40.0, limit),
+        "current_limit": number(8.0, limit),
+        "coulomb": number(0.0, non_negative, "bad", *coulomb_pairs),
+        "stiffness": Arg(lambda arm: None, lambda arm: none_is_valid(scalar_values([300.0], positive))),
+        "shaft_damping": number(0.0, lambda x: "either" if x > 0 and np.isfinite(x) else non_negative(x)),
+        "name": Arg(lambda arm: "motor", lambda arm: choice_values(["motor", "m1"], [], ["", "a */ b", "x\n\x00"])),
+    }
+
+
+def _valve_args() -> dict[str, Arg]:
+    valid = dict(valve_time_constant=5e-3, valve_gain=0.1, flow_gain=0.1, pressure_coefficient=1e-11, area=1e-3,
+                 leakage=1e-11, volume=2e-4, bulk_modulus=1.4e9, supply_pressure=7e6)  # fmt: skip
+    rules = dict(pressure_coefficient=non_negative, leakage=non_negative)
+
+    def limit(x: float) -> str:
+        return "bad" if np.isnan(x) or x <= 0 else "same" if x < 1e15 or x == np.inf else "either"
+
+    args = {
+        k: Arg(lambda arm, v=v: v, lambda arm, v=v, k=k: scalar_values([v], rules.get(k, positive)), names=SYMBOLS)
+        for k, v in valid.items()
+    }
+    args["flow_gain"] = Arg(lambda arm: 0.1, lambda arm: scalar_values([0.1], positive), names=SYMBOLS)
+    args["rotary"] = Arg(lambda arm: True, lambda arm: choice_values([True, False], ["yes", 1, None]))
+    args["orifice"] = Arg(lambda arm: "linear", lambda arm: choice_values(["linear"], ["", "SQRT", "cubic"], ["sqrt"]))
+    args["current_limit"] = Arg(lambda arm: np.inf, lambda arm: scalar_values([0.5], limit), names=SYMBOLS)
+    args["stroke"] = Arg(lambda arm: np.inf, lambda arm: scalar_values([1e-3], limit), names=SYMBOLS)
+    return args
+
+
+def _drive_view(drive: object) -> np.ndarray:
+    """A drive's numbers, the limits' infinity kept as 1e308 (a NaN stays a NaN)."""
+    numbers = []
+    for f in dataclasses.fields(drive):
+        value = getattr(drive, f.name)
+        if isinstance(value, (int, float, np.number)) or (isinstance(value, tuple) and f.name == "coulomb"):
+            numbers += list(np.ravel(np.asarray(value, dtype=float)))
+    array = np.array(numbers)
+    return np.where(np.isinf(array), np.sign(array) * 1e308, array)
+
+
+def _motor() -> object:
+    return actuators.DCMotor(2e-4, 1e-3, 0.2, 0.2, 2.0, 2e-3, 0.02, voltage_limit=40.0, current_limit=8.0)
+
+
+def _valve() -> object:
+    return actuators.Hydraulic(5e-3, 0.1, 1.0, 1e-12, 1e-4, 1e-12, 1e-4, 1e9, 1e7, rotary=True, current_limit=0.5)
+
+
+@functools.cache
+def _driven_arms() -> list[tuple[str, object]]:
+    """Arms with drives: two_link_planar on rigid DC motors, and on a flexible motor and a rotary valve."""
+    arm = ARMS[0][1]
+    flexible = dataclasses.replace(_motor(), stiffness=300.0, shaft_damping=0.5, name="flexible")
+    return [
+        ("two_link_planar, DC motors", actuators.with_actuators(arm, [_motor(), _motor()])),
+        ("two_link_planar, flexible motor and valve", actuators.with_actuators(arm, [flexible, _valve()])),
+    ]
+
+
+def _drives_values(arm: ad.Robot) -> Kinds:
+    motor = _motor()
+    items = [
+        Value("two motors", [motor, motor], "same", [motor, motor]),
+        Value("a tuple of two", (motor, motor), "same", [motor, motor]),
+        Value("a motor and a rotary valve", [motor, _valve()], "either"),
+        Value("one motor", [motor], "bad"),
+        Value("three motors", [motor] * 3, "bad"),
+        Value("a lone motor", motor, "bad"),
+        Value(
+            "a piston on a revolute joint",
+            [motor, dataclasses.replace(_valve(), rotary=False)],
+            "bad",
+            names=("revolute", "rotary"),
+        ),
+        Value("None in the list", [motor, None], "bad"),
+        Value("a number in the list", [motor, 1.0], "bad"),
+        Value("the DCMotor class", [motor, actuators.DCMotor], "bad"),
+        Value("empty list", [], "bad"),
+    ]
+    return items_values(items + junk())
+
+
+def _driven_state(arm: object) -> dict[str, np.ndarray]:
+    q = states(arm.robot)["q"]
+    x = arm.initial_state(q, states(arm.robot)["qd"])
+    return {"q": q, "qd": states(arm.robot)["qd"], "x": x + 0.1 * np.arange(x.size) / x.size, "v": np.full(arm.n, 2.0)}
+
+
+def _driven_arg(key: str, bounded: bool = False, batch: bool = True, none_ok: bool = False) -> Arg:
+    def values(arm: object) -> Kinds:
+        kinds = state_values(_driven_state(arm)[key], bounded=bounded, batch=batch)
+        return none_is_valid(kinds) if none_ok else kinds
+
+    return Arg(lambda arm: _driven_state(arm)[key], values, state=batch)
+
+
+ZERO_IS_BAD = {"negative zeros": "bad"}  # -0.0 where the rule is > 0 (a bandwidth, a mass scale)
+PER_VARIANT = {  # (count, n) = (3, 2) factors: one row per variant is valid (a batch of 2 or 1 is not)
+    **ZERO_IS_BAD,
+    "broadcast view (stride 0)": "same",
+    "mismatched batch (3, n) vs (2, n)": "either",
+}
+
+
+def actuator_targets() -> list[Target]:
+    no_arm = [("-", None)]
+    drives_args = {"arm": _robot_arg(robot_only=True), "drives": Arg(lambda arm: [_motor()] * arm.n, _drives_values)}
+    bandwidth = Arg(lambda arm: None, lambda arm: none_is_valid(relabel(
+        state_values(np.full(arm.n, 500.0), batch=False, bounded=False, scalar_ok=True), ZERO_IS_BAD)))  # fmt: skip
+    driven = _driven_arms()
+    return [
+        Target(
+            "actuators.DCMotor",
+            lambda arm, **kw: actuators.DCMotor(**kw),
+            _motor_args(),
+            no_arm,
+            view=_drive_view,
+            combos=10,
+        ),
+        Target(
+            "actuators.Hydraulic",
+            lambda arm, **kw: actuators.Hydraulic(**kw),
+            _valve_args(),
+            no_arm,
+            view=_drive_view,
+            combos=10,
+        ),
+        Target(
+            "actuators.with_actuators",
+            lambda _arm, **kw: actuators.with_actuators(**kw),
+            drives_args,
+            [ARMS[0]],
+            view=lambda a: np.minimum(a.packed_drives(), 1e308),
+            combos=5,
+        ),
+        Target(
+            "actuators.ActuatedArm(robot, drives)",
+            lambda _arm, **kw: actuators.ActuatedArm(kw["arm"], kw["drives"]),
+            drives_args,
+            [ARMS[0]],
+            view=lambda a: np.minimum(a.packed_drives(), 1e308),
+            combos=5,
+        ),
+        Target(
+            "ActuatedArm.state_derivative",
+            lambda arm, **kw: arm.state_derivative(**kw),
+            {"x": _driven_arg("x"), "v": _driven_arg("v")},
+            driven,
+            combos=10,
+        ),
+        Target(
+            "ActuatedArm.initial_state",
+            lambda arm, **kw: arm.initial_state(**kw),
+            {"q": _driven_arg("q", bounded=True), "qd": _driven_arg("qd", none_ok=True)},
+            driven,
+            combos=10,
+        ),
+        Target(
+            "ActuatedArm.stable_step",
+            lambda arm, **kw: arm.stable_step(**kw),
+            {"q": _driven_arg("q", bounded=True, batch=False), "bandwidth": bandwidth},
+            driven,
+            combos=10,
+        ),
+    ]
+
+
+# derivatives with out= and the smoothed Coulomb law
+
+
+def derivative_targets() -> list[Target]:
+    smoothing = choice_values([], ["AUTO", ""], ["auto"], junk="bad") + none_is_valid(
+        scalar_values([0.0, 1e-3], non_negative)
+    )
+    targets = []
+    for name, third, count in (("inverse_dynamics_derivatives", "qdd", 2), ("forward_dynamics_derivatives", "tau", 3)):
+        args = {k: Arg(lambda arm, k=k: states(arm)[k], None) for k in ("q", "qd", third)}
+        args["out"] = Arg(
+            lambda arm, c=count: None, lambda arm, c=count: _tuple_out_values([(arm.n, arm.n)] * c, "out"), alone=True
+        )
+        args["coulomb_smoothing"] = Arg(lambda arm: None, lambda arm: smoothing)
+        targets.append(_method(f"{name} (out=, coulomb_smoothing=)", args, corrupt_two=False))
+        targets[-1].call = functools.partial(_call_method, name)
+    return targets
+
+
+# generated code
+
+
+def _generated(arm: ad.Robot, functions: object = ("tau",)) -> object:
+    return ad.symbolic.generate_code(arm, functions)
+
+
+def generated_code_targets() -> list[Target]:
+    arms = [ARMS[0], ARMS[1]]
+    functions = items_values(
+        [
+            Value("('tau',)", ("tau",), "same", ("tau",)),
+            Value("'tau' (one name)", "tau", "same", ("tau",)),
+            Value("every function", ["tau", "M", "G", "N", "Vm", "Wb"], "either"),
+            Value("an unknown name", ["tau", "D"], "bad"),
+            Value("a name in another case", ["TAU"], "bad"),
+            Value("empty list", [], "bad"),
+            Value("a number in the list", ["tau", 1], "bad"),
+            Value("a generator", (f for f in ["tau"]), "either"),
+            *junk(),
+        ]
+    )
+
+    def c_source(arm: ad.Robot, prefix: object) -> str:
+        return _generated(arm).c(prefix)
+
+    prefixes = choice_values(
+        ["armdyn_", "", "my_arm_", "_x"],
+        ["1x", "a b", "a-b", "x;", "*/", "a\n", "é_"],
+        ["A", "x" * 200],
+    )
+
+    def python_source(arm: ad.Robot) -> str:
+        return _generated(arm).python()
+
+    def compiled(arm: ad.Robot, values: object) -> np.ndarray:
+        return CLOSED_FORM().compile(values).M(np.array([0.3, 0.7]))
+
+    def values_values(arm: ad.Robot) -> Kinds:
+        names = CLOSED_FORM()._parameter_names()
+        valid = dict.fromkeys(names, 1.0)
+        first = names[0]
+        items = [
+            Value("every parameter", valid, "same", valid),
+            Value("numpy floats", {k: np.float64(1.0) for k in names}, "same", valid),
+            Value("one missing", {k: 1.0 for k in names[1:]}, "bad", names=(first, "values")),
+            Value("one NaN", {**valid, first: np.nan}, "bad", names=(first, "values")),
+            Value("one inf", {**valid, first: np.inf}, "bad", names=(first, "values")),
+            Value("one text", {**valid, first: "heavy"}, "bad", names=(first, "values")),
+            Value("one complex", {**valid, first: 1j}, "bad", names=(first, "values")),
+            Value("one array", {**valid, first: np.ones(2)}, "bad", names=(first, "values")),
+            Value("an unknown key too", {**valid, "zz": 1.0}, "either", valid),
+            Value("a list", list(valid.values()), "bad"),
+            Value("None", None, "bad"),
+        ]
+        return items_values(items + junk(skip=("None", "dict")))
+
+    return [
+        Target(
+            "symbolic.generate_code",
+            lambda arm, **kw: _generated(arm, **kw).python(),
+            {"functions": Arg(lambda arm: ("tau",), lambda arm: functions)},
+            arms,
+            view=lambda source: len(source),
+        ),
+        Target(
+            "GeneratedCode.c(prefix)",
+            c_source,
+            {"prefix": Arg(lambda arm: "armdyn_", lambda arm: prefixes, names=("prefix", "identifier"))},
+            arms,
+            view=lambda source: 0,
+        ),
+        Target("GeneratedCode.python()", python_source, {}, arms, view=lambda source: 0),
+        Target(
+            "ClosedForm.compile(values)",
+            compiled,
+            {"values": Arg(lambda arm: dict.fromkeys(CLOSED_FORM()._parameter_names(), 1.0), values_values)},
+            [ARMS[0]],
+            corrupt_two=False,
+        ),
+    ]
+
+
+@functools.cache
+def CLOSED_FORM() -> object:
+    return ad.symbolic.derive(ad.models.two_link_planar(symbolic=True))
+
+
+# studies
+
+
+def _spec_values() -> Kinds:
+    items = [
+        Value("the default", "max_error_after < 1e-3", "same", "max_error_after < 1e-3"),
+        Value("two clauses", "max_error_after < 1e-3 and max_tau < 200", "either"),
+        Value("a window of 0.01 s", "max-error-after-0.01s < 1e-3", "either"),
+        Value("a window past t_final", "max-error-after-9s < 1e-3", "either", names=("window", "after", "t_final")),
+        Value("a joint", "max_error_after theta2 < 1e-3", "either"),
+        Value("an unknown joint", "max_error_after q9 < 1e-3", "either"),
+        Value("a Requirement", study.Requirement("max_tau < 200"), "either"),
+        Value("bound 1e-3e5", "max_error_after < 1e-3e5", "bad", names=("spec", "bound", "1e-3e5")),
+        Value("bound nan", "max_error_after < nan", "bad", names=("spec", "bound")),
+        Value("bound inf", "max_tau < inf", "bad", names=("spec", "bound")),
+        Value("no operator", "max_error_after 1e-3", "bad", names=("spec",)),
+        Value("an unknown quantity", "speed < 1", "bad", names=("spec", "quantity")),
+        Value("empty", "", "bad", names=("spec",)),
+        Value("'and' alone", "and", "bad", names=("spec",)),
+    ]
+    return items_values(items + junk(skip=("str",), names=("spec",)))
+
+
+def _distribution_values(valid: object) -> Kinds:
+    items = [
+        Value("Uniform(0, 0.5)", study.Uniform(0.0, 0.5), "same", study.Uniform(0.0, 0.5)),
+        Value("Normal(0, 0.1)", study.Normal(0.0, 0.1), "either"),
+        Value("Normal truncated", study.Normal(0.0, 0.1, -0.1, 0.1), "either"),
+        Value("a constant 0.1", 0.1, "either"),
+        Value("None", None, "either"),
+        Value("NaN", np.nan, "bad"),
+        Value("inf", np.inf, "bad"),
+        Value("text", "wide", "bad"),
+        Value("a Uniform's class", study.Uniform, "bad"),
+        Value("a list of two", [0.0, 0.5], "bad"),
+    ]
+    return items_values(items + junk(skip=("None", "str")))
+
+
+def _spec_class_targets() -> list[Target]:
+    def uniform(_arm: object, low: object, high: object) -> object:
+        made = study.Uniform(low, high)
+        return np.array([made.low, made.high, *made.sample(np.random.default_rng(0), (3,))])
+
+    def normal(_arm: object, mean: object, std: object, low: object, high: object) -> object:
+        made = study.Normal(mean, std, low, high)
+        return np.array([made.mean, made.std, *made.sample(np.random.default_rng(0), (3,))])
+
+    def bounds(x: float) -> str:
+        return "bad" if np.isnan(x) else "either"
+
+    return [
+        Target(
+            "study.Uniform",
+            uniform,
+            {
+                "low": Arg(lambda a: 0.0, lambda a: scalar_values([0.0], lambda x: "bad" if x > 0.5 else finite(x))),
+                "high": Arg(lambda a: 0.5, lambda a: scalar_values([0.5], lambda x: "bad" if x < 0 else finite(x))),
+            },
+        ),
+        Target(
+            "study.Normal",
+            normal,
+            {
+                "mean": Arg(
+                    lambda a: 0.0,
+                    lambda a: scalar_values([0.0, 0.1], lambda x: "either" if abs(x) > 0.5 else finite(x)),
+                ),
+                "std": Arg(lambda a: 0.1, lambda a: scalar_values([0.1], non_negative)),
+                "low": Arg(
+                    lambda a: -1.0,
+                    lambda a: scalar_values([-1.0], lambda x: "bad" if np.isnan(x) or x >= 1 else "either"),
+                ),
+                "high": Arg(
+                    lambda a: 1.0,
+                    lambda a: scalar_values([1.0], lambda x: "bad" if np.isnan(x) or x <= -1 else "either"),
+                ),
+            },
+        ),
+        Target(
+            "study.Requirement",
+            lambda _arm, text: study.Requirement(text).clauses[0][2],
+            {"text": Arg(lambda a: "max_error_after < 1e-3", lambda a: _spec_values())},
+        ),
+    ]
+
+
+def _study_table(result: object) -> np.ndarray:
+    table = result.table
+    return np.asarray(table.select_dtypes("number"), dtype=float)
+
+
+_STUDY_FOLDERS = [0]
+
+
+def _fresh_folder() -> Path:
+    _STUDY_FOLDERS[0] += 1
+    return SCRATCH / f"study-{_STUDY_FOLDERS[0]}"
+
+
+def study_targets() -> list[Target]:
+    arm = ARMS[0][1]
+    pid = control.PID(10.0, 2.0)
+    laws = items_values(
+        [
+            Value("PID", pid, "same", pid),
+            Value("ComputedTorque", control.ComputedTorque(100.0, 20.0), "either"),
+            Value("Saturated PID", control.Saturated(pid, 5.0), "either"),
+            Value("a DrivePID (a drive law)", control.drives.DrivePID(1.0, 0.1), "bad"),
+            Value("PID kp NaN", control.PID(np.nan, 2.0), "bad", names=("kp",)),
+            Value("a callable", lambda *a: np.zeros(2), "bad"),
+            Value("None", None, "bad"),
+            Value("the PID class", control.PID, "bad"),
+        ]
+    )
+    paths = items_values(
+        [
+            Value("None", None, "same", None),
+            Value("Sinusoid", trajectories.Sinusoid(0.1, 0.5), "either"),
+            Value("Sinusoid of 3 joints", trajectories.Sinusoid([0.1] * 3, 0.5), "bad", names=("amplitude",)),
+            Value("a callable", lambda t: (np.zeros(2),) * 3, "bad"),
+            Value("a string", "sine", "bad"),
+        ]
+    )
+    seconds = scalar_values([0.02], positive, extra=[("1e9 s", 1e9, "either"), ("not whole steps", 0.0205, "bad")])
+
+    def make(_arm: object, **kw: object) -> object:
+        made = study.Study(arm, **{"t_final": 0.02, "block": 4, **kw})
+        return _study_table(made.run(5))
+
+    def run(_arm: object, **kw: object) -> object:
+        made = study.Study(arm, pid, t_final=0.02, after=0.01, payload=study.Uniform(0.0, 0.5), block=4)
+        if isinstance(kw.get("out"), Value):
+            kw["out"] = kw["out"].value
+        return _study_table(made.run(**kw))
+
+    def folder_values(arm: object) -> Kinds:
+        def fresh() -> Value:
+            return Value("a fresh folder", _fresh_folder(), "same", None)
+
+        def missing_parent() -> Value:
+            return Value("a folder whose parent is missing", _fresh_folder() / "a" / "b", "either", None)
+
+        def a_file() -> Value:
+            path = _write("not a folder", ".txt")
+            return Value("a file", path, "bad")
+
+        def read_only() -> Value:
+            path = _fresh_folder()
+            path.mkdir()
+            path.chmod(0o500)
+            return Value("a read-only folder", path, "bad" if os.geteuid() != 0 else "either")
+
+        def other_study() -> Value:
+            path = _fresh_folder()
+            study.Study(ARMS[0][1], control.PID(5.0, 1.0), t_final=0.02, after=0.01, block=4).run(5, out=path)
+            return Value("a folder of another study", path, "bad", names=("out", "another", "differ"))
+
+        def damaged() -> Value:
+            path = _fresh_folder()
+            made = study.Study(ARMS[0][1], pid, t_final=0.02, after=0.01, payload=study.Uniform(0.0, 0.5), block=4)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                made.run(5, out=path)
+            block = sorted(p for p in path.iterdir() if p.suffix == ".parquet")[0]
+            block.write_bytes(block.read_bytes()[:40])
+            return Value("a folder with a truncated block", path, "same", None)
+
+        kinds = [lazy(fresh), lazy(missing_parent), lazy(a_file), lazy(read_only), lazy(other_study), lazy(damaged)]
+        return none_is_valid(kinds + items_values(junk(skip=("None", "str", "bytes"))))
+
+    counts = scalar_values([5, 3], _count(1, 100), integer=True, extra=[("10**12 runs", 10**12, "bad")])
+    return [
+        *_spec_class_targets(),
+        Target(
+            "study.Study(...)",
+            make,
+            {
+                "controller": Arg(lambda a: pid, lambda a: laws, names=("controller", "law")),
+                "trajectory": Arg(lambda a: None, lambda a: paths),
+                "spec": Arg(lambda a: "max_error_after < 1e-3", lambda a: _spec_values(), sample=8),
+                "after": Arg(
+                    lambda a: 0.01,
+                    lambda a: scalar_values([0.01], lambda x: "bad" if not 0 <= x < 0.02 else "same"),
+                    sample=8,
+                ),
+                "dt": Arg(
+                    lambda a: 1e-3,
+                    lambda a: scalar_values([1e-3], lambda x: "bad" if not 0 < x <= 0.02 else "either"),
+                    sample=8,
+                ),
+                "t_final": Arg(lambda a: 0.02, lambda a: seconds, sample=8),
+                "payload": Arg(lambda a: None, lambda a: _distribution_values(None)),
+                "start_error": Arg(lambda a: None, lambda a: _distribution_values(None), sample=6),
+                "block": Arg(
+                    lambda a: 4,
+                    lambda a: scalar_values(
+                        [4, 2],
+                        lambda x: (
+                            "same"
+                            if x >= 1 and np.isfinite(x) and x < 1e15
+                            else "bad"
+                            if not np.isfinite(x) or x < 1
+                            else "either"
+                        ),
+                        integer=True,
+                    ),
+                    sample=8,
+                ),
+            },
+            combos=4,
+        ),
+        Target(
+            "Study.run",
+            run,
+            {
+                "runs": Arg(lambda a: 5, lambda a: counts, sample=10),
+                "seed": Arg(
+                    lambda a: 0,
+                    lambda a: scalar_values(
+                        [0, 7],
+                        lambda x: (
+                            "same"
+                            if x.is_integer() and 0 <= x < 2**63
+                            else "bad"
+                            if x < 0 or not np.isfinite(x)
+                            else "either"
+                        ),
+                        integer=True,
+                    ),
+                    sample=8,
+                ),
+                "out": Arg(lambda a: None, folder_values),
+                "confidence": Arg(
+                    lambda a: 0.95,
+                    lambda a: scalar_values([0.95, 0.5], lambda x: "same" if 0 < x < 1 else "bad"),
+                    sample=8,
+                ),
+                "progress": Arg(
+                    lambda a: None,
+                    lambda a: items_values(
+                        [
+                            Value("None", None, "same", None),
+                            Value("print", print, "either"),
+                            Value("5", 5, "bad"),
+                            Value("text", "bar", "bad"),
+                        ]
+                    ),
+                ),
+                "timeout": Arg(lambda a: 10.0, lambda a: scalar_values([10.0], positive), sample=8),
+                "damaged": Arg(
+                    lambda a: "recompute", lambda a: choice_values(["recompute", "refuse"], ["", "REFUSE", "ignore"])
+                ),
+            },
+            combos=4,
+        ),
+    ]
+
+
+# simulate with drives and with many runs (risky: child interpreters)
+
+
+def _driven_simulation_targets() -> list[Target]:
+    drive_pid, cct = control.drives.DrivePID(20.0, 0.5), control.drives.CurrentComputedTorque(100.0, 20.0)
+
+    def laws(arm: object) -> Kinds:
+        return items_values(
+            [
+                Value("DrivePID", drive_pid, "same", drive_pid),
+                Value("CurrentComputedTorque", cct, "either"),
+                Value(
+                    "CurrentComputedTorque with bandwidth",
+                    control.drives.CurrentComputedTorque(100.0, 20.0, 0.0, 2000.0),
+                    "either",
+                ),
+                Value("DrivePID kp NaN", control.drives.DrivePID(np.nan, 0.5), "bad", names=("kp",)),
+                Value("DrivePID kv negative", control.drives.DrivePID(1.0, -0.5), "bad", names=("kv",)),
+                Value("DrivePID 3 gains", control.drives.DrivePID([1.0] * 3, 0.5), "bad", names=("kp",)),
+                Value(
+                    "CurrentComputedTorque bandwidth 0",
+                    control.drives.CurrentComputedTorque(1.0, 1.0, 0.0, 0.0),
+                    "bad",
+                    names=("bandwidth",),
+                ),
+                Value("a joint PID", control.PID(10.0, 2.0), "bad", names=("controller",)),
+                Value("None", None, "either", names=("controller",)),
+                Value("a callable", lambda *a: np.zeros(2), "bad", names=("controller",)),
+            ]
+        )
+
+    def step_rule(x: float) -> str:  # more than 10**6 steps per sample of dt = 1 ms is refused
+        return "bad" if x < 1e-9 else positive(x)
+
+    tiny = ("1e-12 s (10**9 steps a sample)", 1e-12, "bad")
+    step = none_is_valid(scalar_values([1e-4, 2e-4], step_rule, extra=[("1 s (above dt)", 1.0, "either"), tiny]))
+    seconds = scalar_values(
+        [0.01, 0.02], positive, extra=[("1e9 s", 1e9, "either"), ("not whole steps", 0.0105, "bad")]
+    )
+    args = {
+        "controller": Arg(lambda arm: drive_pid, laws),
+        "t_final": Arg(lambda arm: 0.01, lambda arm: seconds),
+        "dt": Arg(
+            lambda arm: 1e-3, lambda arm: scalar_values([1e-3], _divides(0.01), extra=[("1e-12 s", 1e-12, "either")])
+        ),
+        "step": Arg(lambda arm: None, lambda arm: step),
+        "q0": Arg(
+            lambda arm: states(arm.robot)["q"],
+            lambda arm: none_is_valid(state_values(states(arm.robot)["q"], batch=False)),
+            sample=20,
+        ),
+        "qd0": Arg(
+            lambda arm: None,
+            lambda arm: none_is_valid(state_values(states(arm.robot)["qd"], batch=False, bounded=False)),
+            sample=20,
+        ),
+        "method": Arg(lambda arm: "rk4", lambda arm: choice_values(["rk4"], ["rk45", "euler", ""])),
+        "joint_limits": Arg(
+            lambda arm: "warn", lambda arm: choice_values(["warn", "ignore", "stop"], ["spring", "", "WARN"])
+        ),
+    }
+    return [
+        Target(
+            "simulate (arm with drives)",
+            lambda arm, **kw: ad.simulate(arm, **kw),
+            args,
+            _driven_arms(),
+            view=_driven_run,
+            combos=10,
+        )
+    ]
+
+
+def _divides(t_final: float) -> Callable[[float], str]:
+    """A rule for dt: positive, and t_final a whole number of its steps (else refused, naming dt)."""
+
+    def rule(x: float) -> str:
+        verdict = positive(x)
+        whole = abs(t_final / x - round(t_final / x)) <= 1e-9 * (t_final / x) if verdict != "bad" else False
+        return "bad" if verdict == "same" and (not whole or round(t_final / x) < 1) else verdict
+
+    return rule
+
+
+def _driven_run(result: object) -> tuple[np.ndarray, ...]:
+    """What a run with drives computed: q, qd, qdd, tau and the drives' states and inputs (not their
+    limit tables, whose infinities mean no limit)."""
+    return result.q, result.qd, result.qdd, result.tau, result.drives.x, result.drives.v
+
+
+def _many_run_targets() -> list[Target]:
+    from armdyn.simulation import plant_variants
+
+    pid = control.PID(10.0, 2.0)
+    arm0 = ARMS[0][1]
+
+    def plants(arm: ad.Robot) -> Kinds:
+        items = [
+            Value("None", None, "same", None),
+            Value("the arm", arm, "either"),
+            Value("3 variants", plant_variants(arm, 3, payload_mass=[0.0, 0.1, 0.2]), "either"),
+            Value("variants of another arm", plant_variants(ARMS[2][1], 3), "bad", names=("joints", "plants")),
+            Value("4 variants for 3 runs", plant_variants(arm, 4), "bad", names=("runs", "plants", "variants")),
+            Value("a list of arms", [arm, arm, arm], "bad"),
+            Value("a symbolic arm", ad.models.two_link_planar(symbolic=True), "bad"),
+        ]
+        return items_values(items + junk(skip=("None",)))
+
+    def variant_call(_arm: object, **kw: object) -> object:
+        variants = plant_variants(arm0, **kw)
+        return variants.packed, variants.coulomb
+
+    n = arm0.n
+    gain_rows = np.array([[10.0] * n, [2.0] * n, [0.0] * n])
+
+    def gains(arm: ad.Robot) -> Kinds:
+        items = [
+            Value("(3, n)", gain_rows, "same", gain_rows),
+            Value("(N, 3, n)", np.stack([gain_rows] * 3), "same", gain_rows),
+            Value("(N+1, 3, n)", np.stack([gain_rows] * 4), "bad"),
+            Value("(2, n)", gain_rows[:2], "bad"),
+            Value("a negative kp", gain_rows * [[-1.0], [1.0], [1.0]], "bad", names=("kp", "gains")),
+            Value("NaN entry", np.where(gain_rows == 10.0, np.nan, gain_rows), "bad"),
+            Value("inf entry", np.where(gain_rows == 10.0, np.inf, gain_rows), "bad"),
+            Value("text", "high", "bad"),
+            Value("a list", gain_rows.tolist(), "same", gain_rows),
+            Value("a scalar", 5.0, "bad"),
+            Value("complex", gain_rows + 1j, "bad"),
+        ]
+        return none_is_valid(items_values(items + junk(skip=("None",))))
+
+    keep = choice_values(
+        ["summary", "full", 2, 1],
+        ["all", "", 0, -1, 1.5, np.nan, 10**20, 10**400, 11],
+        ["FULL", np.int64(3), True, 100],
+    )
+    after = none_is_valid(
+        scalar_values([0.005, 0.0], lambda x: "same" if 0 <= x <= 0.01 else "bad", extra=[("text", "0.005", "either")])
+    )
+    runs = none_is_valid(
+        scalar_values(
+            [3, 1],
+            lambda x: (
+                "same" if x.is_integer() and 1 <= x <= 1e6 else "bad" if x < 1 or not np.isfinite(x) else "either"
+            ),
+            integer=True,
+            extra=[("10**12 runs", 10**12, "bad"), ("2**62 runs", 2**62, "bad")],
+        )
+    )
+    threads = none_is_valid(
+        scalar_values(
+            [1, 2],
+            lambda x: "same" if x in (1, 2) else "bad" if x < 1 or not np.isfinite(x) or x > 1e6 else "either",
+            integer=True,
+        )
+    )
+
+    def rows(key: str) -> Callable[[ad.Robot], Kinds]:
+        def values(arm: ad.Robot) -> Kinds:
+            base = states(arm)[key] * 0.1
+            per_run = np.stack([base, base * 0.5, base * 0.2])
+            items = [
+                Value("one row per run", per_run, "either"),
+                Value("N+1 rows", np.stack([base] * 4), "bad"),
+                Value("rows of n+1", np.zeros((3, arm.n + 1)), "bad"),
+                Value("a row with NaN", np.where(np.arange(3)[:, None] == 1, np.nan, per_run), "bad"),
+                Value("(N, 1, n)", per_run[:, None], "bad"),
+            ]
+            return none_is_valid(items_values(items) + state_values(base, batch=False, bounded=key == "q"))
+
+        return values
+
+    args = {
+        "runs": Arg(lambda arm: 3, lambda arm: runs, sample=14),
+        "plants": Arg(lambda arm: None, plants),
+        "models": Arg(lambda arm: None, plants),
+        "gains": Arg(lambda arm: None, gains),
+        "keep": Arg(lambda arm: "summary", lambda arm: keep),
+        "after": Arg(lambda arm: 0.005, lambda arm: after, sample=14),
+        "threads": Arg(lambda arm: None, lambda arm: threads, sample=10),
+        "q0": Arg(lambda arm: None, rows("q"), sample=20),
+        "qd0": Arg(lambda arm: None, rows("qd"), sample=12),
+        "disturbance": Arg(lambda arm: None, rows("tau"), sample=10),
+    }
+
+    def many(arm: ad.Robot, **kw: object) -> object:
+        return ad.simulate(arm, pid, t_final=0.01, **kw)
+
+    def view(ensemble: object) -> tuple:
+        return ensemble.summaries, ensemble.outcome, tuple(np.asarray(v) for v in ensemble.samples.values())
+
+    count = scalar_values([3, 1], _count(1, 10**6), integer=True, extra=[("10**12", 10**12, "bad")])
+    masses = state_values(np.array([0.0, 0.1, 0.2]), batch=False, bounded=False, scalar_ok=True)
+    return [
+        Target("simulate (many runs)", many, args, [ARMS[0], ARMS[1]], view=view, combos=10),
+        Target(
+            "plant_variants",
+            variant_call,
+            {
+                "count": Arg(lambda a: 3, lambda a: count),
+                "payload_mass": Arg(lambda a: 0.0, lambda a: masses, sample=25),
+                "mass_scale": Arg(  # one factor per joint (n = 2): a zero (or -0.0) is refused
+                    lambda a: 1.0,
+                    lambda a: relabel(
+                        state_values(np.array([0.9, 1.1]), batch=False, bounded=False, scalar_ok=True), PER_VARIANT
+                    ),
+                    sample=25,
+                ),
+            },
+            combos=6,
+        ),
+    ]
+
+
+def _new_risky() -> list[Target]:
+    return [*_driven_simulation_targets(), *_many_run_targets()]
+
+
 # ----- risky cases, for child interpreters ----------------------------------------------------
 
 
@@ -1566,6 +2543,7 @@ RISKY: dict[str, Callable[[], list[Target]]] = {
     "compiled closed forms": _closed_forms,
     "simulate": _simulation_targets,
     "huge sizes, XML bombs, enormous CLI runs": _risky_other,
+    "simulate with drives and many runs": _new_risky,
 }
 
 
@@ -1587,10 +2565,10 @@ def _run_child(group: str, skip: int = 0) -> tuple[subprocess.Popen, float, Path
 _CHILDREN: dict[str, tuple[subprocess.Popen, float, Path]] = {}
 
 
-def _start_children() -> None:
-    """Start every group of risky cases at once, each in its own child (they run while the
+def _start_children(groups: list[str]) -> None:
+    """Start the selected groups of risky cases at once, each in its own child (they run while the
     in-process cases do; the test of each group collects it)."""
-    for group in RISKY:
+    for group in groups:
         if group not in _CHILDREN:
             _CHILDREN[group] = _run_child(group)
 
@@ -1938,6 +2916,11 @@ TARGETS = [
     *statespace_targets(),
     *properties_targets(),
     *cli_targets(),
+    *task_space_targets(),
+    *actuator_targets(),
+    *derivative_targets(),
+    *generated_code_targets(),
+    *study_targets(),
 ]
 
 
@@ -1951,8 +2934,8 @@ def summary(request: pytest.FixtureRequest) -> Iterator[None]:
     import numba
 
     start = time.perf_counter()
-    if any(item.name.startswith("test_risky") for item in request.session.items):
-        _start_children()
+    risky = [item.callspec.params["group"] for item in request.session.items if item.name.startswith("test_risky")]
+    _start_children(risky)
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:

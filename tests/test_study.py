@@ -411,3 +411,17 @@ def test_a_worker_whose_environment_changed_numba_num_threads_still_compiles() -
     if next(iter(started.values())) > 1:  # on one core, the Nanny's value is the value Numba started with
         assert "Cannot set NUMBA_NUM_THREADS" in before
     assert after == (3, 1)
+
+
+def test_a_study_names_its_controller_and_a_normal_its_bounds() -> None:
+    arm = ad.models.two_link_planar()
+    with pytest.raises(ad.ArgumentError, match=r"^controller must be one of armdyn.control's laws.*got NoneType"):
+        Study(arm, None)
+    with pytest.raises(ModelError, match=r"low = 0.9, high = 1 holds almost none of its mass"):
+        Normal(0.0, 0.1, 0.9, 1.0)  # 1e-19 of its mass: refused when made, not at the first draw
+    with pytest.raises(ModelError, match=r"^low must be a number"):
+        Normal(0.0, 0.1, 10**400, 10**401)
+    truncated = Normal(0.0, 0.1, 0.3, 1.0)  # 0.13% of its mass: made, but 100 rounds of redrawing may not do
+    with pytest.raises(ModelError, match=r"^payload: Normal\(0, 0.1\) truncated to low = 0.3"):
+        truncated.sample(np.random.default_rng(0), (10**5,), "payload")
+    assert Normal(0.0, 0.1, -0.1, 0.1).sample(np.random.default_rng(0), (1000,)).max() <= 0.1

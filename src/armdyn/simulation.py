@@ -75,6 +75,8 @@ MAX_SAMPLES = 200_000_000
 """The most samples (t_final / dt + 1) one run records: about 18 GB for the two-link arm (8 (1 + 5 n)
 bytes a sample), and minutes of the compiled loop. A run whose record needs more memory than the
 system has available is refused too (``_available_memory``), before anything is allocated."""
+MAX_SUBSTEPS = 1_000_000
+"""The most RK4 steps per sample of dt an arm with drives takes (its step= or stable step)."""
 
 
 STOPPED_SINGULAR, STOPPED_DIVERGED = 1, 2  # why a compiled run stopped
@@ -1047,7 +1049,15 @@ def _simulate_driven(
         longest = inputs.number(step, "step")
         if not (0 < longest < math.inf):
             raise ModelError(f"step must be a positive number of seconds, got {step}")
-    samples, substeps = step_count(t_final, dt, arm.n_states, False) + 1, max(1, math.ceil(dt / longest - 1e-9))
+    samples = step_count(t_final, dt, arm.n_states, False) + 1
+    if not dt / longest <= MAX_SUBSTEPS or (samples - 1) * (dt / longest) > MAX_SAMPLES:
+        what = "step" if step is not None else "the drives' stable step (give a larger step=)"
+        shortest = max(dt / MAX_SUBSTEPS, t_final / MAX_SAMPLES)
+        raise ModelError(
+            f"{what} = {longest:g} s needs {dt / longest:.4g} RK4 steps per sample of dt = {dt:g} s: at most "
+            f"{MAX_SUBSTEPS:,} per sample and {MAX_SAMPLES:,} in all (step >= {shortest:g} s)"
+        )
+    substeps = max(1, math.ceil(dt / longest - 1e-9))
     y = np.concatenate([arm.initial_state(start, rates), np.zeros(n)])
     times, states = np.empty(samples), np.empty((samples, arm.n_states))
     applied, torques = np.empty((samples, n)), np.empty((samples, n))
@@ -1557,6 +1567,9 @@ def plant_variants(
     inputs.arm_argument(arm, Robot, "arm", numeric=True, why=" (variants are packed models)")
     count = inputs.integer(count, "count", 1)
     n = arm.n
+    assert arm.packed is not None, "arm_argument refuses symbolic arms"
+    per_variant = 8.0 * (3 * arm.packed.size + 7 + 4 * n)  # the packed rows, their Coulomb tables, the arguments
+    memory.affordable(min(count, 2**63) * per_variant, f"count = {_count(count)} variants")
     mass = _per_variant(payload_mass, "payload_mass", count, ())
     com = _per_variant(payload_com, "payload_com", count, (3,))
     moments = _per_variant(payload_inertia, "payload_inertia", count, (3,))
@@ -1879,6 +1892,11 @@ def _paths(trajectory: object, runs: int, n: int) -> tuple[int, np.ndarray]:
     return specs[0][0], np.ascontiguousarray(np.broadcast_to(params, (runs, *params.shape[1:])))
 
 
+def _count(count: int) -> str:
+    """A count for a message: 1,000 or, past 10^15, its order of magnitude (about 10^400)."""
+    return f"{count:,}" if count <= 10**15 else f"about 10^{len(str(count)) - 1}"
+
+
 def _rows(value: object, ndim: int = 2) -> int | None:
     """The length of a per-run argument's first axis (one row per run) when it has ``ndim`` axes, else None."""
     try:
@@ -1928,25 +1946,31 @@ def _simulate_runs(
     if keep == 0:
         raise ModelError("keep must be 'summary', 'full' or a whole number of steps >= 1, got 0 (to keep only the "
                          "summaries, give keep='summary')")  # fmt: skip
+    if every > steps:
+        raise ModelError(f"keep must be 'summary', 'full' or a whole number of steps from 1 to the run's {steps} "
+                         f"steps, got {keep!r}")  # fmt: skip
     kept = 0 if every == 0 else (rows - 1) // every + 1
     spec, period, law = unwrapped_law(controller, n)
     if spec is None:
         raise ArgumentError("many runs run armdyn.control's laws (ComputedTorque, PDGravity, PID, in Digital or "
                          f"Saturated) or None (no torque), got {type(controller).__name__}")  # fmt: skip
-    lengths = {len(v) for v in (plants, models) if isinstance(v, Plants)}
-    lengths |= {count for v in (q0, qd0, disturbance) if (count := _rows(v)) is not None}
-    lengths |= {len(trajectory)} if isinstance(trajectory, (list, tuple)) else set()
-    lengths |= {count} if (count := _rows(gains, 3)) is not None else set()
-    lengths.discard(1)
+    counts = {name: len(v) for name, v in (("plants", plants), ("models", models)) if isinstance(v, Plants)}
+    named = (("q0", q0), ("qd0", qd0), ("disturbance", disturbance))
+    counts |= {name: count for name, v in named if (count := _rows(v)) is not None}
+    counts |= {"trajectory": len(trajectory)} if isinstance(trajectory, (list, tuple)) else {}
+    counts |= {"gains": count} if (count := _rows(gains, 3)) is not None else {}
+    counts = {name: count for name, count in counts.items() if count != 1}
+    rows_given = ", ".join(f"{name} has {count}" for name, count in counts.items())
     if runs is None:
-        if len(lengths) > 1:
-            raise ModelError(f"the per-run arguments disagree on the number of runs: {sorted(lengths)}")
-        runs = lengths.pop() if lengths else 1
+        if len(set(counts.values())) > 1:
+            raise ModelError(f"the per-run arguments disagree on the number of runs: {rows_given} rows")
+        runs = next(iter(counts.values()), 1)
     runs = inputs.integer(runs, "runs", 1)
-    if lengths - {runs}:
-        raise ModelError(f"runs = {runs}, but per-run arguments have {sorted(lengths - {runs})} rows")
+    if set(counts.values()) - {runs}:
+        raise ModelError(f"runs = {runs}, but {rows_given} rows (give one row or one per run)")
     per_run = 8 * ((17 + 4 * kept) * n + 6)  # starts, disturbance, gains, paths, summaries, outcome, kept samples
-    memory.affordable(float(runs) * per_run, f"{runs:,} runs (their starts, gains, summaries and samples kept)")
+    memory.affordable(min(runs, 2**63) * per_run,
+                      f"{_count(runs)} runs (their starts, gains, summaries and samples kept)")  # fmt: skip
     plant_rows, plant_coulombs, plant_of = _variants(plants, arm, runs, "plants")
     shares = np.full(runs, spec.model is None and models is None)
     model_rows, model_coulombs, model_of = _variants(models if models is not None else spec.model, arm, runs,

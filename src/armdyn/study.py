@@ -95,7 +95,7 @@ class Uniform:
         object.__setattr__(self, "low", low)
         object.__setattr__(self, "high", high)
 
-    def sample(self, rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+    def sample(self, rng: np.random.Generator, shape: tuple[int, ...], name: str = "") -> np.ndarray:
         """Draws of the given shape from ``rng``.
 
         Parameters
@@ -104,6 +104,8 @@ class Uniform:
             The stream.
         shape : tuple of int
             The draws' shape.
+        name : str, optional
+            The argument the distribution was given as, for a message.
 
         Returns
         -------
@@ -140,15 +142,18 @@ class Normal:
         mean, std = inputs.number(self.mean, "mean"), inputs.number(self.std, "std")
         if std < 0:
             raise ModelError(f"Normal needs std >= 0, got {std:g}")
-        low, high = float(self.low), float(self.high)
+        low, high = (_bound(value, name) for value, name in ((self.low, "low"), (self.high, "high")))
         if not low < high or math.isnan(low) or math.isnan(high):
             raise ModelError(f"Normal needs low < high, got [{low:g}, {high:g}]")
         if std == 0 and not low <= mean <= high:
             raise ModelError(f"Normal with std 0 needs low <= mean <= high, got mean = {mean:g}")
+        if std > 0 and _mass(mean, std, low, high) < 1e-6:
+            raise ModelError(f"Normal({mean:g}, {std:g}) truncated to low = {low:g}, high = {high:g} holds almost none "
+                             "of its mass (below 1e-6): widen low and high or move the mean between them")  # fmt: skip
         for key, value in (("mean", mean), ("std", std), ("low", low), ("high", high)):
             object.__setattr__(self, key, value)
 
-    def sample(self, rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+    def sample(self, rng: np.random.Generator, shape: tuple[int, ...], name: str = "") -> np.ndarray:
         """Draws of the given shape from ``rng`` (truncated draws are redrawn, at most 100 rounds).
 
         Parameters
@@ -157,6 +162,8 @@ class Normal:
             The stream.
         shape : tuple of int
             The draws' shape.
+        name : str, optional
+            The argument the distribution was given as, for a message.
 
         Returns
         -------
@@ -174,11 +181,25 @@ class Normal:
             if not outside.any():
                 return draws
             draws[outside] = rng.normal(self.mean, self.std, int(outside.sum()))
-        raise ModelError(f"Normal({self.mean:g}, {self.std:g}) truncated to [{self.low:g}, {self.high:g}] holds "
-                         "almost none of its mass")  # fmt: skip
+        raise ModelError(f"{name + ': ' if name else ''}Normal({self.mean:g}, {self.std:g}) truncated to low = "
+                         f"{self.low:g}, high = {self.high:g} holds almost none of its mass: widen low and high or "
+                         "move the mean between them")  # fmt: skip
 
 
 Distribution = Uniform | Normal
+
+
+def _mass(mean: float, std: float, low: float, high: float) -> float:
+    """The probability a Normal(mean, std) draw falls in [low, high]."""
+    scale = std * math.sqrt(2.0)
+    return 0.5 * (math.erf((high - mean) / scale) - math.erf((low - mean) / scale))
+
+
+def _bound(value: object, name: str) -> float:
+    """A truncation bound: a real number or an infinity (no bound), or a ModelError naming it."""
+    if isinstance(value, (float, np.floating)) and math.isinf(value):
+        return float(value)
+    return inputs.number(value, name)
 
 
 def _distribution(value: object, name: str) -> Distribution | None:
@@ -427,9 +448,10 @@ def run_block(setup: Setup, index: int, threads: int | None = None) -> DataFrame
     n = setup.q0.shape[0]
     rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
     # each quantity is drawn, in this order, whether declared or not: adding one keeps the others' draws
-    draws = {name: (dist or Uniform(0.0, 0.0)).sample(rng, shape) for name, dist, shape in (
-        ("payload", setup.payload, (count,)), ("mass_scale", setup.mass_error, (count, n)),
-        ("friction_scale", setup.friction_error, (count, n)), ("start", setup.start_error, (count, n)))}  # fmt: skip
+    draws = {name: (dist or Uniform(0.0, 0.0)).sample(rng, shape, argument) for name, argument, dist, shape in (
+        ("payload", "payload", setup.payload, (count,)), ("mass_scale", "mass_error", setup.mass_error, (count, n)),
+        ("friction_scale", "friction_error", setup.friction_error, (count, n)),
+        ("start", "start_error", setup.start_error, (count, n)))}  # fmt: skip
     scale = 1.0 + draws["mass_scale"] if setup.mass_error is not None else np.ones((count, n))
     friction = 1.0 + draws["friction_scale"] if setup.friction_error is not None else np.ones((count, n))
     if np.any(draws["payload"] < 0) or np.any(scale <= 0) or np.any(friction < 0):
@@ -568,7 +590,9 @@ class Study:
         self.after = after
         law_spec, period, self.controller = unwrapped_law(controller, n)
         if law_spec is None or controller is None:
-            raise ArgumentError("a study runs one of armdyn.control's laws (ComputedTorque, PDGravity, PID)")
+            raise ArgumentError("controller must be one of armdyn.control's laws (ComputedTorque, PDGravity, PID, "
+                                "in Digital or Saturated): a study runs one, got "
+                                f"{type(controller).__name__}")  # fmt: skip
         gains, hold = law_table(law_spec, period, self.dt, n)
         belief, belief_coulomb = packed_plants([law_spec.model if law_spec.model is not None else arm])
         path = trajectories.packed(trajectory, n)

@@ -903,15 +903,16 @@ def _checked_drives(arm: Robot, drives: object) -> tuple[Drive, ...]:
             f"drives must be a sequence of DCMotor or Hydraulic, one per joint, got {reprlib.repr(drives)}"
         )
     if len(drives) != arm.n:
-        raise ModelError(f"{where} has {arm.n} joints {arm.joint_names}; {len(drives)} drives were given")
+        raise ModelError(f"drives must be one per joint: {where} has {arm.n} joints {arm.joint_names}; "
+                         f"{len(drives)} drives were given")  # fmt: skip
     for link, drive in zip(arm.links, drives, strict=True):
         if not isinstance(drive, (DCMotor, Hydraulic)):
-            raise ModelError(f"the drive of joint '{link.name}' must be a DCMotor or Hydraulic, got {drive!r}")
+            raise ModelError(f"drives: the drive of joint '{link.name}' must be a DCMotor or Hydraulic, got {drive!r}")
         if isinstance(drive, Hydraulic) and drive.rotary != (link.kind == "revolute"):
             actuator = "a rotary motor" if drive.rotary else "a piston (linear)"
             fit = "rotary=False, a piston" if link.kind == "prismatic" else "rotary=True, a rotary motor"
             raise ModelError(
-                f"drive '{drive.name}' is {actuator} and cannot drive the {link.kind} joint '{link.name}' "
+                f"drives: drive '{drive.name}' is {actuator} and cannot drive the {link.kind} joint '{link.name}' "
                 f"(it needs {fit})"
             )
     return tuple(drives)

@@ -107,7 +107,9 @@ def stable_step(arm: ActuatedArm, q: ArrayLike, bandwidth: ArrayLike | None = No
     """
     q = inputs.state(q, arm.n, "q", arm._where)
     if q.shape != (arm.n,):
-        raise ModelError(f"stable_step takes one configuration of {arm.n} values{arm._where}")
+        raise ModelError(
+            f"q must be one configuration of {arm.n} values for stable_step{arm._where}, got shape {q.shape}"
+        )
     inertia = arm._mechanical.inertia_matrix(q)
     condition = float(np.linalg.cond(inertia))
     if not condition < 1e12:
@@ -116,6 +118,14 @@ def stable_step(arm: ActuatedArm, q: ArrayLike, bandwidth: ArrayLike | None = No
                             condition=condition)  # fmt: skip
     mobility = np.diag(np.linalg.inv(inertia))  # 1/m_j
     d, f, h = arm._dc, arm._flex, arm._hyd
+    if bandwidth is not None:
+        bandwidth = inputs.numbers(bandwidth, "bandwidth", None, arm._where)
+        if bandwidth.shape not in ((), (arm.n,)):
+            raise ModelError(f"bandwidth must be one number or one per joint ({arm.n}){arm._where}, got shape "
+                             f"{bandwidth.shape}")  # fmt: skip
+        bandwidth = np.broadcast_to(bandwidth, (arm.n,))
+        if not np.all(bandwidth > 0):
+            raise ModelError(f"bandwidth must be positive (rad/s, one per joint){arm._where}, got {bandwidth}")
     electrical = arm._R_a[d] / arm._L[d] if bandwidth is None else np.maximum(arm._R_a / arm._L, bandwidth)[d]
     shaft = mobility[f] + arm._r[f] ** 2 / arm._J_M[f]
     real = [electrical, 1 / arm._tau_v[h], arm._K_ce[h] / arm._C[h], arm._mechanical.viscous_friction * mobility]
