@@ -82,7 +82,7 @@ pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parent.parent
 CHILD_MEMORY = 3 * 2**30  # address space of a child interpreter: a huge allocation fails fast there
-CHILD_TIMEOUT = 110.0  # seconds for one child interpreter
+CHILD_TIMEOUT = 300.0  # seconds for one child interpreter, its cold compile of the kernels included (a fresh clone)
 CHILD_COUNT = [0]  # cases tried in child interpreters
 # files written for the cases (removed at the end); a child interpreter is given a folder inside the parent's
 SCRATCH = Path(os.environ.get("ARMDYN_FUZZ_SCRATCH") or tempfile.mkdtemp(prefix="armdyn-fuzz-"))
