@@ -1140,17 +1140,16 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
         run_rk4(plant, controller, desired_path, (0.0, dt, first, last), (state, tau_held, e_int, outcome), record)
         return outcome[0] < 0
 
-    def stopped_run(rows: int) -> Result:
-        return Result(times[:rows], arrays["q"][:rows], arrays["qd"][:rows], arrays["qdd"][:rows],
-                      arrays["tau"][:rows], arrays["q_d"][:rows] if trajectory is not None else None, arm,
-                      {"method": "rk4 (compiled)", "dt": dt, "integral": e_int, "stopped": "interrupted"})  # fmt: skip
+    def recorded(rows: int, extra: dict) -> Result:
+        q, qd = arrays["q"][:rows], arrays["qd"][:rows]
+        return Result(times[:rows], q, qd, arrays["qdd"][:rows], arrays["tau"][:rows],
+                      arrays["q_d"][:rows] if trajectory is not None else None, arm,
+                      {"method": "rk4 (compiled)", "dt": dt, "integral": e_int, **extra},
+                      lambda: _energies(arms, events, times[:rows], q, qd))  # fmt: skip
 
-    in_chunks(advance, steps + 1, progress, stopped_run)
+    in_chunks(advance, steps + 1, progress, lambda rows: recorded(rows, {"stopped": "interrupted"}))
     rows = steps + 1 if outcome[0] < 0 else int(outcome[0])
-    q_d = arrays["q_d"][:rows] if trajectory is not None else None
-    result = Result(times[:rows], arrays["q"][:rows], arrays["qd"][:rows], arrays["qdd"][:rows], arrays["tau"][:rows],
-                    q_d, arm, {"method": "rk4 (compiled)", "dt": dt, "integral": e_int},
-                    lambda: _energies(arms, events, times[:rows], arrays["q"][:rows], arrays["qd"][:rows]))  # fmt: skip
+    result = recorded(rows, {})
     if outcome[0] >= 0:
         raise _stopped(arm, int(outcome[1]), int(outcome[2]), rows * dt, state[:n], result)
     return result

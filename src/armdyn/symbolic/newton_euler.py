@@ -699,6 +699,12 @@ def python_source(function: GeneratedFunction) -> str:
     return f"def {function.name}({', '.join(function.arguments)}, out):\n" + "\n".join(body or ["    pass"]) + "\n"
 
 
+def c_signature(function: GeneratedFunction, prefix: str = "armdyn_") -> str:
+    """The function's C99 signature: ``void armdyn_tau(const double *q, ..., double *out)``."""
+    arguments = ", ".join(f"const double *{a}" for a in function.arguments)
+    return f"void {prefix}{function.name}({arguments}, double *out)"
+
+
 def c_source(function: GeneratedFunction, prefix: str = "armdyn_") -> str:
     """The function as C99: ``void armdyn_tau(const double *q, ..., double *out)``, one operation per line."""
 
@@ -710,12 +716,11 @@ def c_source(function: GeneratedFunction, prefix: str = "armdyn_") -> str:
         return f"({rate} > 0.0 ? {literal(plus)} : ({rate} < 0.0 ? {literal(minus)} : 0.0))"
 
     lines, outputs = statements(function, literal, lambda fn, x: f"{fn}({x})", coulomb)
-    arguments = ", ".join(f"const double *{a}" for a in function.arguments)
     body = [f"    const double {name} = {text};" for name, text in lines]
     body += [f"    out[{k}] = {value};" for k, value in enumerate(outputs)]
     read = {names for op, names, _ in (function.graph.nodes[i] for i in function.order) if op == "in"}
     unused = [f"    (void){a};" for a in function.arguments if not any(x.startswith(f"{a}[") for x in read)]
-    return f"void {prefix}{function.name}({arguments}, double *out) {{\n" + "\n".join(unused + body) + "\n}\n"
+    return c_signature(function, prefix) + " {\n" + "\n".join(unused + body) + "\n}\n"
 
 
 # ----- the public object -----------------------------------------------------------------------------------
@@ -834,7 +839,7 @@ class GeneratedCode:
             As ``c``.
         """
         prefix = c_prefix(prefix)
-        declarations = [c_source(f, prefix).split(" {", 1)[0] + ";" for f in self.functions.values()]
+        declarations = [c_signature(f, prefix) + ";" for f in self.functions.values()]
         if self.base is not None:
             declarations.append(f"extern const double {prefix}phi_base[{len(self.base.phi)}];")
         return c_header(declarations, header_guard(self.robot.name, prefix), f"{self.robot.name}: armdyn's robot "
