@@ -1,4 +1,4 @@
-"""Identify the PUMA 560's base parameters by the workflow of armdyn.excitation.
+"""Identify the PUMA 560's base parameters by the workflow of armdyn.identification.excitation.
 
 1. An excitation trajectory: a finite Fourier series per joint (Swevers, Ganseman, Tukel,
    De Schutter and Van Brussel, IEEE Trans. Robotics and Automation 13(5), 1997) whose
@@ -16,7 +16,12 @@ import numpy as np
 from rich.console import Console
 
 import armdyn as ad
-from armdyn.excitation import FourierTrajectory, IdentificationData, excitation_trajectory, identification_data
+from armdyn.identification.excitation import (
+    FourierTrajectory,
+    IdentificationData,
+    excitation_trajectory,
+    identification_data,
+)
 
 ARM = ad.models.puma560()
 

@@ -18,8 +18,15 @@ import armdyn as ad
 from armdyn.cli import app
 from armdyn.control import ComputedTorque
 from armdyn.dynamics import regressor as regressor_module
-from armdyn.dynamics.regressor import FrictionMisfitWarning, PoorExcitationWarning, parameter_names
-from armdyn.excitation import FourierTrajectory, excitation_ranges, excitation_trajectory, identification_data
+from armdyn.dynamics.regressor import parameter_names
+from armdyn.identification import least_squares
+from armdyn.identification.excitation import (
+    FourierTrajectory,
+    excitation_ranges,
+    excitation_trajectory,
+    identification_data,
+)
+from armdyn.identification.least_squares import FrictionMisfitWarning, PoorExcitationWarning
 from tests.helpers import exciting, pinocchio_pair
 from tests.strategies import random_robot, random_state
 
@@ -139,8 +146,8 @@ def test_identification_checks_its_input() -> None:
 # ----- excitation, memory and arguments ---------------------------------------------------
 @pytest.mark.slow
 def test_identify_refuses_data_that_do_not_excite_the_parameters() -> None:
-    warning = regressor_module.PoorExcitationWarning
-    poor, limit = regressor_module.POOR_CONDITION, regressor_module.MAX_CONDITION
+    warning = least_squares.PoorExcitationWarning
+    poor, limit = least_squares.POOR_CONDITION, least_squares.MAX_CONDITION
     arm = ad.models.puma560()
     zeros = np.zeros((200, 6))
     with pytest.raises(ad.ModelError, match=r"do not excite the 58 base parameters.*rank 3 of 58"):

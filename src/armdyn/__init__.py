@@ -3,9 +3,10 @@
 from armdyn import kinematics
 from armdyn import models as models
 from armdyn.dynamics import lagrange
-from armdyn.dynamics.regressor import base_parameters, identify
+from armdyn.dynamics.regressor import base_parameters
 from armdyn.dynamics.threads import set_threads, threads
 from armdyn.errors import ArgumentError, MissingDependencyError, ModelError, SimulationError, SingularError
+from armdyn.identification import identify
 from armdyn.model import ArmModel, Inertial, Joint, Link
 from armdyn.robot import Robot
 from armdyn.urdf import load_urdf
@@ -24,7 +25,7 @@ _LAZY_MODULES = (
     "simulation",
     "study",
     "plotting",
-    "excitation",
+    "identification",
 )
 
 

@@ -51,7 +51,7 @@ if TYPE_CHECKING:
     from armdyn.actuators.packing import DriveRecord
     from armdyn.control.drives import CurrentComputedTorque, DrivePID
     from armdyn.control.task import TaskComputedTorque, Tracking
-    from armdyn.excitation import FourierTrajectory
+    from armdyn.identification.excitation import FourierTrajectory
     from armdyn.simulation import Result
     from armdyn.symbolic.closed_form import ClosedForm
     from armdyn.task_space import TaskOutput
@@ -1072,7 +1072,7 @@ def identify(
 ) -> None:
     """Identify an arm's base parameters by least squares: from measured samples in a CSV file, or
     from samples generated along an optimized excitation trajectory (--generate)."""
-    from armdyn.dynamics.regressor import identify as identify_parameters
+    from armdyn.identification import identify as identify_parameters
 
     if generate and csv is not None:
         _fail(f"give either a CSV file of samples or --generate, not both (got {csv} and --generate)")
@@ -1126,8 +1126,9 @@ def _generated_samples(
     arm: Robot, noise: float, seed: int, period: float, harmonics: int, dt: float
 ) -> tuple[dict[str, np.ndarray], FourierTrajectory]:
     """``identify --generate``: an excitation trajectory optimized for the arm, and one period of samples
-    simulated along it with torque noise (armdyn.excitation), as (q, qd, qdd, tau arrays, the trajectory)."""
-    from armdyn.excitation import excitation_trajectory, identification_data
+    simulated along it with torque noise (armdyn.identification.excitation), as (q, qd, qdd, tau arrays, the
+    trajectory)."""
+    from armdyn.identification.excitation import excitation_trajectory, identification_data
 
     _activity.status(f"optimizing an excitation trajectory for {arm.name} ({harmonics} harmonics, {period:g} s)")
     trajectory = excitation_trajectory(arm, period=period, harmonics=harmonics, seed=seed)
