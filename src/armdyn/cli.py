@@ -1069,10 +1069,68 @@ def identify(
         "velocity that is not the Coulomb sign law (simulate's smoothed friction; stiction). Default 0.",
     ),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    log: str | None = typer.Option(
+        None,
+        "--log",
+        help="A robot's log to identify from: a CSV, NPZ or Parquet file of time, q (optionally qd) and tau or motor "
+        "current, or a folder in the format of Gaz et al.'s Panda log. Writes a report and the identified arm to -o "
+        "DIR.",
+    ),
+    columns: str | None = typer.Option(
+        None, "--columns", help='With --log: the column map, e.g. "t=time,q=pos{j},tau=effort{j}" ({j} is 1..n).'
+    ),
+    current: bool = typer.Option(False, "--current", help="With --log: the log holds motor currents, not torques."),
+    gains: str | None = typer.Option(
+        None, "--gains", help="With --current: the current-to-torque gains per joint (N m/A), separated by commas."
+    ),
+    gains_from_payload: tuple[str, float] | None = typer.Option(
+        None,
+        "--gains-from-payload",
+        help="With --current: estimate the gains from a second log RUN carrying a payload of known MASS (kg) at the "
+        "tool link's origin.",
+        metavar="RUN MASS",
+    ),
+    friction: str = typer.Option(
+        "sigmoid", "--friction", help="With --log: the friction law, viscous, coulomb, stribeck or sigmoid."
+    ),
+    consistent: bool = typer.Option(
+        True,
+        "--consistent/--no-consistent",
+        help="With --log: also the physically consistent estimate (every pseudo-inertia positive semidefinite), "
+        "from which the identified arm is built.",
+    ),
+    validate_log: str | None = typer.Option(None, "--validate", help="With --log: a second log to predict."),
+    holdout: float = typer.Option(
+        0.0, "--holdout", help="With --log: the share of the log, at its end, kept out of the estimate and predicted."
+    ),
+    reference: str | None = typer.Option(
+        None, "--reference", help="With --log: an arm predicting the same held-out samples, for comparison."
+    ),
+    cutoff: float | None = typer.Option(None, "--cutoff", help="With --log: the low-pass cut-off (Hz)."),
+    decimate: int | None = typer.Option(None, "--decimate", help="With --log: the decimation factor."),
 ) -> None:
     """Identify an arm's base parameters by least squares: from measured samples in a CSV file, or
-    from samples generated along an optimized excitation trajectory (--generate)."""
+    from samples generated along an optimized excitation trajectory (--generate); or identify a
+    physically consistent arm from a robot's log (--log), with a validation report."""
     from armdyn.identification import identify as identify_parameters
+
+    if log is not None:
+        if csv is not None or generate:
+            _fail("--log identifies from a robot's log; give it without a samples CSV file and without --generate")
+        _identify_log(
+            name, log, output, strict, columns=columns, current=current, gains=gains, payload=gains_from_payload,
+            friction=friction, consistent=consistent, validate_log=validate_log, holdout=holdout,
+            reference=reference, cutoff=cutoff, decimate=decimate, velocity_band=velocity_band,
+        )  # fmt: skip
+        return
+    log_options = (("--columns", columns), ("--gains", gains), ("--gains-from-payload", gains_from_payload),
+                   ("--validate", validate_log), ("--reference", reference), ("--cutoff", cutoff),
+                   ("--decimate", decimate))  # fmt: skip
+    given = [option for option, value in log_options if value is not None]
+    given += [option for option, on in (("--current", current), ("--holdout", holdout != 0.0)) if on]
+    given += ["--friction"] if friction != "sigmoid" else []
+    if given:
+        _fail(f"{', '.join(given)} {'goes' if len(given) == 1 else 'go'} with --log")
 
     if generate and csv is not None:
         _fail(f"give either a CSV file of samples or --generate, not both (got {csv} and --generate)")
@@ -1120,6 +1178,100 @@ def identify(
             for row in zip(result.names, result.phi, result.standard_errors, result.base.phi, strict=True):
                 writer.writerow([row[0], *(repr(float(value)) for value in row[1:])])
         console.print(f"wrote {output}")
+
+
+def _column_map(text: str) -> dict[str, str]:
+    """--columns "t=time,q=q{j},tau=tau{j}" as a mapping."""
+    mapping = {}
+    for part in text.split(","):
+        key, sep, value = part.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            _fail(f"--columns {text!r}: give field=column pairs separated by commas, e.g. t=time,q=q{{j}},tau=tau{{j}}")
+        mapping[key.strip()] = value.strip()
+    return mapping
+
+
+def _identify_log(
+    name: str, path: str, output: str | None, strict: bool, *, columns: str | None, current: bool,
+    gains: str | None, payload: tuple[str, float] | None, friction: str, consistent: bool,
+    validate_log: str | None, holdout: float, reference: str | None, cutoff: float | None,
+    decimate: int | None, velocity_band: float,
+) -> None:  # fmt: skip
+    """``identify ARM --log FILE``: the whole workflow of armdyn.identification, its report and exports."""
+    from armdyn.identification.log import read_log
+    from armdyn.identification.report import write_report
+    from armdyn.identification.workflow import identify_log, validate
+
+    if output is None:
+        _fail("--log writes a report and the identified arm: give the folder with -o DIR")
+    if velocity_band != 0.0:
+        _fail("--velocity-band goes with a samples CSV file; a log's friction law covers slow samples")
+    if not (np.isfinite(holdout) and 0.0 <= holdout <= 0.9):
+        _fail(f"--holdout must be a share between 0 and 0.9, got {holdout}")
+    if holdout and validate_log:
+        _fail("give either --holdout or --validate, not both")
+    if (gains is not None or payload is not None) and not current:
+        _fail("--gains and --gains-from-payload go with --current (a log of motor currents)")
+    if current and gains is None and payload is None:
+        _fail("--current needs the current-to-torque gains: --gains G1,G2,... or --gains-from-payload RUN MASS")
+    folder = _output_folder(output, "-o")
+    arm = _arm(name, strict)
+    mapping = _column_map(columns) if columns else None
+    _activity.status(f"reading {path}")
+    data = read_log(path, columns=mapping)
+    held = data.current is not None
+    if current != held:
+        what = "motor currents" if held else "torques"
+        _fail(f"{path}: the log holds {what}; {'give --current' if held else 'leave out --current'}")
+    gain_values = _values(gains, "--gains") if gains is not None else None
+    if payload is not None:
+        from armdyn.identification.gains import identify_gains
+        from armdyn.identification.preprocess import prepare
+
+        run, mass = payload
+        _activity.status(f"estimating the drive gains from {run} (payload {mass:g} kg)")
+        loaded = read_log(run, columns=mapping)
+        estimate = identify_gains(arm, prepare(data), prepare(loaded), mass)
+        gain_values = np.asarray(estimate.gains)
+        console.print("gains from the payload run (N m/A): " + ", ".join(f"{g:.6g}" for g in gain_values))
+    model = identify_log(
+        arm, data, friction=friction, consistent=consistent, holdout=holdout, gains=gain_values, cutoff=cutoff,
+        decimate=decimate, progress=_activity.status,
+    )  # fmt: skip
+    held_out = (
+        read_log(validate_log, columns=mapping) if validate_log else (data.split(1 - holdout)[1] if holdout else None)
+    )
+    validation = model.validate(held_out, gain_values) if held_out is not None else None
+    compared = None
+    if reference is not None and validation is not None:
+        other = _arm(reference, strict)
+        compared = validate(other.inverse_dynamics, held_out, model.prepared, gain_values)
+    _make_folder(folder)
+    report = write_report(model, folder, validation, compared, reference or "reference")
+    console.print(
+        f"identified {arm.name} from {model.prepared.q.shape[0]} samples ({friction} friction); condition number "
+        f"{model.condition_number:.4g}",
+        highlight=False,
+    )
+    if validation is not None:
+        table = Table(title="Held-out samples: predicted against measured torque")
+        headers = ["joint", "rms (N m)", "normalized rms"] + ([f"{reference} rms", "change"] if compared else [])
+        for header in headers:
+            table.add_column(header, justify="left" if header == "joint" else "right")
+        for j, joint in enumerate(validation.joint_names):
+            row = [joint, f"{validation.rms[j]:.4g}", f"{validation.normalized_rms[j]:.3g}"]
+            if compared is not None:
+                row += [f"{compared.rms[j]:.4g}", f"{100 * (validation.rms[j] / compared.rms[j] - 1):+.1f}%"]
+            table.add_row(*row)
+        console.print(table)
+    if model.arm is not None:
+        from armdyn.io.model_file import save_arm
+        from armdyn.io.urdf_out import to_urdf
+
+        to_urdf(model.arm, folder / "identified.urdf")
+        save_arm(model.arm, folder / "identified.json")
+        console.print(f"wrote {folder / 'identified.urdf'} and {folder / 'identified.json'}")
+    console.print(f"wrote {report} and report.html")
 
 
 def _generated_samples(
