@@ -1,0 +1,1 @@
+"""Identification of an arm's dynamic parameters from a robot's log."""
