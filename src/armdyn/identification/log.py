@@ -36,6 +36,7 @@ from armdyn.errors import MissingDependencyError, ModelError
 from armdyn.model import ArmModel
 
 __all__ = [
+    "DEGREE_MARGIN",
     "FIELDS",
     "MIN_LOG_SAMPLES",
     "Log",
@@ -672,10 +673,12 @@ def read_gaz_panda(folder: str | Path) -> Log:
             present = ", ".join(sorted(p.name for p in where.iterdir())) or "nothing"
             raise ModelError(f"{folder}: no file {name}; the folder holds {present}")
         try:
-            values = pandas.read_csv(file, header=None, dtype=float, skip_blank_lines=False).to_numpy().ravel()
+            frame = pandas.read_csv(file, header=None, dtype=str, skip_blank_lines=False, keep_default_na=False)
         except (ValueError, OSError, pandas.errors.ParserError) as error:
-            raise ModelError(f"{file}: one number a line is expected: {error}") from None
-        data[field] = values
+            raise ModelError(f"{file}: cannot be read as one number a line: {error}") from None
+        if frame.shape[1] != 1:
+            raise ModelError(f"{file}: one number a line is expected, a line holds {frame.shape[1]} fields")
+        data[field] = _numbers_by_line(frame[0].to_numpy(), file)
     samples = data["t"].shape[0]
     for field in ("q", "qd", "tau"):
         if data[field].shape[0] != _GAZ_JOINTS * samples:
@@ -688,6 +691,16 @@ def read_gaz_panda(folder: str | Path) -> Log:
     names["t"] = (_GAZ_FILES["t"],)
     joints = tuple(f"panda_joint{j}" for j in range(1, _GAZ_JOINTS + 1))
     return Log(**data, joint_names=joints, source=str(folder), columns=names)
+
+
+def _numbers_by_line(lines: np.ndarray, file: Path) -> np.ndarray:
+    """The lines of a text file as numbers ('nan' and 'inf' kept, for the Log to name), or a ModelError naming
+    the first line that is not a number."""
+    try:
+        return lines.astype(float)
+    except ValueError:
+        k = next(k for k, line in enumerate(lines) if math.isnan(_number(line)) and line.strip().lower() != "nan")
+        raise ModelError(f"{file}: line {k + 1} is {lines[k]!r}, not a number") from None
 
 
 _READERS = {".csv": read_csv, ".npz": read_npz, ".parquet": read_parquet, ".pq": read_parquet}

@@ -153,7 +153,7 @@ def excitation_bandwidth(q: np.ndarray, rate: float, energy: float = 0.99) -> fl
     Returns
     -------
     float
-        The bandwidth, Hz (a multiple of the frequency resolution rate / N).
+        The bandwidth, Hz (a multiple of the frequency resolution rate / N, at least one).
 
     Raises
     ------
@@ -173,7 +173,7 @@ def excitation_bandwidth(q: np.ndarray, rate: float, energy: float = 0.99) -> fl
     if not moving.any():
         raise ModelError("excitation_bandwidth: no joint moves (q is constant)")
     share = np.cumsum(power[:, moving], axis=0) / total[moving]
-    first = np.argmax(share >= energy, axis=0)
+    first = np.maximum(np.argmax(share >= energy, axis=0), 1)  # at least the frequency resolution
     return float(np.fft.rfftfreq(x.shape[0], 1.0 / fs)[first].max())
 
 
@@ -337,9 +337,9 @@ def parallel_filter(x: np.ndarray, rate: float, cutoff: float, factor: int) -> n
 @dataclass(frozen=True, eq=False)
 class Prepared:
     """A log prepared for identification: uniform time, filtered positions and their derivatives, filtered
-    torques (or currents), trimmed and decimated (see ``prepare``).
+    torques (or currents), trimmed and decimated (see ``prepare``, which makes it).
 
-    Attributes
+    Parameters
     ----------
     t : numpy.ndarray
         Sample times (M,), s, uniform at ``rate``.
@@ -486,12 +486,12 @@ def prepare(
         raise ModelError(f"{log.source}: trim must be a number of seconds >= 0, got {trim!r}")
     uniform = resample(log)
     rate = uniform.sample_rate
-    if cutoff is None:
-        bandwidth = excitation_bandwidth(uniform.q, rate)
-        fc = min(CUTOFF_PER_BANDWIDTH * bandwidth, MAX_CUTOFF_SHARE * rate / 2)
-    else:
-        fc = float(cutoff)
     try:
+        if cutoff is None:
+            bandwidth = excitation_bandwidth(uniform.q, rate)
+            fc = min(CUTOFF_PER_BANDWIDTH * bandwidth, MAX_CUTOFF_SHARE * rate / 2)
+        else:
+            fc = float(cutoff)
         q = lowpass(uniform.q, fc, rate)
         effort = lowpass(uniform.effort, fc, rate)
         if use_measured_velocity:
