@@ -371,6 +371,8 @@ def test_csv_errors_name_the_file_the_column_and_the_sample(tmp_path: Path) -> N
         read_csv(path)
     with pytest.raises(ModelError, match=r"the column map names 'torque', not a field of a log"):
         read_csv(path, {"torque": "tau{j}"})
+    with pytest.raises(ModelError, match=r"the column map's 'tau' is 'tau\{i\}'; in a pattern \{j\} is the only"):
+        read_csv(path, {"tau": "tau{i}"})
     holes = frame.copy()
     holes.loc[41, "tau2"] = np.nan
     holes.to_csv(path, index=False)

@@ -398,6 +398,12 @@ def _checked_map(columns: ColumnMap | None, source: str) -> dict[str, Any]:
         if field not in FIELDS:
             raise ModelError(f"{source}: the column map names '{field}', not a field of a log ({', '.join(FIELDS)})")
         if value is None or isinstance(value, str):
+            try:
+                _ = value if value is None else value.format(j=1)
+            except (KeyError, IndexError, ValueError):
+                raise ModelError(
+                    f"{source}: the column map's '{field}' is {value!r}; in a pattern {{j}} is the only field"
+                ) from None
             checked[field] = value
         elif isinstance(value, Sequence) and value and all(isinstance(v, str) for v in value):
             checked[field] = tuple(value)
