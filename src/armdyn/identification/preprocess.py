@@ -355,6 +355,8 @@ class Prepared:
         The decimation factor: these samples are every factor-th of the undecimated ones.
     log : Log
         The log it came from.
+    trim : float
+        The seconds cut from each end.
     full : Prepared or None
         The same before decimation (factor 1), its arrays those of which these are every factor-th sample
         (views: no copy); None when factor is 1 (the samples are the undecimated ones: ``undecimated``).
@@ -371,6 +373,7 @@ class Prepared:
     factor: int
     log: Log
     full: Prepared | None = None
+    trim: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("t", "q", "qd", "qdd", "tau", "current"):
@@ -432,7 +435,7 @@ def prepare(
     log: Log,
     cutoff: float | None = None,
     decimate: int | None = None,
-    trim: float = 0.1,
+    trim: float | None = None,
     use_measured_velocity: bool = False,
 ) -> Prepared:
     """A log prepared for identification (Gautier 1997): resampled, filtered, differentiated, trimmed, decimated.
@@ -447,7 +450,7 @@ def prepare(
     4. the torques (or currents) through the same filter, so that they and the positions share its
        small distortion of the motion;
     5. ``trim`` seconds cut from each end (a robot's start and stop, and the filter's end effects, which
-       last about 2 / cutoff seconds: with a low cut-off, trim more);
+       last about 2 / cutoff seconds: by default the larger of 0.1 s and 2 / cutoff);
     6. every factor-th sample kept: by default the largest factor whose decimated rate is still at least
        DECIMATED_RATE_PER_CUTOFF (5) times the cut-off. The samples are band-limited by the filter of step
        2 already, so they do not alias; for the regressor, whose products of signals reach beyond the
@@ -462,7 +465,7 @@ def prepare(
     decimate : int, optional
         The decimation factor, a whole number >= 1 (default above; 1 keeps every sample).
     trim : float, optional
-        Seconds cut from each end, >= 0 (default 0.1).
+        Seconds cut from each end, >= 0 (default the larger of 0.1 s and 2 / cutoff).
     use_measured_velocity : bool, optional
         Take the velocities the robot reported (the log's qd) instead of differentiating the positions.
 
@@ -482,7 +485,7 @@ def prepare(
         raise ModelError(f"{log.source}: use_measured_velocity needs the log's velocities qd, and it has none")
     if decimate is not None and (not isinstance(decimate, (int, np.integer)) or decimate < 1):
         raise ModelError(f"{log.source}: the decimation factor must be a whole number >= 1, got {decimate!r}")
-    if not (isinstance(trim, (int, float, np.floating)) and math.isfinite(trim) and trim >= 0):
+    if trim is not None and not (isinstance(trim, (int, float, np.floating)) and math.isfinite(trim) and trim >= 0):
         raise ModelError(f"{log.source}: trim must be a number of seconds >= 0, got {trim!r}")
     uniform = resample(log)
     rate = uniform.sample_rate
@@ -501,6 +504,7 @@ def prepare(
             qd, qdd = derivatives(q, rate)
     except ModelError as error:
         raise ModelError(f"{log.source}: {error}") from None
+    trim = max(0.1, 2.0 / fc) if trim is None else float(trim)
     factor = int(decimate) if decimate is not None else max(1, int(rate // (DECIMATED_RATE_PER_CUTOFF * fc)))
     t = uniform.t
     keep = slice(int(np.searchsorted(t, t[0] + trim, "left")), int(np.searchsorted(t, t[-1] - trim, "right")))
@@ -511,7 +515,7 @@ def prepare(
             f"{factor}-th sample leaves {kept} samples; at least {MIN_LOG_SAMPLES} are needed"
         )
     efforts: dict[str, Any] = {"tau": None, "current": None, log.effort_name: effort[keep]}
-    full = Prepared(t[keep], q[keep], qd[keep], qdd[keep], **efforts, rate=rate, cutoff=fc, factor=1, log=log)
+    full = Prepared(t[keep], q[keep], qd[keep], qdd[keep], **efforts, rate=rate, cutoff=fc, factor=1, log=log, trim=trim)
     if factor == 1:
         return full
     every = slice(None, None, factor)
@@ -527,4 +531,5 @@ def prepare(
         factor=factor,
         log=log,
         full=full,
+        trim=trim,
     )

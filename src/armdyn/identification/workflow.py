@@ -347,7 +347,7 @@ def identify_log(
     gains: Sequence[float] | np.ndarray | None = None,
     cutoff: float | None = None,
     decimate: int | None = None,
-    trim: float = 0.1,
+    trim: float | None = None,
     motor_inertia: bool = True,
     offset: bool = True,
     regularization: float = 1e-4,
@@ -378,7 +378,9 @@ def identify_log(
         default from the excitation's bandwidth), the decimation factor and the seconds trimmed
         at each end.
     motor_inertia, offset : bool, optional
-        Estimate a reflected motor inertia and a torque offset per joint (both default True).
+        Estimate a reflected motor inertia and a torque offset per joint (both default True; the
+        Coulomb and Stribeck laws hold an offset in their asymmetric Coulomb terms already, so
+        with them ``offset`` is not estimated apart).
     regularization : float, optional
         Weight of the distance to the prior in the consistent estimate (default 1e-4, relative to
         the data term): it settles the parameters the data cannot tell apart.
@@ -397,8 +399,6 @@ def identify_log(
         When the log does not fit the arm (joints, units), holds currents without gains, does not
         excite the identifiable parameters, or the consistent estimate is infeasible with the bounds.
     """
-    from armdyn.identification.consistent import bounds_from_prior, consistent_estimate
-
     say = progress or (lambda text: None)
     if friction not in LAWS:
         raise ModelError(f"friction must be one of {', '.join(LAWS)}, got {friction!r}")
@@ -417,15 +417,17 @@ def identify_log(
     say(f"fitting the {friction} friction law")
     base = base_parameters(arm, drives=motor_inertia)  # the rigid-body base set, with Ia where estimated
     n = arm.n
+    offset = offset and friction not in ("coulomb", "stribeck")  # an asymmetric Coulomb law holds the offset already
     law = FrictionLaw(friction, np.zeros((n, 0)))
+    if law.nonlinear_names:
+        linear_part = FrictionLaw({"stribeck": "coulomb", "sigmoid": "viscous"}[friction], np.zeros((n, 0)))
+        fixed = Columns(n, linear_part, motor_inertia, offset)
+        X, y, joint = _stacked(fixed, arm, prepared)
+        keep, _ = _base_selection(fixed, base)
+        law = fit_nonlinear(friction, X[:, keep], y, prepared.qd.reshape(-1), joint, n)
     columns = Columns(n, law, motor_inertia, offset)
     X, y, joint = _stacked(columns, arm, prepared)
     keep, regrouping = _base_selection(columns, base)
-    if law.nonlinear_names:
-        qd_rows = prepared.qd.reshape(-1)
-        law = fit_nonlinear(friction, X[:, keep], y, qd_rows, joint, n)
-        columns = Columns(n, law, motor_inertia, offset)
-        X, y, joint = _stacked(columns, arm, prepared)
     timings["friction"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -439,6 +441,8 @@ def identify_log(
     estimate = None
     identified = None
     if consistent:
+        from armdyn.identification.consistent import bounds_from_prior, consistent_estimate
+
         start = time.perf_counter()
         say("the physically consistent estimate (semidefinite program)")
         k = len(columns.per_joint)
