@@ -1,0 +1,1 @@
+"""Identification of an arm's parameters from measured motion and torques."""
