@@ -492,7 +492,7 @@ def _solve(
     if problem.status != cp.OPTIMAL or x.value is None:
         raise ModelError(
             f"the consistent estimate's semidefinite program was not solved: solver {solver} returned status "
-            f"'{problem.status}' (infeasible: check the mass and extra bounds against the margin)"
+            f"'{problem.status}'" + (": check the mass and extra bounds" if "infeasible" in problem.status else "")
         )
     return scale * np.asarray(x.value), str(problem.status)
 
