@@ -41,6 +41,8 @@ MODULES = (
     "armdyn.identification.preprocess",
     "armdyn.identification.friction",
     "armdyn.identification.workflow",
+    "armdyn.identification.consistent",
+    "armdyn.identification.report",
     "armdyn.task_space",
     "armdyn.control.task",
     "armdyn.control.drives",

@@ -515,7 +515,9 @@ def prepare(
             f"{factor}-th sample leaves {kept} samples; at least {MIN_LOG_SAMPLES} are needed"
         )
     efforts: dict[str, Any] = {"tau": None, "current": None, log.effort_name: effort[keep]}
-    full = Prepared(t[keep], q[keep], qd[keep], qdd[keep], **efforts, rate=rate, cutoff=fc, factor=1, log=log, trim=trim)
+    full = Prepared(
+        t[keep], q[keep], qd[keep], qdd[keep], **efforts, rate=rate, cutoff=fc, factor=1, log=log, trim=trim
+    )
     if factor == 1:
         return full
     every = slice(None, None, factor)
