@@ -29,15 +29,15 @@ from armdyn.dynamics.regressor import BaseParameters, base_parameters, regressor
 from armdyn.errors import ArgumentError, ModelError
 from armdyn.identification.payload import (
     BODY,
+    LEAST_SQUARES,
     body_parameters,
-    link_index,
+    payload_link,
     run_arrays,
     stacked_least_squares,
 )
 from armdyn.kinematics import check_arm
 from armdyn.model import ArmModel
 
-METHODS = ("ols", "tls")
 CURRENT_FIELDS = ("q", "qd", "qdd", "current")
 
 
@@ -186,8 +186,8 @@ def identify_gains(
     the gains by about the ratio of its variance to that of the currents' part the payload
     explains (about 1% for 1% current noise and a payload giving a tenth of the torques); total
     least squares does not. Standard errors come from each joint's own residual variance in each
-    run (as ``armdyn.identify``). The unloaded run is needed: with the loaded
-    run alone, the payload only changes the base parameters and the scale stays free. The
+    run (as ``armdyn.identify``). The unloaded run is needed: with the loaded run alone, the
+    payload only changes the base parameters and the scale stays free. The
     payload's torques fix the scale of every gain, so they must be large against the noise at
     every joint (a heavy payload, moved fast).
 
@@ -236,15 +236,15 @@ def identify_gains(
         the four attributes, or ``drives`` is not a bool.
     """
     check_arm(arm, True)
-    index = link_index(arm, link)
+    index = payload_link(arm, link)
     mass = inputs.number(payload_mass, "payload_mass")
     if not mass > 0:
         raise ModelError(
             f"payload_mass must be positive (kg): the known payload fixes the scale of the gains, got {mass:g}"
         )
     known = body_parameters(mass, payload_com, payload_inertia)
-    if method not in METHODS:
-        raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if method not in LEAST_SQUARES:
+        raise ModelError(f"method must be one of {', '.join(LEAST_SQUARES)}, got {method!r}")
     if not isinstance(drives, (bool, np.bool_)):
         raise ArgumentError(f"drives must be True or False, got {drives!r}")
     if unloaded is None:

@@ -43,7 +43,7 @@ from armdyn.dynamics.regressor import (
     regressor,
 )
 from armdyn.errors import ArgumentError, ModelError
-from armdyn.kinematics import check_arm
+from armdyn.kinematics import check_arm, link_index
 from armdyn.model import ArmModel
 from armdyn.model.inertial import Inertial
 
@@ -51,10 +51,12 @@ BODY = 10
 """Inertial parameters of one body: [m, mx, my, mz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]."""
 INERTIA_ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
 """The entries of a symmetric 3x3 inertia held in a body's parameters 4 to 9, in that order."""
-FIELDS = ("q", "qd", "qdd", "tau")
+TORQUE_FIELDS = ("q", "qd", "qdd", "tau")
+LEAST_SQUARES = ("ols", "tls")
+"""The estimators of ``stacked_least_squares``: ordinary and total least squares."""
 
 
-class Samples(Protocol):
+class TorqueSamples(Protocol):
     """Samples of one run: anything with attributes q, qd, qdd and tau, each (N, n).
 
     armdyn.excitation.IdentificationData is one; a tuple (q, qd, qdd, tau) is taken as well.
@@ -67,13 +69,13 @@ class Samples(Protocol):
 
 
 def run_arrays(
-    run: object, arm: ArmModel, label: str, fields: tuple[str, ...] = FIELDS
+    run: object, arm: ArmModel, label: str, fields: tuple[str, ...] = TORQUE_FIELDS
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The four arrays of a run, checked: each (N, n) finite numbers, all of one N.
 
     Parameters
     ----------
-    run : Samples or tuple
+    run : TorqueSamples or tuple
         An object with attributes named ``fields`` (default q, qd, qdd, tau), or a tuple of the
         four arrays in that order.
     arm : ArmModel
@@ -121,8 +123,8 @@ def run_arrays(
     return q, qd, qdd, y
 
 
-def link_index(arm: ArmModel, link: object) -> int:
-    """The index of a link given by index or name; None is the tool link.
+def payload_link(arm: ArmModel, link: object) -> int:
+    """The index of the link a payload is fixed to, given by index or name; None is the tool link.
 
     Parameters
     ----------
@@ -139,22 +141,14 @@ def link_index(arm: ArmModel, link: object) -> int:
     Raises
     ------
     armdyn.ModelError
-        When no link has that index or name.
-    armdyn.ArgumentError
-        When ``link`` is not an int, a str or None.
+        When no link has that index or name, or ``link`` is neither an integer, a str nor None.
     """
-    if link is None:
-        return arm.tool_link
-    names = [item.name for item in arm.links]
     if isinstance(link, str):
+        names = [item.name for item in arm.links]
         if link not in names:
             raise ModelError(f"'{arm.name}' has no link '{link}'; its links are {', '.join(names)}")
         return names.index(link)
-    if isinstance(link, (bool, np.bool_)) or not isinstance(link, (int, np.integer)):
-        raise ArgumentError(f"link must be a link index, a link name or None, got {link!r}")
-    if not 0 <= link < arm.n:
-        raise ModelError(f"link must be a link index from 0 to {arm.n - 1} for '{arm.name}', got {link}")
-    return int(link)
+    return link_index(arm, link)
 
 
 def body_parameters(mass: object, com: object = (0.0, 0.0, 0.0), inertia: object = None) -> np.ndarray:
@@ -272,7 +266,7 @@ def stacked_least_squares(
     """
     from scipy.linalg import solve_triangular
 
-    if method not in ("ols", "tls"):
+    if method not in LEAST_SQUARES:
         raise ModelError(f"method must be 'ols' or 'tls', got {method!r}")
     rows, p = A.shape
     if rows <= p:
@@ -511,8 +505,16 @@ class PayloadEstimate:
                 f"the payload was identified on link {self.link} ('{self.link_name}'), but the tool link of "
                 f"'{arm.name}' is link {arm.tool_link}: with_payload puts a payload on the tool link"
             )
-        given = self.inertia if inertia else None
-        return arm.with_payload(self.mass, self.com, given)
+        if not inertia:
+            return arm.with_payload(self.mass, self.com)
+        try:
+            return arm.with_payload(self.mass, self.com, self.inertia)
+        except ModelError as error:
+            raise ModelError(
+                f"the payload's estimated inertia about its centre of mass (standard errors "
+                f"{np.diag(self.inertia_standard_errors)} kg m^2 on the moments) is not a rigid body's: {error}; "
+                "excite the tool link's rotations more, or pass inertia=False for a point mass"
+            ) from None
 
 
 def com_jacobian(mass: float, first_moment: np.ndarray) -> np.ndarray:
@@ -571,8 +573,8 @@ def inertia_jacobian(mass: float, first_moment: np.ndarray) -> np.ndarray:
 
 def identify_payload(
     arm: ArmModel,
-    unloaded: Samples | tuple | None,
-    loaded: Samples | tuple,
+    unloaded: TorqueSamples | tuple | None,
+    loaded: TorqueSamples | tuple,
     link: int | str | None = None,
     drives: bool = True,
     confidence: float = 0.95,
@@ -601,9 +603,9 @@ def identify_payload(
     ----------
     arm : ArmModel
         The arm without the payload (its structure; with ``unloaded`` None, its values too).
-    unloaded : Samples, tuple or None
+    unloaded : TorqueSamples, tuple or None
         The run without the payload: q, qd, qdd, tau, each (N_u, n); None to use the arm's model.
-    loaded : Samples or tuple
+    loaded : TorqueSamples or tuple
         The run with the payload, likewise (N_l, n).
     link : int, str or None, optional
         The link the payload is fixed to, by index or name; default None, the arm's tool link.
@@ -636,7 +638,7 @@ def identify_payload(
         the four attributes, or ``drives`` is not a bool.
     """
     check_arm(arm, True)
-    index = link_index(arm, link)
+    index = payload_link(arm, link)
     level = _confidence(confidence)
     if not isinstance(drives, (bool, np.bool_)):
         raise ArgumentError(f"drives must be True or False, got {drives!r}")
