@@ -43,6 +43,8 @@ MODULES = (
     "armdyn.identification.workflow",
     "armdyn.identification.consistent",
     "armdyn.identification.report",
+    "armdyn.identification.payload",
+    "armdyn.identification.gains",
     "armdyn.task_space",
     "armdyn.control.task",
     "armdyn.control.drives",

@@ -13,7 +13,8 @@ from numpy.testing import assert_allclose
 
 import armdyn as ad
 from armdyn import ModelError
-from armdyn.dynamics.regressor import base_parameters, identify, parameters, regressor
+from armdyn.dynamics.regressor import base_parameters, parameters, regressor
+from armdyn.identification import identify
 from armdyn.identification.consistent import (
     ConsistentEstimate,
     bounds_from_prior,

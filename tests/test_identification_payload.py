@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 
 import armdyn as ad
 from armdyn.dynamics.regressor import parameters
-from armdyn.excitation import excitation_trajectory, identification_data
+from armdyn.identification.excitation import excitation_trajectory, identification_data
 from armdyn.identification.gains import GainEstimate, identify_gains, torques_from_currents
 from armdyn.identification.payload import (
     PayloadEstimate,

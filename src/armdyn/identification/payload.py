@@ -33,16 +33,9 @@ from typing import Protocol
 import numpy as np
 
 from armdyn import inputs
-from armdyn.dynamics.regressor import (
-    MAX_CONDITION,
-    POOR_CONDITION,
-    BaseParameters,
-    PoorExcitationWarning,
-    base_parameters,
-    parameters,
-    regressor,
-)
+from armdyn.dynamics.regressor import BaseParameters, base_parameters, parameters, regressor
 from armdyn.errors import ArgumentError, ModelError
+from armdyn.identification.least_squares import MAX_CONDITION, POOR_CONDITION, PoorExcitationWarning
 from armdyn.kinematics import check_arm, link_index
 from armdyn.model import ArmModel
 from armdyn.model.inertial import Inertial
@@ -59,7 +52,7 @@ LEAST_SQUARES = ("ols", "tls")
 class TorqueSamples(Protocol):
     """Samples of one run: anything with attributes q, qd, qdd and tau, each (N, n).
 
-    armdyn.excitation.IdentificationData is one; a tuple (q, qd, qdd, tau) is taken as well.
+    armdyn.identification.excitation.IdentificationData is one; a tuple (q, qd, qdd, tau) is taken as well.
     """
 
     q: object
@@ -590,8 +583,9 @@ def identify_payload(
     solved by ordinary least squares for the arm's base parameters phi_b (friction and motor
     inertia included with ``drives``) and the payload's phi_L, W_L being the ten columns of link
     L in the regressor. With ``unloaded`` None the arm's model stands in for the unloaded run:
-    tau_l - W(q, qd, qdd) phi_arm = W_L phi_L, phi_arm = ``parameters(arm)`` (W phi_arm is the
-    arm's inverse dynamics); the estimate is then only as good as that model. Standard errors
+    tau_l - tau_arm(q, qd, qdd) = W_L phi_L, tau_arm the arm's inverse dynamics (a Robot's, with its
+    whole friction law; for a bare ArmModel W phi_arm, phi_arm = ``parameters(arm)``); the estimate is
+    then only as good as that model. Standard errors
     come from each joint's own residual variance in each run (as ``armdyn.identify``); errors in
     q, qd or qdd are not counted.
 
@@ -648,7 +642,9 @@ def identify_payload(
     joints = np.tile(np.arange(n), len(q))
     name = arm.links[index].name
     if unloaded is None:
-        y = (tau - W_loaded @ parameters(arm)).reshape(-1)
+        dynamics = getattr(arm, "inverse_dynamics", None)  # a Robot: its whole friction law, sigmoid included
+        model = dynamics(q, qd, qdd) if dynamics is not None else W_loaded @ parameters(arm)
+        y = (tau - model).reshape(-1)
         what = f"the 10 parameters of a payload on link '{name}' of '{arm.name}'"
         fit = stacked_least_squares(W_loaded[..., columns].reshape(-1, BODY), y, joints, what)
         return PayloadEstimate(
