@@ -6,7 +6,9 @@ are numbered depth first from the root, children in file order. Every number tha
 the model is checked finite where it is read, so an error names the element; joints that
 move no mass in any configuration (a singular M(q)) are found after the arm is built.
 Locked joints (``locked``) are fixed by ArmModel.reduced once the whole arm is built; the
-tool may sit on any link (``tool_link``), a merged one included.
+tool may sit on any link (``tool_link``), a merged one included. A joint's ``<armdyn:drive>``
+element (namespace ``ARMDYN_NAMESPACE``, written by armdyn.io.urdf_out.to_urdf) carries the
+friction and motor that ``<dynamics>`` cannot hold; other URDF readers ignore it.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -31,6 +33,10 @@ if TYPE_CHECKING:
     from lxml import etree
 
 _MOVING = {"revolute", "continuous", "prismatic"}
+# The XML namespace of armdyn's URDF extension, declared as xmlns:armdyn on <robot>
+ARMDYN_NAMESPACE = "urn:armdyn:urdf"
+# <armdyn:drive> attributes: the Link field each gives and how many numbers it holds
+_DRIVE = {"viscous": 1, "coulomb": 2, "motor_inertia": 1, "gear_ratio": 1, "stribeck": 2, "sigmoid": 3}
 # The test for joints that move no mass: M(q) is factored at this many random configurations
 # (a fixed seed, so that loading is deterministic); a pivot counts as zero below these.
 _SAMPLES, _SEED = 4, 20240531
@@ -89,6 +95,7 @@ class _Joint:
     limit: _Limit | None
     dynamics: _Dynamics | None
     mimic: bool  # whether the joint has a <mimic> element
+    drive: dict[str, str] | None = None  # the attributes of its <armdyn:drive>, None when absent
 
 
 @dataclass(frozen=True)
@@ -235,7 +242,11 @@ def _read_joint(element: etree._Element, path: Path) -> _Joint:
     origin = _pose(element.find("origin"))
     axis = np.array([float(word) for word in xyz.split()])
     parent, child = ends
-    return _Joint(name, element.get("type"), parent, child, origin, axis, limit, dynamics, mimic is not None)
+    drive = element.find(f"{{{ARMDYN_NAMESPACE}}}drive")
+    attributes = None if drive is None else {str(key): str(value) for key, value in drive.attrib.items()}
+    return _Joint(
+        name, element.get("type"), parent, child, origin, axis, limit, dynamics, mimic is not None, attributes
+    )
 
 
 def _check_vectors(root: etree._Element, file: str) -> None:
@@ -322,10 +333,15 @@ def load_urdf(
     Revolute, continuous, prismatic and fixed joints, in branching trees; fixed joints are
     merged into their parent body and the moving joints numbered depth first from the root,
     children in file order. ``<dynamics damping friction>`` become viscous and (symmetric)
-    Coulomb friction. ``<limit lower upper>`` are the joint limits; as the URDF
-    specification says (and as Pinocchio reads them), a missing ``lower`` or ``upper`` is 0.
-    A continuous joint, or a revolute or prismatic joint without ``<limit>``, is unlimited.
-    Mimic joints load as independent joints, with a warning naming them. Only ``<robot>``,
+    Coulomb friction, unless the joint holds an ``<armdyn:drive>`` element (namespace
+    ``urn:armdyn:urdf``, as armdyn.io.urdf_out.to_urdf writes it): its attributes ``viscous``,
+    ``coulomb`` ("Tc+ Tc-"), ``motor_inertia``, ``gear_ratio``, ``stribeck`` ("Fs vs") and
+    ``sigmoid`` ("A alpha shift") are then the Link's fields of those names (a missing one
+    its default) and ``<dynamics>`` is not used. ``<limit lower upper>`` are the joint
+    limits; as the URDF specification says (and as Pinocchio reads them), a missing
+    ``lower`` or ``upper`` is 0. A continuous joint, or a revolute or prismatic joint
+    without ``<limit>``, is unlimited. Mimic joints load as independent joints, with a
+    warning naming them. Only ``<robot>``,
     ``<link>`` (its ``<inertial>``) and ``<joint>`` are read: meshes are never loaded, and
     ``<visual>``, ``<collision>`` and the rest of the file are not read.
 
@@ -383,10 +399,11 @@ def load_urdf(
         planar joints, a joint of unknown type, a kinematic loop, a link defined twice, a joint
         naming an undefined link, more or fewer than one root link, or no moving joint; when a
         number that reaches the model (an ``<origin>`` of a joint or an ``<inertial>``, an
-        axis, a mass, an inertia, a limit, a damping or friction) is NaN or infinite, or not a
-        number; when an xyz, rpy or axis of a joint or an ``<inertial>`` is not 3 numbers, or
-        holds one of 1e15 or more in magnitude (the message names the joint or link and the
-        attribute); when a joint axis has no direction; when a link's mass properties,
+        axis, a mass, an inertia, a limit, a damping or friction, an ``<armdyn:drive>``
+        attribute) is NaN or infinite, or not a number; when an ``<armdyn:drive>`` attribute is
+        unknown or holds the wrong count of numbers; when an xyz, rpy or axis of a joint or an
+        ``<inertial>`` is not 3 numbers, or holds one of 1e15 or more in magnitude (the message
+        names the joint or link and the attribute); when a joint axis has no direction; when a link's mass properties,
         friction or limits are invalid (see Inertial and Link); and, with ``strict``, when an
         inertia breaks the triangle inequality or some joint moves no mass in any
         configuration (the message names them); when ``locked`` is not a mapping, names a
@@ -607,15 +624,37 @@ def _moving_link(file: str, joint: _Joint, parent: int, placement: np.ndarray, b
     if joint.dynamics is not None:
         damping = _finite(joint.dynamics.damping or 0.0, where, "<dynamics> damping")
         friction = _finite(joint.dynamics.friction or 0.0, where, "<dynamics> friction")
+    drive = (
+        {"viscous": damping, "coulomb": (friction, -friction)} if joint.drive is None else _drive(joint.drive, where)
+    )
     try:
         return Link(
             joint.name,
             Joint(kind, placement, axis / norm, name=joint.name),
             body,
             parent=parent,
-            viscous=damping,
-            coulomb=(friction, -friction),
             limits=limits,
+            **drive,
         )
     except ModelError as error:
         raise ModelError(f"{file}: {error}") from None
+
+
+def _drive(attributes: dict[str, str], where: str) -> dict[str, Any]:
+    """The Link fields an ``<armdyn:drive>`` element gives: its friction and motor in full (a missing attribute
+    is Link's default; ``<dynamics>`` is then not used), each attribute refused unless it holds its count of
+    finite numbers."""
+    import dataclasses
+
+    fields = {field.name for field in dataclasses.fields(Link)}
+    values: dict[str, Any] = {}
+    for key, text in attributes.items():
+        if key not in _DRIVE:
+            raise ModelError(f"{where}: <armdyn:drive> has an unknown attribute '{key}' (known: {', '.join(_DRIVE)})")
+        if key not in fields:
+            raise ModelError(f"{where}: <armdyn:drive> {key}: this version of armdyn has no {key} friction")
+        numbers = [_finite(word, where, f"<armdyn:drive> {key}") for word in text.split()]
+        if len(numbers) != _DRIVE[key]:
+            raise ModelError(f"{where}: <armdyn:drive> {key} is '{text}': it must hold {_DRIVE[key]} number(s)")
+        values[key] = numbers[0] if _DRIVE[key] == 1 else tuple(numbers)
+    return values
