@@ -26,6 +26,7 @@ _LAZY_MODULES = (
     "study",
     "plotting",
     "identification",
+    "io",
 )
 
 
@@ -39,9 +40,11 @@ def __getattr__(name: str) -> object:
         return importlib.import_module(f"armdyn.{name}")
     if name == "simulate":
         return getattr(importlib.import_module("armdyn.simulation"), name)
+    if name == "load_arm":
+        return importlib.import_module("armdyn.io.model_file").load_arm
     import difflib
 
-    known = sorted({*__all__, *_LAZY_MODULES, "simulate", "__version__"})
+    known = sorted({*__all__, *_LAZY_MODULES, "simulate", "load_arm", "__version__"})
     close = difflib.get_close_matches(name, known, n=3, cutoff=0.7)
     hint = f": did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
     raise AttributeError(f"module 'armdyn' has no attribute '{name}'{hint}")

@@ -522,6 +522,10 @@ def _arm(name: str, strict: bool = True) -> Robot:
         from armdyn.urdf import load_urdf
 
         return load_urdf(name, strict=strict)
+    if suffix == ".json" and _is_model_file(name):
+        from armdyn.io.model_file import load_arm
+
+        return load_arm(name)
     if suffix in ARM_FILES:
         return catalog.load_dh_file(name, strict=strict)
     try:
@@ -534,6 +538,20 @@ def _arm(name: str, strict: bool = True) -> Robot:
             _fail(f"{name}: no such file (an arm is a built-in name, {', '.join(catalog.names())}; a URDF file, "
                   ".urdf; or a DH table file, .json or .yaml)")  # fmt: skip
         raise ModelError(f"{error}; or give a URDF file (.urdf) or a DH table file (.json, .yaml)") from None
+
+
+def _is_model_file(path: str) -> bool:
+    """Whether a .json file is armdyn's own model file (``armdyn.io.model_file``) rather than a DH table."""
+    import json
+
+    from armdyn.io.model_file import FORMAT
+
+    try:
+        with open(path, encoding="utf-8") as handle:
+            data = json.load(handle)
+    except (OSError, ValueError):
+        return False  # the DH-table reader names the problem
+    return isinstance(data, dict) and data.get("format") == FORMAT
 
 
 def _values(text: str, option: str) -> np.ndarray:

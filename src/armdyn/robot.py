@@ -45,6 +45,50 @@ class Robot(ArmModel):
         super().__init__(*args, **kwargs)
         object.__setattr__(self, "packed", None if self.is_symbolic else pack(self))
 
+    def to_urdf(self, path: str | Path | None = None) -> str:
+        """The arm as URDF text, written to ``path`` when given (``armdyn.io.urdf_out.to_urdf``).
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            The file to write.
+
+        Returns
+        -------
+        str
+            The URDF; ``load_urdf`` of it gives the same dynamics.
+
+        Raises
+        ------
+        armdyn.ModelError
+            For a symbolic arm, or a path that cannot be written.
+        """
+        from armdyn.io.urdf_out import to_urdf
+
+        return to_urdf(self, path)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the arm to armdyn's own model file (JSON), exact in every number (``armdyn.load_arm``).
+
+        Parameters
+        ----------
+        path : str or Path
+            The file, ending in .json.
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        armdyn.ModelError
+            For a symbolic arm, another suffix, or a path that cannot be written.
+        """
+        from armdyn.io.model_file import save_arm
+
+        return save_arm(self, path)
+
     # dynamics (armdyn.dynamics.api)
     inverse_dynamics = api.inverse_dynamics
     forward_dynamics = api.forward_dynamics
