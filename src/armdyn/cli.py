@@ -491,7 +491,7 @@ ARM_HELP = "A built-in arm (see 'armdyn models'), a URDF file (.urdf) or a DH ta
 STRICT_HELP = "Refuse inertias that break the triangle inequality (and, in a URDF, joints that move no mass)."
 
 
-def _arm(name: str, strict: bool = True) -> Robot:
+def _arm(name: str, strict: bool = True, locked: dict[str, float] | None = None) -> Robot:
     """The arm a command names: a built-in arm, a URDF file (.urdf) or a DH table file (.json,
     .yaml, .yml); ``strict`` as ``armdyn.load_urdf`` and ``armdyn.models.load_dh_file`` take it.
 
@@ -518,10 +518,12 @@ def _arm(name: str, strict: bool = True) -> Robot:
     """
     _activity.status(f"{_activity.command} {name}".strip())
     suffix = Path(name).suffix.lower()
+    if locked and suffix != ".urdf":
+        _fail(f"--lock takes joints of a URDF file; {name} is not one")
     if suffix == ".urdf":
         from armdyn.urdf import load_urdf
 
-        return load_urdf(name, strict=strict)
+        return load_urdf(name, strict=strict, locked=locked)
     if suffix == ".json" and _is_model_file(name):
         from armdyn.io.model_file import load_arm
 
@@ -1126,6 +1128,11 @@ def identify(
     ),
     cutoff: float | None = typer.Option(None, "--cutoff", help="With --log: the low-pass cut-off (Hz)."),
     decimate: int | None = typer.Option(None, "--decimate", help="With --log: the decimation factor."),
+    lock: str | None = typer.Option(
+        None,
+        "--lock",
+        help='With --log and a URDF arm: joints held fixed, "name=value,..." (e.g. a gripper\'s fingers).',
+    ),
 ) -> None:
     """Identify an arm's base parameters by least squares: from measured samples in a CSV file, or
     from samples generated along an optimized excitation trajectory (--generate); or identify a
@@ -1138,12 +1145,12 @@ def identify(
         _identify_log(
             name, log, output, strict, columns=columns, current=current, gains=gains, payload=gains_from_payload,
             friction=friction, consistent=consistent, validate_log=validate_log, holdout=holdout,
-            reference=reference, cutoff=cutoff, decimate=decimate, velocity_band=velocity_band,
+            reference=reference, cutoff=cutoff, decimate=decimate, velocity_band=velocity_band, lock=lock,
         )  # fmt: skip
         return
     log_options = (("--columns", columns), ("--gains", gains), ("--gains-from-payload", gains_from_payload),
                    ("--validate", validate_log), ("--reference", reference), ("--cutoff", cutoff),
-                   ("--decimate", decimate))  # fmt: skip
+                   ("--decimate", decimate), ("--lock", lock))  # fmt: skip
     given = [option for option, value in log_options if value is not None]
     given += [option for option, on in (("--current", current), ("--holdout", holdout != 0.0)) if on]
     given += ["--friction"] if friction != "sigmoid" else []
@@ -1198,13 +1205,13 @@ def identify(
         console.print(f"wrote {output}")
 
 
-def _column_map(text: str) -> dict[str, str]:
-    """--columns "t=time,q=q{j},tau=tau{j}" as a mapping."""
+def _column_map(text: str, option: str = "--columns") -> dict[str, str]:
+    """--columns "t=time,q=q{j},tau=tau{j}" (or --lock "name=value,...") as a mapping."""
     mapping = {}
     for part in text.split(","):
         key, sep, value = part.partition("=")
         if not sep or not key.strip() or not value.strip():
-            _fail(f"--columns {text!r}: give field=column pairs separated by commas, e.g. t=time,q=q{{j}},tau=tau{{j}}")
+            _fail(f"{option} {text!r}: give name=value pairs separated by commas, e.g. t=time,q=q{{j}},tau=tau{{j}}")
         mapping[key.strip()] = value.strip()
     return mapping
 
@@ -1213,7 +1220,7 @@ def _identify_log(
     name: str, path: str, output: str | None, strict: bool, *, columns: str | None, current: bool,
     gains: str | None, payload: tuple[str, float] | None, friction: str, consistent: bool,
     validate_log: str | None, holdout: float, reference: str | None, cutoff: float | None,
-    decimate: int | None, velocity_band: float,
+    decimate: int | None, velocity_band: float, lock: str | None,
 ) -> None:  # fmt: skip
     """``identify ARM --log FILE``: the whole workflow of armdyn.identification, its report and exports."""
     from armdyn.identification.log import read_log
@@ -1233,7 +1240,12 @@ def _identify_log(
     if current and gains is None and payload is None:
         _fail("--current needs the current-to-torque gains: --gains G1,G2,... or --gains-from-payload RUN MASS")
     folder = _output_folder(output, "-o")
-    arm = _arm(name, strict)
+    locked = (
+        {key: float(catalog._value(value, "--lock")) for key, value in _column_map(lock, "--lock").items()}
+        if lock
+        else None
+    )
+    arm = _arm(name, strict, locked)
     mapping = _column_map(columns) if columns else None
     _activity.status(f"reading {path}")
     data = read_log(path, columns=mapping)
