@@ -37,6 +37,12 @@ MODULES = (
     "armdyn.model",
     "armdyn.identification.excitation",
     "armdyn.identification.least_squares",
+    "armdyn.identification.log",
+    "armdyn.identification.preprocess",
+    "armdyn.identification.friction",
+    "armdyn.identification.workflow",
+    "armdyn.identification.consistent",
+    "armdyn.identification.report",
     "armdyn.task_space",
     "armdyn.control.task",
     "armdyn.control.drives",
@@ -51,6 +57,7 @@ ENTRY_POINTS = (
     "armdyn.simulation.plant_variants",
     "armdyn.properties.check",
     "armdyn.identify",
+    "armdyn.identification.workflow.identify_log",
     "armdyn.symbolic.derive",
 )
 

@@ -61,20 +61,55 @@ class FrictionLaw:
         return {"viscous": (), "coulomb": (), "stribeck": ("vs",), "sigmoid": ("alpha", "shift")}[self.name]
 
     def columns(self, qd: np.ndarray) -> np.ndarray:
-        """The law's columns at joint velocities qd (..., n): (..., n, k) with F_j = columns[..., j, :] @ p_j."""
+        """The law's columns at joint velocities qd: F_j = columns[..., j, :] @ p_j.
+
+        Parameters
+        ----------
+        qd : array_like
+            Joint velocities, (..., n).
+
+        Returns
+        -------
+        numpy.ndarray
+            (..., n, k): each joint's columns, in the order of ``linear_names``.
+        """
         return law_columns(self.name, np.asarray(qd, dtype=float), self.nonlinear)
 
     def lower_bounds(self) -> np.ndarray:
-        """Sign rules of the linear parameters of one joint (Fv, Fc+, Fs, A >= 0, Fc- <= 0): lower bounds."""
+        """Lower bounds of one joint's linear parameters (the sign rules Fv, Fc+, Fs, A >= 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            (k,), -inf where there is none.
+        """
         rule = {"Fv": 0.0, "Fc+": 0.0, "Fc-": -np.inf, "Fs": 0.0, "A": 0.0}
         return np.array([rule[name] for name in self.linear_names])
 
     def upper_bounds(self) -> np.ndarray:
+        """Upper bounds of one joint's linear parameters (the sign rule Fc- <= 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            (k,), inf where there is none.
+        """
         rule = {"Fv": np.inf, "Fc+": np.inf, "Fc-": 0.0, "Fs": np.inf, "A": np.inf}
         return np.array([rule[name] for name in self.linear_names])
 
     def link_fields(self, linear: np.ndarray) -> list[dict[str, object]]:
-        """Link keywords (joint side, gear 1) of each joint from its linear parameters (n, k)."""
+        """Link keywords (joint side, gear 1) of each joint: viscous, coulomb, stribeck, sigmoid.
+
+        Parameters
+        ----------
+        linear : array_like
+            (n, k): each joint's linear parameters, in the order of ``linear_names``.
+
+        Returns
+        -------
+        list of dict
+            One mapping of Link keywords per joint.
+        """
         fields: list[dict[str, object]] = []
         for j, p in enumerate(np.asarray(linear, dtype=float)):
             values = dict(zip(self.linear_names, p, strict=True))
@@ -90,22 +125,74 @@ class FrictionLaw:
 
 
 def logistic(x: np.ndarray) -> np.ndarray:
-    """1 / (1 + exp(-x)), without overflow for large |x|."""
+    """1 / (1 + exp(-x)), without overflow for large |x|.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        The logistic function of x, same shape.
+    """
     return np.exp(-np.logaddexp(0.0, -x))
 
 
 def sigmoid_friction(qd: np.ndarray, alpha: np.ndarray, shift: np.ndarray) -> np.ndarray:
-    """s(alpha (qd + shift)) - s(alpha shift): Gaz et al.'s law (2019) per unit amplitude A; 0 at rest."""
+    """s(alpha (qd + shift)) - s(alpha shift): Gaz et al.'s law (2019) per unit amplitude A; 0 at rest.
+
+    Parameters
+    ----------
+    qd : numpy.ndarray
+        Joint velocities.
+    alpha, shift : numpy.ndarray
+        The law's slope and shift, broadcasting with qd.
+
+    Returns
+    -------
+    numpy.ndarray
+        The law per unit amplitude.
+    """
     return logistic(alpha * (qd + shift)) - logistic(alpha * shift)
 
 
 def stribeck_friction(qd: np.ndarray, vs: np.ndarray) -> np.ndarray:
-    """exp(-(qd / vs)^2) sign(qd): the Stribeck excess per unit breakaway torque Fs."""
+    """exp(-(qd / vs)^2) sign(qd): the Stribeck excess per unit breakaway torque Fs.
+
+    Parameters
+    ----------
+    qd : numpy.ndarray
+        Joint velocities.
+    vs : numpy.ndarray
+        The Stribeck velocities, broadcasting with qd.
+
+    Returns
+    -------
+    numpy.ndarray
+        The excess per unit Fs.
+    """
     return np.exp(-((qd / vs) ** 2)) * np.sign(qd)
 
 
 def nonlinear_column(name: str, qd: np.ndarray, parameters: np.ndarray) -> np.ndarray:
-    """The law's nonlinear term per unit amplitude at qd (...), parameters (..., k') broadcasting with it."""
+    """The law's nonlinear term per unit amplitude.
+
+    Parameters
+    ----------
+    name : str
+        "stribeck" or "sigmoid".
+    qd : numpy.ndarray
+        Joint velocities (...).
+    parameters : numpy.ndarray
+        (..., k'): the nonlinear parameters, broadcasting with qd.
+
+    Returns
+    -------
+    numpy.ndarray
+        The term, shape of qd.
+    """
     if name == "stribeck":
         return stribeck_friction(qd, parameters[..., 0])
     return sigmoid_friction(qd, parameters[..., 0], parameters[..., 1])
@@ -117,6 +204,20 @@ def nonlinear_derivatives(name: str, qd: np.ndarray, parameters: np.ndarray) -> 
     Sigmoid, g = s(alpha (qd + shift)) - s(alpha shift) with s' = s (1 - s): dg/dalpha =
     s'(alpha (qd + shift)) (qd + shift) - s'(alpha shift) shift, dg/dshift = alpha (s'(alpha (qd + shift))
     - s'(alpha shift)). Stribeck, h = exp(-(qd/vs)^2) sign(qd): dh/dvs = 2 qd^2 / vs^3 h.
+
+    Parameters
+    ----------
+    name : str
+        "stribeck" or "sigmoid".
+    qd : numpy.ndarray
+        Joint velocities (...).
+    parameters : numpy.ndarray
+        (..., k'): the nonlinear parameters, broadcasting with qd.
+
+    Returns
+    -------
+    numpy.ndarray
+        (..., k'): the derivatives.
     """
     if name == "stribeck":
         vs = parameters[..., 0]
@@ -130,7 +231,27 @@ def nonlinear_derivatives(name: str, qd: np.ndarray, parameters: np.ndarray) -> 
 
 
 def law_columns(name: str, qd: np.ndarray, nonlinear: np.ndarray) -> np.ndarray:
-    """Columns (..., n, k) of the named law at qd (..., n) with nonlinear parameters (n, k')."""
+    """The columns of the named law.
+
+    Parameters
+    ----------
+    name : str
+        One of LAWS.
+    qd : numpy.ndarray
+        Joint velocities, (..., n).
+    nonlinear : numpy.ndarray
+        (n, k'): the nonlinear parameters (k' = 0 for the viscous and Coulomb laws).
+
+    Returns
+    -------
+    numpy.ndarray
+        (..., n, k): Fv's column, then Fc+ and Fc- (Coulomb, Stribeck), then the nonlinear term.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When ``name`` is not one of LAWS.
+    """
     if name not in LAWS:
         raise ModelError(f"friction law must be one of {', '.join(LAWS)}, got {name!r}")
     parts = [qd]
@@ -147,6 +268,18 @@ def initial_nonlinear(name: str, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray
     The transition of the sigmoid (width about 4 / alpha) and the Stribeck velocity vs start at a
     twentieth of each joint's largest speed and are searched between 1/2000 and the whole range;
     the sigmoid's shift within a tenth of the range either side of zero.
+
+    Parameters
+    ----------
+    name : str
+        One of LAWS.
+    qd : numpy.ndarray
+        (N, n) joint velocities.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The start, lower and upper bounds, each (n, k').
     """
     top = np.maximum(np.max(np.abs(qd), axis=0), 1e-9)
     n = qd.shape[-1]

@@ -21,7 +21,20 @@ from armdyn.identification.workflow import IdentifiedModel, Validation
 
 
 def comparison(ours: Validation, reference: Validation, label: str = "reference") -> object:
-    """A pandas DataFrame per joint: our rms, the reference's, and how much lower ours is (%)."""
+    """Per joint: our rms, the reference's, and the change (%, negative where ours is lower).
+
+    Parameters
+    ----------
+    ours, reference : Validation
+        Predictions of the same samples.
+    label : str, optional
+        The reference's name in the column headers.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per joint.
+    """
     import pandas as pd
 
     return pd.DataFrame(
@@ -35,7 +48,18 @@ def comparison(ours: Validation, reference: Validation, label: str = "reference"
 
 
 def consistency_table(model: IdentifiedModel) -> object:
-    """Per link: mass, the pseudo-inertia's smallest eigenvalue and the triangle inequalities (a DataFrame)."""
+    """Per link: mass, the pseudo-inertia's eigenvalues and the triangle inequalities.
+
+    Parameters
+    ----------
+    model : IdentifiedModel
+        The identified model (its full parameter vector).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per link (``armdyn.identification.consistent.link_consistency``).
+    """
     import pandas as pd
 
     from armdyn.identification.consistent import link_consistency

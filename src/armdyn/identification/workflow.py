@@ -43,7 +43,18 @@ class Columns:
     """Which columns of the extended regressor a model holds, and their names.
 
     The full parameter vector is [the 10 n rigid-body parameters | per joint: the friction law's
-    linear parameters, then Ia if motor inertias are estimated | per joint: the offset if any].
+    linear parameters, then Ia if motor inertias are estimated, then the offset if any].
+
+    Parameters
+    ----------
+    n : int
+        The number of joints.
+    law : FrictionLaw
+        The friction law, with its nonlinear parameters.
+    motor_inertia : bool
+        Whether a reflected motor inertia Ia is a column of each joint.
+    offset : bool
+        Whether a torque offset is a column of each joint.
     """
 
     n: int
@@ -61,7 +72,20 @@ class Columns:
         return rigid + [f"{name}{j + 1}" for j in range(self.n) for name in self.per_joint]
 
     def matrix(self, arm: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        """The extended regressor at the samples, (N, n, 10 n + n k)."""
+        """The extended regressor at the samples.
+
+        Parameters
+        ----------
+        arm : ArmModel
+            The arm whose rigid-body regressor (Table 3.3.1, property 9) is extended.
+        q, qd, qdd : numpy.ndarray
+            (N, n) states.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N, n, 10 n + n k).
+        """
         rigid = regressor(arm, q, qd, qdd)[..., : 10 * self.n]
         law = self.law.columns(qd)  # (N, n, k_law)
         extra = [law]
@@ -111,7 +135,13 @@ class Validation:
         return self.rms / np.sqrt(np.mean(self.measured**2, axis=0))
 
     def table(self) -> object:
-        """A pandas DataFrame: per joint rms (N m), normalized rms and the measured torque's rms."""
+        """Per joint: rms (N m), normalized rms and the measured torque's rms.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per joint.
+        """
         import pandas as pd
 
         return pd.DataFrame(
@@ -197,17 +227,46 @@ class IdentifiedModel:
             return self.standard_errors / np.abs(self.phi_least_squares)
 
     def predict(self, q: object, qd: object, qdd: object) -> np.ndarray:
-        """The torques the identified model predicts, (..., n) for states (..., n)."""
+        """The torques the identified model predicts (offsets included).
+
+        Parameters
+        ----------
+        q, qd, qdd : array_like
+            States, (..., n).
+
+        Returns
+        -------
+        numpy.ndarray
+            (..., n) torques.
+        """
         q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
         return self.columns.matrix(self.prior, q, qd, qdd) @ self.phi
 
     def validate(self, log: Log, gains: object = None) -> Validation:
-        """Predicted against measured torque at the log's own samples (see ``validate``)."""
+        """Predicted against measured torque at the log's own samples (see ``validate``).
+
+        Parameters
+        ----------
+        log : Log
+            Held-out measurements.
+        gains : array_like, optional
+            For a log of motor currents.
+
+        Returns
+        -------
+        Validation
+        """
         return validate(self.predict, log, self.prepared, gains)
 
     def parameter_table(self) -> object:
         """A pandas DataFrame: each least-squares combination, its estimate, standard error, relative
-        standard deviation (%) and, with a consistent estimate, the consistent value."""
+        standard deviation (%) and, with a consistent estimate, the consistent value.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per estimated combination.
+        """
         import pandas as pd
 
         frame = pd.DataFrame(
@@ -320,7 +379,24 @@ def _link_parameters(phi: np.ndarray, n: int) -> list[tuple[float, np.ndarray, n
 
 def identified_arm(prior: ArmModel, columns: Columns, phi: np.ndarray, name: str | None = None) -> ArmModel:
     """The arm of a full parameter vector: the prior's kinematics and limits, the estimated links, friction
-    (joint side, gear 1) and motor inertias. Offsets are not the arm's (they are the sensor's)."""
+    (joint side, gear 1) and motor inertias. Offsets are not the arm's (they are the sensor's).
+
+    Parameters
+    ----------
+    prior : ArmModel
+        The arm whose kinematics, limits and names are kept.
+    columns : Columns
+        The columns of ``phi``.
+    phi : numpy.ndarray
+        The full parameter vector, physically consistent.
+    name : str, optional
+        The new arm's name (default the prior's with "_identified").
+
+    Returns
+    -------
+    ArmModel
+        The identified arm, of the prior's class.
+    """
     import dataclasses
 
     n, k = columns.n, len(columns.per_joint)
@@ -347,7 +423,7 @@ def identify_log(
     gains: Sequence[float] | np.ndarray | None = None,
     cutoff: float | None = None,
     decimate: int | None = None,
-    trim: float = 0.1,
+    trim: float | None = None,
     motor_inertia: bool = True,
     offset: bool = True,
     regularization: float = 1e-4,
@@ -378,7 +454,9 @@ def identify_log(
         default from the excitation's bandwidth), the decimation factor and the seconds trimmed
         at each end.
     motor_inertia, offset : bool, optional
-        Estimate a reflected motor inertia and a torque offset per joint (both default True).
+        Estimate a reflected motor inertia and a torque offset per joint (both default True; the
+        Coulomb and Stribeck laws hold an offset in their asymmetric Coulomb terms already, so
+        with them ``offset`` is not estimated apart).
     regularization : float, optional
         Weight of the distance to the prior in the consistent estimate (default 1e-4, relative to
         the data term): it settles the parameters the data cannot tell apart.
@@ -397,8 +475,6 @@ def identify_log(
         When the log does not fit the arm (joints, units), holds currents without gains, does not
         excite the identifiable parameters, or the consistent estimate is infeasible with the bounds.
     """
-    from armdyn.identification.consistent import bounds_from_prior, consistent_estimate
-
     say = progress or (lambda text: None)
     if friction not in LAWS:
         raise ModelError(f"friction must be one of {', '.join(LAWS)}, got {friction!r}")
@@ -417,15 +493,17 @@ def identify_log(
     say(f"fitting the {friction} friction law")
     base = base_parameters(arm, drives=motor_inertia)  # the rigid-body base set, with Ia where estimated
     n = arm.n
+    offset = offset and friction not in ("coulomb", "stribeck")  # an asymmetric Coulomb law holds the offset already
     law = FrictionLaw(friction, np.zeros((n, 0)))
+    if law.nonlinear_names:
+        linear_part = FrictionLaw({"stribeck": "coulomb", "sigmoid": "viscous"}[friction], np.zeros((n, 0)))
+        fixed = Columns(n, linear_part, motor_inertia, offset)
+        X, y, joint = _stacked(fixed, arm, prepared)
+        keep, _ = _base_selection(fixed, base)
+        law = fit_nonlinear(friction, X[:, keep], y, prepared.qd.reshape(-1), joint, n)
     columns = Columns(n, law, motor_inertia, offset)
     X, y, joint = _stacked(columns, arm, prepared)
     keep, regrouping = _base_selection(columns, base)
-    if law.nonlinear_names:
-        qd_rows = prepared.qd.reshape(-1)
-        law = fit_nonlinear(friction, X[:, keep], y, qd_rows, joint, n)
-        columns = Columns(n, law, motor_inertia, offset)
-        X, y, joint = _stacked(columns, arm, prepared)
     timings["friction"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -439,6 +517,8 @@ def identify_log(
     estimate = None
     identified = None
     if consistent:
+        from armdyn.identification.consistent import bounds_from_prior, consistent_estimate
+
         start = time.perf_counter()
         say("the physically consistent estimate (semidefinite program)")
         k = len(columns.per_joint)
@@ -447,7 +527,7 @@ def identify_log(
         prior[10 * n :] = phi[10 * n :]
         lower = np.tile(np.concatenate([law.lower_bounds(), [0.0] * motor_inertia, [-np.inf] * offset]), n)
         upper = np.tile(np.concatenate([law.upper_bounds(), [np.inf] * motor_inertia, [np.inf] * offset]), n)
-        mass_bounds = bounds_from_prior(prior[: 10 * n], mass_tolerance) if mass_tolerance is not None else None
+        mass_bounds = bounds_from_prior(prior[: 10 * n], n, mass_tolerance) if mass_tolerance is not None else None
         estimate = consistent_estimate(
             X,
             y,
