@@ -486,7 +486,8 @@ def main() -> None:
         ),
         "sysid's cost (sum of squares of its normalized q, qd residuals over the windows) at the true parameters "
         "is the last number of its note: where it is above the cost reached, simulating the noisy torques through "
-        "MuJoCo's friction makes a wrong model fit the windows better than the truth, and more iterations do not lead to the truth.",
+        "MuJoCo's friction makes a wrong model fit the windows better than the truth, and more iterations do not "
+        "lead to the truth.",
     ]
     report.show(table)
     load_after = os.getloadavg()
