@@ -41,7 +41,7 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.aba import aba_core
 from armdyn.dynamics.coriolis import body_coriolis
-from armdyn.dynamics.friction import sigmoid_slope, smooth_sign, stribeck_slope, stribeck_torque
+from armdyn.dynamics.friction import exact_sign, sigmoid_slope, smooth_sign, stribeck_slope, stribeck_torque
 from armdyn.dynamics.linalg import cholesky, cholesky_solve
 from armdyn.dynamics.packed import (
     ABA_FIXED,
@@ -145,7 +145,7 @@ def nonlinear_slope(model: np.ndarray, j: int, rate: float, eps: float) -> float
             sign = smooth_sign(rate, eps)
             sign_slope = (1.0 - sign * sign) / eps if abs(rate / eps) < 20.0 else 0.0
         else:
-            sign, sign_slope = (1.0 if rate > 0.0 else (-1.0 if rate < 0.0 else 0.0)), 0.0
+            sign, sign_slope = exact_sign(rate), 0.0
         slope += stribeck_slope(force, model[b + STRIBECK_SPEED], sign, sign_slope, rate)
     return slope
 

@@ -55,6 +55,12 @@ def smooth_sign(rate: float, eps: float) -> float:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
+def exact_sign(rate: float) -> float:
+    """sgn(qd): 1, -1, or 0 at rest (the exact sign of the Coulomb and Stribeck laws)."""
+    return 1.0 if rate > 0.0 else (-1.0 if rate < 0.0 else 0.0)
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
 def logistic(x: float) -> float:
     """1 / (1 + exp(-x)) without overflow for any x (exp of a non-positive number only)."""
     if x >= 0.0:
@@ -117,8 +123,7 @@ def sigmoid_slope(model: np.ndarray, j: int, rate: float) -> float:
 def stribeck(model: np.ndarray, j: int, rate: float) -> float:
     """Fs_j exp(-(qd_j/vs_j)^2) sgn(qd_j) of the packed model (the exact sign)."""
     b = HEADER + STRIDE * j
-    sign = 1.0 if rate > 0.0 else (-1.0 if rate < 0.0 else 0.0)
-    return stribeck_torque(model[b + STRIBECK_FORCE], model[b + STRIBECK_SPEED], sign, rate)
+    return stribeck_torque(model[b + STRIBECK_FORCE], model[b + STRIBECK_SPEED], exact_sign(rate), rate)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -142,7 +147,7 @@ def smooth_coulomb(coulomb_table: np.ndarray, eps: np.ndarray, i: int, rate: flo
         smooth = smooth_sign(rate, eps[i])
         value = smooth * coulomb_table[i, 0] if rate >= 0.0 else -smooth * coulomb_table[i, 1]
     else:
-        smooth = 1.0 if rate > 0.0 else (-1.0 if rate < 0.0 else 0.0)
+        smooth = exact_sign(rate)
         value = coulomb_torque(coulomb_table[i, 0], coulomb_table[i, 1], rate)
     if coulomb_table[i, 2] != 0.0:
         value += stribeck_torque(coulomb_table[i, 2], coulomb_table[i, 3], smooth, rate)
