@@ -759,7 +759,13 @@ def _dynamics_sheet(arm: Robot) -> _Sheet:
     friction = _units(arm, "N m", "N")
     columns = ["link", "mass (kg)", "c.o.m. (m)", "Ixx Iyy Izz (kg m^2)", "Ixy Iyz Ixz (kg m^2)", "Jm (kg m^2)",
                "G (ratio)", f"B ({_units(arm, 'N m/(rad/s)', 'N/(m/s)')})", f"Tc+ / Tc- ({friction})"]  # fmt: skip
-    sheet = _Sheet("Dynamics (inertia about the c.o.m. in the link frame; motor side Jm, B, Tc)", columns, [])
+    stribeck, sigmoid = bool(np.any(arm.stribeck_friction[:, 0])), bool(np.any(arm.sigmoid_friction[:, 0]))
+    speed = _units(arm, "rad/s", "m/s")
+    columns += [f"Stribeck Fs ({friction}) / vs ({speed})"] if stribeck else []
+    columns += [f"sigmoid A ({friction}) / alpha ({_units(arm, 's/rad', 's/m')}) / shift ({speed})"] if sigmoid else []
+    title = "Dynamics (inertia about the c.o.m. in the link frame; motor side Jm, B, Tc"
+    title += "; joint side Stribeck and sigmoid)" if stribeck or sigmoid else ")"
+    sheet = _Sheet(title, columns, [])
     for link in arm.links:
         body = link.inertial
         inertia = body.inertia
@@ -774,6 +780,10 @@ def _dynamics_sheet(arm: Robot) -> _Sheet:
             _number(link.viscous),
             f"{_number(link.coulomb[0])} / {_number(link.coulomb[1])}",
         ])  # fmt: skip
+        if stribeck:
+            sheet.rows[-1].append(f"{_number(link.stribeck[0])} / {_number(link.stribeck[1])}")
+        if sigmoid:
+            sheet.rows[-1].append(" / ".join(_number(x) for x in link.sigmoid))
     return sheet
 
 

@@ -706,11 +706,23 @@ def _coriolis_rows(
                         f"{len(q)} samples", torque, "residual"))  # fmt: skip
 
 
+def _bounded_friction(arm: Robot) -> np.ndarray:
+    """max |F_i - Fv_i qd_i| per joint: the Coulomb step's larger side, plus the Stribeck Fs and the sigmoid's A
+    (|A / (1 + exp(-alpha (qd + shift))) - A / (1 + exp(-alpha shift))| < A)."""
+    return np.abs(arm.coulomb_friction).max(axis=1) + arm.stribeck_friction[:, 0] + arm.sigmoid_friction[:, 0]
+
+
+def _has_friction(arm: Robot) -> bool:
+    """True when the arm has any friction (viscous, Coulomb, Stribeck or sigmoid)."""
+    laws = (arm.viscous_friction, arm.coulomb_friction, arm.stribeck_friction[:, 0], arm.sigmoid_friction[:, 0])
+    return bool(any(np.any(law) for law in laws))
+
+
 def _friction_rows(arm: Robot, x: np.ndarray, rng: np.random.Generator, rows: list[Row], bounds: dict) -> None:
     speeds = x * rng.uniform(0.0, 5.0, (len(x), 1))
     F = arm.friction(speeds)
     v = float(np.max(arm.viscous_friction, initial=0.0))
-    k = float(np.linalg.norm(np.abs(arm.coulomb_friction).max(axis=1)))
+    k = float(np.linalg.norm(_bounded_friction(arm)))
     bounds["v"], bounds["k"] = v, k
     lhs = np.linalg.norm(F, axis=-1)
     rhs = v * np.linalg.norm(speeds, axis=-1) + k
@@ -823,7 +835,7 @@ def _passivity_rows(robot: Robot, ranges: list[tuple[float, float]], rows: list[
     """
     q0, amplitude, omega = _passivity_motion(robot, ranges)
     loose, tight = PASSIVITY_RTOL
-    friction = bool(np.any(robot.viscous_friction) or np.any(robot.coulomb_friction))
+    friction = _has_friction(robot)
     for arm, label in ((robot.without_friction(), "lossless"), (robot, "with friction")):
         if label == "with friction" and not friction:
             continue
@@ -1111,7 +1123,7 @@ def _check_task(
 
         _guarded(["skew"], skew, rows)
     if region.square and "friction" in groups:
-        if np.any(arm.viscous_friction) or np.any(arm.coulomb_friction):
+        if _has_friction(arm):
             _guarded(["friction"], lambda: _task_friction_rows(region, rng, rows, bounds, units), rows)
         else:
             notes.append("the arm has no friction (F = 0, so Fbar = 0): the friction rows are skipped")
@@ -1239,7 +1251,7 @@ def _task_friction_rows(
     speeds = _units_rows(rng.normal(size=(k, region.m))) * rng.uniform(0.0, 5.0, (k, 1))
     F = task_space.task_friction(robot, output, q, _solve(J, speeds), max_condition=region.guard)
     viscous = robot.viscous_friction
-    coulomb = float(np.linalg.norm(np.abs(robot.coulomb_friction).max(axis=1)))
+    coulomb = float(np.linalg.norm(_bounded_friction(robot)))
 
     def inverse(p: np.ndarray) -> np.ndarray:
         J = region.jacobian(p)

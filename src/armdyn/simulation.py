@@ -7,9 +7,10 @@ controller and the trajectory are armdyn's own and the disturbance is constant, 
 RK4 run is one compiled Numba call.
 
 Coulomb friction is smoothed: Fd_i = tanh(qd_i / eps_i) Tc+ (qd_i >= 0) or -tanh(qd_i / eps_i) Tc-
-(qd_i < 0), continuous through zero velocity, so the integrator does not chatter. With
-``coulomb_smoothing="auto"`` (the default) eps_i = max(1e-3 rad/s, Tc_i dt / M_ii(q0)), which
-keeps the stiffness of the smoothed law within fixed-step RK4's stability region; a number
+(qd_i < 0), continuous through zero velocity, so the integrator does not chatter; the Stribeck
+law's sign alike, Fs_i exp(-(qd_i/vs_i)^2) tanh(qd_i / eps_i) (the sigmoid law is smooth as it is).
+With ``coulomb_smoothing="auto"`` (the default) eps_i = max(1e-3 rad/s, (Tc_i + Fs_i) dt / M_ii(q0)),
+which keeps the stiffness of the smoothed law within fixed-step RK4's stability region; a number
 sets every eps_i, and eps -> 0 recovers Fd = Tc sgn(qd). The integral
 of the error for PID control is accumulated once per controller evaluation.
 """
@@ -36,7 +37,7 @@ from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.drives import closed_loop, hold_limits
-from armdyn.dynamics.friction import smooth_coulomb, smooth_coulomb_vector
+from armdyn.dynamics.friction import sign_law_table, smooth_coulomb, smooth_coulomb_vector, stribeck_vector
 from armdyn.dynamics.linalg import cholesky, cholesky_solve_vector
 from armdyn.dynamics.packed import (
     COULOMB_NEG,
@@ -49,6 +50,9 @@ from armdyn.dynamics.packed import (
     MASS,
     N_JOINTS,
     PIVOT_FLOOR,
+    SIGMOID_AMPLITUDE,
+    SIGMOID_REST,
+    STRIBECK_FORCE,
     STRIDE,
     TOOL_LINK,
     VISCOUS,
@@ -419,10 +423,10 @@ def rk4_advance(y: np.ndarray, k1: np.ndarray, k2: np.ndarray, k3: np.ndarray, k
 def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, state: tuple, record: tuple) -> None:
     """Steps first..last-1 of fixed-step RK4 (the book's TRESP), recording each step's start.
 
-    plant = (models (P, L), Coulomb tables (P, n, 2), switch times (P - 1,), disturbance (n,),
+    plant = (models (P, L), Coulomb and Stribeck tables (P, n, 4), switch times (P - 1,), disturbance (n,),
     Coulomb smoothing eps (n,), joint stops (n, 4): lower, upper, K, B, see stop_torque): the plant in
     force is models[p] from switch time p - 1 on.
-    controller = (kind, model, model Coulomb (n, 2), gain table (4, n), hold, shares plant):
+    controller = (kind, model, model Coulomb and Stribeck (n, 4), gain table (4, n), hold, shares plant):
     control.control_law every ``hold`` steps on ``model``; "shares plant" when the model is
     the plant's own, so that the plant reuses the controller's M and N.
     trajectory = (kind, params (4, n), q0 (n,)): trajectories.desired.
@@ -567,16 +571,17 @@ def run_drives(
 
 # ----- the Python side ---------------------------------------------------------------------------------
 def packed_plants(arms: list[Robot]) -> tuple[np.ndarray, np.ndarray]:
-    """Compiled plants with their Coulomb friction taken out (the loop adds the smoothed one)."""
+    """Compiled plants with their Coulomb and Stribeck friction taken out (the loop adds the smoothed
+    laws), and those laws per arm, (A, n, 4): Tc+, Tc-, Fs, vs (friction.sign_law_table)."""
     plants, coulombs = [], []
     for arm in arms:
         assert arm.packed is not None, "the callers refuse symbolic arms"
         buffer = arm.packed.copy()  # packed once per Robot
         for i in range(arm.n):
             base = HEADER + STRIDE * i
-            buffer[base + COULOMB_POS] = buffer[base + COULOMB_NEG] = 0.0
+            buffer[base + COULOMB_POS] = buffer[base + COULOMB_NEG] = buffer[base + STRIBECK_FORCE] = 0.0
         plants.append(buffer)
-        coulombs.append(arm.coulomb_friction.copy())
+        coulombs.append(sign_law_table(arm))
     if len({b.shape for b in plants}) != 1:
         raise ModelError("every arm of a run (events included) must have the same joints")
     return np.stack(plants), np.stack(coulombs)
@@ -1226,7 +1231,7 @@ def _smoothing(arm: Robot, eps: str | float, dt: float, q0: np.ndarray) -> np.nd
     Tc_i / (eps_i M_ii) times dt stays at 1, inside RK4's stability limit (2.79), and eps_i is
     never below 1e-3 rad/s."""
     if isinstance(eps, str):
-        largest = np.abs(arm.coulomb_friction).max(axis=1)
+        largest = np.abs(arm.coulomb_friction).max(axis=1) + arm.stribeck_friction[:, 0]
         diagonal = np.diag(arm.inertia_matrix(q0))  # zero where M(q0) is singular: the run then stops there
         stiffness = np.divide(largest * dt, diagonal, out=np.zeros(arm.n), where=diagonal > 0)
         return np.maximum(1e-3, stiffness)
@@ -1240,11 +1245,14 @@ def _plant_at(arms: list[Robot], events: list, t: float) -> Robot:
 
 def _dynamics(arms, events, eps, stops):
     bare = [a.replace([_no_coulomb(link) for link in a.links]) for a in arms]
+    stribeck = [a.stribeck_friction if np.any(a.stribeck_friction[:, 0] != 0) else None for a in arms]
 
     def qdd(t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         _check_bounded(q, qd, tau)
         index = sum(1 for e in events if t >= e[0])
         friction = smooth_coulomb_vector(arms[index].coulomb_friction, eps, qd)
+        if stribeck[index] is not None:
+            friction = friction + stribeck_vector(stribeck[index], qd, eps)
         return bare[index].forward_dynamics(q, qd, tau - friction + stop_torques(stops, q, qd))
 
     return qdd
@@ -1253,7 +1261,7 @@ def _dynamics(arms, events, eps, stops):
 def _no_coulomb(link):
     import dataclasses
 
-    return dataclasses.replace(link, coulomb=(0.0, 0.0))
+    return dataclasses.replace(link, coulomb=(0.0, 0.0), stribeck=(0.0, 0.0))
 
 
 def _desired_of(
@@ -1490,9 +1498,9 @@ class Plants:
     arm : Robot
         The nominal arm they vary.
     packed : numpy.ndarray
-        (V, L): each variant's packed model, its Coulomb friction taken out.
+        (V, L): each variant's packed model, its Coulomb and Stribeck friction taken out.
     coulomb : numpy.ndarray
-        (V, n, 2): each variant's Coulomb friction (Tc+, Tc-) at the joints.
+        (V, n, 4): each variant's Coulomb friction (Tc+, Tc-) at the joints and Stribeck friction (Fs, vs).
     """
 
     arm: Robot
@@ -1529,7 +1537,8 @@ def plant_variants(
     the nominal row with its links scaled and the payload added by the parallel-axis theorem, in
     one array operation: no Robot is built per variant. Variant k equals
     ``arm.with_payload(...)`` with the links' masses, first moments and inertias times
-    ``mass_scale[k]`` and the viscous and Coulomb friction times ``friction_scale[k]``.
+    ``mass_scale[k]`` and the friction forces (viscous B, Coulomb Tc, Stribeck Fs, the sigmoid's A)
+    times ``friction_scale[k]``.
 
     Parameters
     ----------
@@ -1548,7 +1557,7 @@ def plant_variants(
         Factors > 0 on the links' mass properties: one, (n,) per joint, (count, 1) per variant, or
         (count, n).
     friction_scale : float or array_like, optional
-        Factors >= 0 on the joints' viscous and Coulomb friction, shaped as ``mass_scale``.
+        Factors >= 0 on the joints' friction forces (B, Tc, Fs, A), shaped as ``mass_scale``.
 
     Returns
     -------
@@ -1592,9 +1601,9 @@ class Nominal:
     Attributes
     ----------
     packed : numpy.ndarray
-        (L,): the packed model, its Coulomb friction taken out.
+        (L,): the packed model, its Coulomb and Stribeck friction taken out.
     coulomb : numpy.ndarray
-        (n, 2): Coulomb friction at the joints.
+        (n, 4): Coulomb friction at the joints (Tc+, Tc-) and Stribeck friction (Fs, vs).
     tool : int
         The tool link's index.
     rotation, offset : numpy.ndarray
@@ -1639,16 +1648,19 @@ def nominal(arm: Robot) -> Nominal:
 def vary_packed(
     arm: Nominal, mass: np.ndarray, com: np.ndarray, moments: np.ndarray, scale: np.ndarray, friction: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(packed (V, L), Coulomb (V, n, 2)) of V variants: links' mass properties times ``scale`` (V, n),
-    friction times ``friction`` (V, n), the payload (mass (V,), centre (V, 3) and principal moments
-    (V, 3) in the tool link's frame) added by the parallel-axis theorem. The arguments are checked
-    by ``plant_variants``."""
+    """(packed (V, L), Coulomb and Stribeck (V, n, 4)) of V variants: links' mass properties times ``scale``
+    (V, n), friction forces (B, Tc, Fs, the sigmoid's A) times ``friction`` (V, n), the payload (mass (V,),
+    centre (V, 3) and principal moments (V, 3) in the tool link's frame) added by the parallel-axis theorem.
+    The arguments are checked by ``plant_variants``."""
     count, n = scale.shape
     packed = np.repeat(arm.packed[None], count, axis=0)
     for j in range(n):
         start = HEADER + STRIDE * j
         packed[:, start + MASS : start + INERTIA + 6] *= scale[:, j, None]
         packed[:, start + VISCOUS] *= friction[:, j]
+        if packed[0, start + SIGMOID_AMPLITUDE] != 0.0:
+            packed[:, start + SIGMOID_AMPLITUDE] *= friction[:, j]
+            packed[:, start + SIGMOID_REST] *= friction[:, j]
     start = HEADER + STRIDE * arm.tool
     centre = com @ arm.rotation.T + arm.offset  # the payload's centre in the body frame
     inertia = np.einsum("ij,kj,jl->kil", arm.rotation, moments, arm.rotation.T)  # R diag(I) R^T per variant
@@ -1658,7 +1670,9 @@ def vary_packed(
     packed[:, start + FIRST_MOMENT : start + FIRST_MOMENT + 3] += mass[:, None] * centre
     upper = inertia[:, [0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]]  # Ixx Ixy Ixz Iyy Iyz Izz
     packed[:, start + INERTIA : start + INERTIA + 6] += upper
-    return packed, arm.coulomb[None] * friction[:, :, None]
+    table = np.repeat(arm.coulomb[None], count, axis=0)
+    table[:, :, :3] *= friction[:, :, None]  # Tc+, Tc-, Fs; not the Stribeck velocity vs
+    return packed, table
 
 
 SUMMARY_NAMES = ("final_error", "max_error_after", "rms_error", "max_tau", "final_q")
@@ -1674,7 +1688,7 @@ def _auto_smoothing(plant: np.ndarray, coulomb: np.ndarray, q: np.ndarray, qd: n
     mass_matrix_and_bias(plant, np.empty(workspace_size(n)), q, qd, M, N)
     eps = np.empty(n)
     for i in range(n):
-        largest = max(abs(coulomb[i, 0]), abs(coulomb[i, 1]))
+        largest = max(abs(coulomb[i, 0]), abs(coulomb[i, 1])) + coulomb[i, 2]
         eps[i] = max(1e-3, largest * dt / M[i, i] if M[i, i] > 0 else 0.0)
     return eps
 
@@ -1685,9 +1699,9 @@ def run_many(
 ) -> None:
     """Runs r = 0..N-1 of run_rk4 in parallel (prange over runs), each in chunks of rows.
 
-    plants = (packed (P, L), Coulomb (P, n, 2), plant of each run (N,), disturbance (N, n)); each run's
+    plants = (packed (P, L), Coulomb and Stribeck (P, n, 4), plant of each run (N,), disturbance (N, n)); each run's
     Coulomb smoothing is simulate's "auto" on its own plant and start (_auto_smoothing).
-    models = (packed (Q, L), Coulomb (Q, n, 2), model of each run (N,), shares plant (N,)).
+    models = (packed (Q, L), Coulomb and Stribeck (Q, n, 4), model of each run (N,), shares plant (N,)).
     control = (kind, gains (N, 4, n), hold). path = (kind, params (N, 4, n)). starts = (q0 (N, n),
     qd0 (N, n)). timing = (dt, rows, chunk, keep every, first row of the summaries' "after").
     outputs = (summaries (N, 5, n), outcome (N, 3), kept q, qd, tau, q_d (N, K, n)): each run writes
@@ -1857,7 +1871,7 @@ def _runs_of(value: object, name: str, runs: int, n: int, default: float = 0.0) 
 
 
 def _variants(value: object, arm: Robot, runs: int, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(packed (V, L), Coulomb (V, n, 2), variant of each run) from None (the arm), a Robot or Plants."""
+    """(packed (V, L), Coulomb and Stribeck (V, n, 4), variant of each run) from None (the arm), a Robot or Plants."""
     if value is None:
         value = arm
     if isinstance(value, Robot):

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 
 from armdyn import inputs
 from armdyn.dynamics.api import smoothing_per_joint
-from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb_vector
+from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb_vector, stribeck_vector
 from armdyn.errors import ArgumentError, MissingDependencyError, ModelError
 from armdyn.robot import Robot
 
@@ -413,13 +413,14 @@ def linearize(arm: Robot, q0: object, qd0: object, tau0: object, coulomb_smoothi
 
 
 def _check_differentiable(arm: Robot, qd: np.ndarray, coulomb_smoothing: object) -> None:
-    """A ModelError when a joint with the exact Coulomb law (no smoothing) is at zero velocity."""
+    """A ModelError when a joint with the exact Coulomb or Stribeck law (no smoothing) is at zero velocity."""
     eps = np.zeros(arm.n) if coulomb_smoothing is None else np.broadcast_to(np.asarray(coulomb_smoothing), (arm.n,))
-    stuck = (qd == 0) & (arm.coulomb_friction != 0).any(axis=1) & ~(eps > 0)
-    if np.any(stuck):
-        joint = arm.joint_names[int(np.flatnonzero(stuck)[0])]
-        raise ModelError(f"Coulomb friction of joint '{joint}' is not differentiable at zero velocity; linearize "
-                         "elsewhere, or give coulomb_smoothing > 0")  # fmt: skip
+    for law, table in (("Coulomb", arm.coulomb_friction), ("Stribeck", arm.stribeck_friction[:, :1])):
+        stuck = (qd == 0) & (table != 0).any(axis=1) & ~(eps > 0)
+        if np.any(stuck):
+            joint = arm.joint_names[int(np.flatnonzero(stuck)[0])]
+            raise ModelError(f"{law} friction of joint '{joint}' is not differentiable at zero velocity; linearize "
+                             "elsewhere, or give coulomb_smoothing > 0")  # fmt: skip
 
 
 def _rates_and_jacobians(
@@ -433,6 +434,9 @@ def _rates_and_jacobians(
     if coulomb_smoothing is not None:
         eps, table = np.broadcast_to(np.asarray(coulomb_smoothing, float), (n,)), arm.coulomb_friction
         torque = tau - smooth_coulomb_vector(table, eps, qd) + coulomb_vector(table, qd)
+        stribeck = arm.stribeck_friction
+        if np.any(stribeck[:, 0] != 0):  # the Stribeck law's sign smoothed alike
+            torque = torque - stribeck_vector(stribeck, qd, eps) + stribeck_vector(stribeck, qd)
     qdd = arm.forward_dynamics(q, qd, torque)
     d_q, d_qd, d_tau = arm.forward_dynamics_derivatives(q, qd, tau, coulomb_smoothing=coulomb_smoothing)
     jacobian = np.zeros((2 * n, 2 * n))

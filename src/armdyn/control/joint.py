@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 from armdyn import inputs
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.drives import KI, KP, KV
-from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb, smooth_coulomb_vector
+from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb, smooth_coulomb_vector, stribeck_vector
 from armdyn.dynamics.rnea import gravity_core
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.errors import ArgumentError, ModelError
@@ -174,7 +174,7 @@ class ComputedTorque:
         """tau for one state (n,) or a batch (..., n) of the states' common batch shape.
 
         ``coulomb_smoothing`` (eps per joint, given by simulate) compensates the model's Coulomb
-        friction with the smoothed law the simulated plant follows, as the compiled law does;
+        and Stribeck friction with the smoothed law the simulated plant follows, as the compiled law does;
         without it the exact sign law. ``t`` is not used. A state that is not numbers of shape
         (..., n), holds NaN or infinity, or does not broadcast with the others is a ModelError
         naming it."""
@@ -189,6 +189,9 @@ class ComputedTorque:
             eps, table = _smoothing(coulomb_smoothing, n), arm.coulomb_friction
             with np.errstate(over="ignore"):  # qd / a tiny eps overflows to inf, where tanh is exactly +-1
                 N = N - coulomb_vector(table, qd) + smooth_coulomb_vector(table, eps, qd)
+                stribeck = arm.stribeck_friction
+                if np.any(stribeck[:, 0] != 0):  # the Stribeck law's sign smoothed alike
+                    N = N - stribeck_vector(stribeck, qd) + stribeck_vector(stribeck, qd, eps)
         return _times_matrix(arm.inertia_matrix(q), u) + N
 
 
@@ -198,8 +201,9 @@ def computed_torque_law(
     desired: np.ndarray, e_int: np.ndarray, gain: np.ndarray, u: np.ndarray, M: np.ndarray, N: np.ndarray,
     tau: np.ndarray,
 ) -> None:  # fmt: skip
-    """tau = M (qdd_d + kv edot + kp e + ki int e) + N on the model; its Coulomb friction compensated
-    with the simulation's smooth law. Leaves M and N of this state in M and N."""
+    """tau = M (qdd_d + kv edot + kp e + ki int e) + N on the model; its Coulomb and Stribeck friction
+    (``model_coulomb``, (n, 4), taken out of ``model`` by simulation.packed_plants) compensated with the
+    simulation's smooth law. Leaves M and N of this state in M and N."""
     n = q.shape[0]
     for i in range(n):
         u[i] = (

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from armdyn.dynamics.friction import coulomb_torque
+from armdyn.dynamics.friction import coulomb_torque, nonlinear_friction
 from armdyn.dynamics.packed import (
     ARMATURE,
     COULOMB_NEG,
@@ -50,6 +50,8 @@ from armdyn.dynamics.packed import (
     PIVOT_FLOOR,
     POSITION,
     ROTATION,
+    SIGMOID_AMPLITUDE,
+    STRIBECK_FORCE,
     STRIDE,
     VISCOUS,
 )
@@ -227,6 +229,7 @@ def _pivot_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
     b = HEADER + STRIDE * i
     armature, viscous, floor = model[b + ARMATURE], model[b + VISCOUS], model[PIVOT_FLOOR]
     positive, negative = model[b + COULOMB_POS], model[b + COULOMB_NEG]
+    nonlinear = model[b + STRIBECK_FORCE] != 0.0 or model[b + SIGMOID_AMPLITUDE] != 0.0
     for s in range(BLOCK):
         s0, s1, s2 = x[S_ * BLOCK + s], x[(S_ + 1) * BLOCK + s], x[(S_ + 2) * BLOCK + s]
         s3, s4, s5 = x[(S_ + 3) * BLOCK + s], x[(S_ + 4) * BLOCK + s], x[(S_ + 5) * BLOCK + s]
@@ -258,6 +261,9 @@ def _pivot_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
         x[D_ * BLOCK + s] = D
         x[VALUE_ * BLOCK + s] = x[TAU_ * BLOCK + s] - (viscous * rate + coulomb) - spa
         x[FLAG_ * BLOCK + s] = 0.0 if floor < D else 1.0
+    if nonlinear:  # the Stribeck and sigmoid friction, a loop of its own (the one above stays as it vectorizes)
+        for s in range(BLOCK):
+            x[VALUE_ * BLOCK + s] -= nonlinear_friction(model, i, x[QD_ * BLOCK + s])
 
 
 @njit(**NUMBA_OPTIONS)

@@ -417,7 +417,9 @@ def gravity_vector(arm: Robot, q: ArrayLike, out: np.ndarray | None = None) -> n
 @_public
 def friction(arm: Robot, qd: ArrayLike, out: np.ndarray | None = None) -> np.ndarray:
     """F(qd) = Fv qd + Fd(qd), joint side: G^2 B qd plus |G| Tc+ (qd > 0) or |G| Tc- (qd < 0)
-    (Table 3.3.1, property 6).
+    (Table 3.3.1, property 6), plus the Stribeck law Fs exp(-(qd/vs)^2) sgn(qd) and the sigmoid law
+    A / (1 + exp(-alpha (qd + shift))) - A / (1 + exp(-alpha shift)) of Gaz et al. (IEEE RA-L 4(4),
+    2019) where the links have them (Link.stribeck, Link.sigmoid).
 
     Parameters
     ----------
@@ -788,7 +790,8 @@ def inverse_dynamics_derivatives(
     (Carpentier and Mansard, RSS 2018; armdyn.dynamics.derivatives), compiled, one state or a
     batch in one parallel call. The reflected motor inertia and the viscous friction are included;
     the exact Coulomb law is constant away from zero velocity and adds nothing, its smoothed form
-    tanh(qd / eps) Tc (``coulomb_smoothing``, as ``simulate`` uses it) adds its slope.
+    tanh(qd / eps) Tc (``coulomb_smoothing``, as ``simulate`` uses it) adds its slope; the Stribeck
+    law (its sign smoothed alike) and the sigmoid law add theirs.
     d tau/dqdd is M (``inertia_matrix``).
 
     Parameters

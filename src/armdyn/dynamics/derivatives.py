@@ -24,7 +24,8 @@ composites I^C_j, D^C_j, F^C_j summed over the subtree of j:
 (zero for joints on different branches): O(n d) work for depth d, a few dot products per pair.
 The motor terms add the reflected inertia to M's diagonal and the viscous friction to d tau/dqd's;
 the Coulomb law is constant away from zero velocity and adds d/dqd of its smoothed form
-tanh(qd / eps) Tc where a smoothing eps > 0 is given (friction.smooth_coulomb).
+tanh(qd / eps) Tc where a smoothing eps > 0 is given (friction.smooth_coulomb); the Stribeck law
+adds its slope (its sign smoothed alike) and the sigmoid law A alpha s (1 - s).
 
 Forward dynamics: qdd = FD(q, qd, tau) by the articulated-body algorithm, then the derivatives
 above at (q, qd, qdd) and one Cholesky factorization of M: d qdd/dq = -M^-1 d tau/dq,
@@ -40,7 +41,7 @@ from numba import njit, prange, types
 
 from armdyn.dynamics.aba import aba_core
 from armdyn.dynamics.coriolis import body_coriolis
-from armdyn.dynamics.friction import smooth_sign
+from armdyn.dynamics.friction import exact_sign, sigmoid_slope, smooth_sign, stribeck_slope, stribeck_torque
 from armdyn.dynamics.linalg import cholesky, cholesky_solve
 from armdyn.dynamics.packed import (
     ABA_FIXED,
@@ -71,6 +72,8 @@ from armdyn.dynamics.packed import (
     N_JOINTS,
     PARENT,
     SPATIAL,
+    STRIBECK_FORCE,
+    STRIBECK_SPEED,
     STRIDE,
     TRANSFORM,
     VISCOUS,
@@ -112,16 +115,39 @@ def coulomb_slope(model: np.ndarray, j: int, rate: float, eps: float) -> float:
 
 @njit(inline="always", **NUMBA_OPTIONS)
 def coulomb_smoothed_minus_exact(model: np.ndarray, j: int, rate: float, eps: float) -> float:
-    """The smoothed Coulomb torque of joint j less the exact sign law's (0 for eps = 0)."""
+    """The smoothed Coulomb and Stribeck torque of joint j less the exact sign law's (0 for eps = 0)."""
     if eps <= 0.0:
         return 0.0
     b = HEADER + STRIDE * j
     smooth = smooth_sign(rate, eps)
     if rate > 0.0:
-        return (smooth - 1.0) * model[b + COULOMB_POS]
-    if rate < 0.0:
-        return -(1.0 + smooth) * model[b + COULOMB_NEG]
-    return 0.0
+        difference = (smooth - 1.0) * model[b + COULOMB_POS]
+        sign = 1.0
+    elif rate < 0.0:
+        difference = -(1.0 + smooth) * model[b + COULOMB_NEG]
+        sign = -1.0
+    else:
+        return 0.0
+    if model[b + STRIBECK_FORCE] != 0.0:
+        difference += stribeck_torque(model[b + STRIBECK_FORCE], model[b + STRIBECK_SPEED], smooth - sign, rate)
+    return difference
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def nonlinear_slope(model: np.ndarray, j: int, rate: float, eps: float) -> float:
+    """d/dqd_j of joint j's Stribeck law (its sign smoothed to tanh(qd / eps) for eps > 0, as
+    friction.smooth_coulomb; the exact sign's slope is 0 away from rest) and its sigmoid law."""
+    slope = sigmoid_slope(model, j, rate)
+    b = HEADER + STRIDE * j
+    force = model[b + STRIBECK_FORCE]
+    if force != 0.0:
+        if eps > 0.0:
+            sign = smooth_sign(rate, eps)
+            sign_slope = (1.0 - sign * sign) / eps if abs(rate / eps) < 20.0 else 0.0
+        else:
+            sign, sign_slope = exact_sign(rate), 0.0
+        slope += stribeck_slope(force, model[b + STRIBECK_SPEED], sign, sign_slope, rate)
+    return slope
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -239,6 +265,7 @@ def rnea_derivatives_core(model: np.ndarray, work: np.ndarray, q: np.ndarray, qd
         col_v = (work[column], work[column + 1], work[column + 2], work[column + 3], work[column + 4],
                  work[column + 5])  # fmt: skip
         dqd[j, j] += dot_with(work, sj, col_v) + model[b + VISCOUS] + coulomb_slope(model, j, qd[j], eps[j])
+        dqd[j, j] += nonlinear_slope(model, j, qd[j], eps[j])
         if with_mass:
             M[j, j] = dot_with(work, sj, f2) + model[b + ARMATURE]
         i = int(model[b + PARENT])

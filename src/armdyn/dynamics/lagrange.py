@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from armdyn.dynamics.friction import sigmoid_vector, stribeck_vector
 from armdyn.kinematics import as_state, as_states, check_arm, link_transform_derivatives, twist_generators
 from armdyn.model import ArmModel
 
@@ -334,9 +335,11 @@ def kinetic_energy(arm: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
 
 
 def friction(arm: ArmModel, qd: np.ndarray) -> np.ndarray:
-    """F(qd) = Fv qd + Fd(qd) (3.3.2): viscous G^2 B qd plus Coulomb |G| Tc+ or |G| Tc-.
+    """F(qd) = Fv qd + Fd(qd) (3.3.2): viscous G^2 B qd plus Coulomb |G| Tc+ or |G| Tc-, plus the
+    Stribeck law Fs exp(-(qd/vs)^2) sgn(qd) and the sigmoid law of Gaz et al. (IEEE RA-L 4(4), 2019)
+    A / (1 + exp(-alpha (qd + shift))) - A / (1 + exp(-alpha shift)) where the arm has them.
 
-    At qd_i = 0 the Coulomb term is zero (sgn 0 = 0).
+    At qd_i = 0 the Coulomb and Stribeck terms are zero (sgn 0 = 0).
 
     Parameters
     ----------
@@ -359,7 +362,13 @@ def friction(arm: ArmModel, qd: np.ndarray) -> np.ndarray:
     """
     qd = as_state(arm, qd, "qd")
     coulomb = arm.coulomb_friction
-    return arm.viscous_friction * qd + np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
+    value = arm.viscous_friction * qd + np.where(qd > 0, coulomb[:, 0], np.where(qd < 0, coulomb[:, 1], 0.0))
+    stribeck, sigmoid = arm.stribeck_friction, arm.sigmoid_friction
+    if np.any(stribeck[:, 0] != 0):
+        value = value + stribeck_vector(stribeck, qd)
+    if np.any(sigmoid[:, 0] != 0):
+        value = value + sigmoid_vector(sigmoid, qd)
+    return value
 
 
 def inverse_dynamics(arm: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:

@@ -19,6 +19,8 @@ kernels then never need a general axis (Featherstone, Rigid Body Dynamics Algori
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -33,7 +35,10 @@ PARENT, KIND, ROTATION, POSITION = 0, 1, 2, 11
 MASS, FIRST_MOMENT, INERTIA = 14, 15, 18  # INERTIA: Ixx Ixy Ixz Iyy Iyz Izz about the body origin
 ARMATURE, VISCOUS, COULOMB_POS, COULOMB_NEG = 24, 25, 26, 27
 LINK_ROTATION, LINK_POSITION = 28, 37  # the link frame (DH or URDF) in the body frame, for kinematics
-STRIDE = 40
+STRIBECK_FORCE, STRIBECK_SPEED = 40, 41  # Fs, vs: Fs exp(-(qd/vs)^2) sgn(qd), joint side
+# A, alpha, shift and A / (1 + exp(-alpha shift)) (the law's value at rest, subtracted): Gaz et al. (2019)
+SIGMOID_AMPLITUDE, SIGMOID_STEEPNESS, SIGMOID_SHIFT, SIGMOID_REST = 42, 43, 44, 45
+STRIDE = 46
 REVOLUTE_KIND, PRISMATIC_KIND = 0.0, 1.0
 
 
@@ -123,6 +128,7 @@ def pack(arm: ArmModel) -> np.ndarray:
     buffer[TOOL_ROTATION : TOOL_ROTATION + 9] = tool[:3, :3].ravel()
     buffer[TOOL_POSITION : TOOL_POSITION + 3] = tool[:3, 3]
     armature, viscous, coulomb = arm.reflected_inertia, arm.viscous_friction, arm.coulomb_friction
+    stribeck, sigmoid = arm.stribeck_friction, arm.sigmoid_friction
     for i, link in enumerate(arm.links):
         record = buffer[HEADER + STRIDE * i : HEADER + STRIDE * (i + 1)]
         record[PARENT] = link.parent
@@ -137,10 +143,21 @@ def pack(arm: ArmModel) -> np.ndarray:
         record[ARMATURE] = armature[i]
         record[VISCOUS] = viscous[i]
         record[COULOMB_POS], record[COULOMB_NEG] = coulomb[i]
+        record[STRIBECK_FORCE], record[STRIBECK_SPEED] = stribeck[i]
+        record[SIGMOID_AMPLITUDE], record[SIGMOID_STEEPNESS], record[SIGMOID_SHIFT] = sigmoid[i]
+        record[SIGMOID_REST] = sigmoid_rest(*sigmoid[i])
         record[LINK_ROTATION : LINK_ROTATION + 9] = link_in_body[i][:3, :3].ravel()
         record[LINK_POSITION : LINK_POSITION + 3] = link_in_body[i][:3, 3]
     buffer[PIVOT_FLOOR] = PIVOT_RELATIVE * inertia_scale(arm)
     return buffer
+
+
+def sigmoid_rest(amplitude: float, steepness: float, shift: float) -> float:
+    """A / (1 + exp(-alpha shift)): the sigmoid law's first term at rest, which the law subtracts (0 for A = 0;
+    written as friction.logistic, without overflow)."""
+    x = steepness * shift
+    value = 1.0 / (1.0 + math.exp(-x)) if x >= 0.0 else math.exp(x) / (1.0 + math.exp(x))
+    return amplitude * value if amplitude != 0.0 else 0.0
 
 
 def inertia_scale(arm: ArmModel) -> float:

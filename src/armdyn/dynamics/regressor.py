@@ -10,7 +10,9 @@ carries the forces of the links it moves, tau_j = S_j^T sum_i f_i.
 phi, per link in link order: [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz], the
 inertia about the link-frame origin in link-frame axes (Pinocchio's dynamic parameters);
 then per joint [Fv, Fc+, Fc-, Ia]: the joint-side viscous and Coulomb friction and the
-reflected motor inertia G^2 Jm.
+reflected motor inertia G^2 Jm. Stribeck and sigmoid friction (Link.stribeck, Link.sigmoid)
+are not linear in their parameters and are not columns of W: tau = W phi holds for an arm
+without them (armdyn.identification fits them).
 
 A batch is computed a block of states at a time (about CHUNK_BYTES of W per block), so the
 peak memory of a large batch is the result's own size plus a few times CHUNK_BYTES; a
@@ -97,7 +99,8 @@ def parameters(arm: ArmModel) -> np.ndarray:
     The linear parameterization of Table 3.3.1, property 9. Per link [m, m cx, m cy, m cz,
     Ixx, Ixy, Iyy, Ixz, Iyz, Izz], the inertia about the link-frame origin in link-frame
     axes; then per joint [Fv, Fc+, Fc-, Ia], the joint-side viscous and Coulomb friction
-    and the reflected motor inertia G^2 Jm.
+    and the reflected motor inertia G^2 Jm. An arm's Stribeck and sigmoid friction are not
+    in phi (they are not columns of W): for such an arm W phi is inverse dynamics less them.
 
     Parameters
     ----------
@@ -195,7 +198,9 @@ def _body_regressor(w: np.ndarray, v: np.ndarray, alpha: np.ndarray, a: np.ndarr
 def regressor(arm: ArmModel, q: object, qd: object, qdd: object, out: np.ndarray | None = None) -> np.ndarray:
     """W(q, qd, qdd), shape (..., n, 14 n), with W phi = tau (Table 3.3.1, property 9).
 
-    Friction and motors included: W ``parameters(arm)`` equals the inverse dynamics.
+    Viscous and Coulomb friction and motors included: W ``parameters(arm)`` equals the inverse
+    dynamics (less the Stribeck and sigmoid friction, which are not columns of W; they are
+    fitted by armdyn.identification).
     Computed recursively, O(n d) for depth d (Atkeson, An and Hollerbach 1986), batched
     over any leading shape, a block of states at a time (see the module docstring): the
     peak memory is W's own size plus a few times CHUNK_BYTES.

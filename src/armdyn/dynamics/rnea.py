@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange, types
 
-from armdyn.dynamics.friction import coulomb
+from armdyn.dynamics.friction import coulomb, nonlinear_friction
 from armdyn.dynamics.packed import (
     ARMATURE,
     FIRST_MOMENT,
@@ -152,6 +152,7 @@ def rnea_core(
         if (flags & WITH_FRICTION) != 0:
             value += model[b + VISCOUS] * qd[i]
             value += coulomb(model, i, qd[i])
+            value += nonlinear_friction(model, i, qd[i])
         tau[i] = value
         parent = int(model[b])
         if parent >= 0:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from armdyn.dynamics.friction import coulomb
+from armdyn.dynamics.friction import coulomb, nonlinear_friction
 from armdyn.dynamics.packed import (
     ARMATURE,
     FIRST_MOMENT,
@@ -26,6 +26,8 @@ from armdyn.dynamics.packed import (
     PARENT,
     POSITION,
     ROTATION,
+    SIGMOID_AMPLITUDE,
+    STRIBECK_FORCE,
     STRIDE,
     VISCOUS,
 )
@@ -172,12 +174,16 @@ def rnea_blocks(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarra
             b = HEADER + STRIDE * i
             prism = model[b + KIND]
             armature = ascale * model[b + ARMATURE]
+            nonlinear = friction and (model[b + STRIBECK_FORCE] != 0.0 or model[b + SIGMOID_AMPLITUDE] != 0.0)
             for s in range(size):
                 value = prism * store[i, 29, s] + (1.0 - prism) * store[i, 26, s] + armature * qdd[first + s, i]
                 if friction:
                     value += model[b + VISCOUS] * qd[first + s, i]
                     value += coulomb(model, i, qd[first + s, i])
                 tau[first + s, i] = value
+            if nonlinear:  # the Stribeck and sigmoid friction, a loop of its own (the one above stays as it is)
+                for s in range(size):
+                    tau[first + s, i] += nonlinear_friction(model, i, qd[first + s, i])
             parent = int(model[b + PARENT])
             if parent >= 0:
                 for row in range(12):

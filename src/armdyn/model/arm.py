@@ -21,8 +21,9 @@ from armdyn.model.joint import Joint, check_rigid, dh_joint, dh_parameters
 
 _NO_LIMITS = (-np.inf, np.inf)
 _DH_KEYS = frozenset(
-    {"kind", "a", "alpha", "d", "theta", "mass", "com", "inertia", "Jm", "G", "B", "Tc", "qlim", "name"}
-)
+    {"kind", "a", "alpha", "d", "theta", "mass", "com", "inertia", "Jm", "G", "B", "Tc", "qlim", "name", "stribeck",
+     "sigmoid"}
+)  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,6 +35,16 @@ class Link:
     act on the motor side of a gear of ratio ``gear_ratio`` (G) whose rotor has inertia
     ``motor_inertia`` (Jm). At the joint they appear as G^2 Jm, G^2 B and |G| Tc. With
     the default G = 1 and Jm = 0 the friction values are joint-side values.
+
+    Two further friction laws act on the joint side (whatever the gear): the Stribeck
+    breakaway friction Fs exp(-(qd/vs)^2) sgn(qd) on top of the Coulomb step (Armstrong-Helouvry,
+    Dupont and Canudas de Wit, "A survey of models, analysis tools and compensation methods for
+    the control of machines with friction", Automatica 30(7), 1994), and the sigmoid law of
+    Gaz, Cognetti, Oliva, Robuffo Giordano and De Luca ("Dynamic identification of the Franka
+    Emika Panda robot with retrieval of feasible parameters using penalty-based optimization",
+    IEEE RA-L 4(4), 2019), F(qd) = A / (1 + exp(-alpha (qd + shift))) - A / (1 + exp(-alpha shift)),
+    zero at rest and increasing. The joint's friction is F(qd) = G^2 B qd + |G| Tc(qd) + Stribeck
+    + sigmoid.
 
     Parameters
     ----------
@@ -55,6 +66,13 @@ class Link:
         Gear ratio G, finite and non-zero (default 1); negative reverses the motor.
     limits : (float, float), optional
         Joint limits (lower, upper), rad or m (default unlimited, (-inf, inf)).
+    stribeck : (float, float), optional
+        Stribeck friction (Fs, vs), joint side: Fs >= 0 the breakaway torque (force) above the
+        Coulomb level, vs the Stribeck velocity, > 0 when Fs > 0 (default (0, 0): none).
+    sigmoid : (float, float, float), optional
+        Sigmoid friction (A, alpha, shift) of Gaz et al. (2019), joint side: A >= 0 its span,
+        alpha >= 0 its steepness (s/rad or s/m), shift its velocity offset (default (0, 0, 0):
+        none; A = 0 means none).
 
     Raises
     ------
@@ -62,8 +80,10 @@ class Link:
         When ``joint`` is not a Joint or ``inertial`` not an Inertial, B, Jm or G is not a
         finite real number, Tc is not two finite real numbers, a sign rule is broken (B >= 0,
         Tc+ >= 0 >= Tc-, Jm >= 0, G != 0), the limits are not two real numbers (infinite for
-        none) with lower <= upper, or ``parent`` is below -1; the message names the argument
-        and the link. Numbers of 1e15 or more in magnitude are refused.
+        none) with lower <= upper, ``parent`` is below -1, ``stribeck`` is not two finite
+        numbers with Fs >= 0 and vs > 0 when Fs > 0, or ``sigmoid`` not three finite numbers
+        with A >= 0 and alpha >= 0; the message names the argument and the link. Numbers of
+        1e15 or more in magnitude are refused.
     TypeError
         When ``parent`` is not an integer.
     """
@@ -77,6 +97,8 @@ class Link:
     motor_inertia: float = 0.0
     gear_ratio: float = 1.0
     limits: tuple[float, float] = _NO_LIMITS
+    stribeck: tuple[float, float] = (0.0, 0.0)
+    sigmoid: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         where = f"link '{self.name}'"
@@ -99,6 +121,8 @@ class Link:
             raise ModelError(f"{where}: gear ratio G must be finite and non-zero, got {gear_ratio:g}")
         object.__setattr__(self, "gear_ratio", gear_ratio)
         object.__setattr__(self, "limits", _limits(self.limits, where))
+        object.__setattr__(self, "stribeck", _stribeck(self.stribeck, where))
+        object.__setattr__(self, "sigmoid", _sigmoid(self.sigmoid, where))
 
     @property
     def kind(self) -> str:
@@ -273,6 +297,8 @@ class ArmModel:
                     motor_inertia=row.get("Jm", 0.0),
                     gear_ratio=row.get("G", 1.0),
                     limits=row.get("qlim", _NO_LIMITS),
+                    stribeck=row.get("stribeck", (0.0, 0.0)),
+                    sigmoid=row.get("sigmoid", (0.0, 0.0, 0.0)),
                 )
             )
             rows.append({"kind": joint.kind, "a": a, "alpha": alpha, "d": d, "theta": theta})
@@ -346,14 +372,19 @@ class ArmModel:
         return self.replace(links)
 
     def without_friction(self) -> Self:
-        """The same arm with no viscous or Coulomb friction.
+        """The same arm with no friction (viscous, Coulomb, Stribeck or sigmoid).
 
         Returns
         -------
         ArmModel
             The arm without friction, of the same class; motors are kept.
         """
-        return self.replace([dataclasses.replace(link, viscous=0.0, coulomb=(0.0, 0.0)) for link in self._links])
+        return self.replace(
+            [
+                dataclasses.replace(link, viscous=0.0, coulomb=(0.0, 0.0), stribeck=(0.0, 0.0), sigmoid=(0.0, 0.0, 0.0))
+                for link in self._links
+            ]
+        )
 
     def without_motors(self) -> Self:
         """The same arm with no motor rotor inertia (friction, if any, is kept at the joint side).
@@ -588,6 +619,16 @@ class ArmModel:
         return _frozen(np.array([[abs(link.gear_ratio) * c for c in link.coulomb] for link in self._links]))
 
     @property
+    def stribeck_friction(self) -> np.ndarray:
+        """(Fs, vs) per joint, shape (n, 2): the Stribeck friction, joint side (zeros for none)."""
+        return _frozen(np.array([link.stribeck for link in self._links], dtype=float).reshape(len(self._links), 2))
+
+    @property
+    def sigmoid_friction(self) -> np.ndarray:
+        """(A, alpha, shift) per joint, shape (n, 3): the sigmoid friction, joint side (zeros for none)."""
+        return _frozen(np.array([link.sigmoid for link in self._links], dtype=float).reshape(len(self._links), 3))
+
+    @property
     def configurations(self) -> dict[str, np.ndarray]:
         return {key: value.copy() for key, value in self._configurations.items()}
 
@@ -737,6 +778,35 @@ def _coulomb(value: object, where: str) -> tuple[float, float]:
             f"(negative velocity), got {tuple(coulomb.tolist())}"
         )
     return float(coulomb[0]), float(coulomb[1])
+
+
+def _stribeck(value: object, where: str) -> tuple[float, float]:
+    """Stribeck friction (Fs, vs): two finite real numbers, Fs >= 0, and vs > 0 when Fs > 0."""
+    stribeck = real_array(value, "Stribeck friction (Fs, vs)", where)
+    if stribeck.shape != (2,):
+        raise ModelError(f"{where}: Stribeck friction must be two finite numbers (Fs, vs), got shape {stribeck.shape}")
+    force, speed = float(stribeck[0]), float(stribeck[1])
+    if force < 0:
+        raise ModelError(f"{where}: Stribeck friction must have Fs >= 0 (its breakaway torque), got Fs = {force:g}")
+    if force > 0 and not speed > 0:
+        raise ModelError(f"{where}: Stribeck friction with Fs > 0 must have vs > 0 (its velocity), got vs = {speed:g}")
+    return force, speed
+
+
+def _sigmoid(value: object, where: str) -> tuple[float, float, float]:
+    """Sigmoid friction (A, alpha, shift): three finite real numbers with A >= 0 and alpha >= 0."""
+    sigmoid = real_array(value, "sigmoid friction (A, alpha, shift)", where)
+    if sigmoid.shape != (3,):
+        raise ModelError(
+            f"{where}: sigmoid friction must be three finite numbers (A, alpha, shift), got shape {sigmoid.shape}"
+        )
+    amplitude, steepness, shift = (float(x) for x in sigmoid)
+    if amplitude < 0 or steepness < 0:
+        raise ModelError(
+            f"{where}: sigmoid friction must have A >= 0 and alpha >= 0 (dissipative), got A = {amplitude:g}, "
+            f"alpha = {steepness:g}"
+        )
+    return amplitude, steepness, shift
 
 
 def _limits(value: object, where: str) -> tuple[float, float]:

@@ -383,6 +383,15 @@ def _facts(arm: ArmModel) -> list[tuple[str, list[str]]]:
         facts.append(("Coulomb friction", lines))
     else:
         facts.append(("Coulomb friction", ["none"]))
+    stribeck = arm.stribeck_friction
+    if np.any(stribeck[:, 0] != 0):
+        lines = [f"Fs = {_numbers(stribeck[:, 0])}", f"vs = {_numbers(stribeck[:, 1])}"]
+        facts.append(("Stribeck friction", lines))
+    sigmoid = arm.sigmoid_friction
+    if np.any(sigmoid[:, 0] != 0):
+        lines = [f"A = {_numbers(sigmoid[:, 0])}", f"alpha = {_numbers(sigmoid[:, 1])}",
+                 f"shift = {_numbers(sigmoid[:, 2])}"]  # fmt: skip
+        facts.append(("sigmoid friction", lines))
     reflected = arm.reflected_inertia
     ratios = np.array([link.gear_ratio for link in links])
     motors = []

@@ -648,7 +648,8 @@ def derive(
         True (default) for the arm's own friction, False for none, "symbolic" for new
         symbols v_i (viscous) and k_i (Coulomb), F_i = v_i qd_i + k_i sgn(qd_i). The
         arm's own Coulomb law is k sgn(qd) when symmetric, else a Piecewise: Tc+ for
-        qd > 0, Tc- for qd < 0, 0 at rest.
+        qd > 0, Tc- for qd < 0, 0 at rest. An arm's own Stribeck or sigmoid friction is
+        not supported (a ModelError; derive with friction=False).
     progress : callable, optional
         Called as progress(fraction, stage) as the derivation proceeds: the fraction done
         (0 to 1) and the stage starting ("kinematics", "inertia matrix", "gravity",
@@ -680,7 +681,8 @@ def derive(
         supported output with m = n (ToolPose and outputs of other sizes are not); with
         drives, when ``output`` is given too, the arm has motors of its own, the number of
         drives is not the number of joints, or a drive is hydraulic (not supported),
-        flexible or not a drive.
+        flexible or not a drive; with friction=True, when a link has Stribeck or sigmoid
+        friction (the message names the link and the law).
     """
     from armdyn.actuators import ActuatedArm
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import symengine as se
 
+from armdyn.dynamics.friction import refuse_nonlinear_friction
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic.algebra import TrigAlgebra, cross, matrix, number, skew, transform
@@ -233,7 +234,8 @@ def coulomb_law(rate: se.Symbol, positive: se.Basic, negative: se.Basic) -> se.B
 
 
 def friction(arm: _Arm, mode: str | bool) -> tuple[list[se.Basic], list[se.Symbol]]:
-    """F(qd) = Fv qd + Fd(qd); the arm's own values, none, or new symbols v_i, k_i (F = v qd + k sgn(qd))."""
+    """F(qd) = Fv qd + Fd(qd); the arm's own values, none, or new symbols v_i, k_i (F = v qd + k sgn(qd)).
+    An arm's own Stribeck or sigmoid friction is refused (a ModelError naming the link)."""
     n, robot = arm.n, arm.robot
     if mode == "symbolic":
         symbols, F = [], []
@@ -244,6 +246,7 @@ def friction(arm: _Arm, mode: str | bool) -> tuple[list[se.Basic], list[se.Symbo
         return F, symbols
     if not mode:
         return [se.Integer(0)] * n, []
+    refuse_nonlinear_friction(robot, "the closed form")
     viscous, coulomb = robot.viscous_friction, robot.coulomb_friction
     F = []
     for i in range(n):

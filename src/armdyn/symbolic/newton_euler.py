@@ -35,6 +35,7 @@ from typing import TypeAlias, cast
 import numpy as np
 
 from armdyn import inputs
+from armdyn.dynamics.friction import refuse_nonlinear_friction
 from armdyn.dynamics.packed import (
     ARMATURE,
     COULOMB_NEG,
@@ -1090,7 +1091,8 @@ def generate_code(arm: Robot, functions: Sequence[str] = FUNCTIONS) -> Generated
     Raises
     ------
     armdyn.ModelError
-        When a function name is unknown.
+        When a function name is unknown, or tau or N is asked of an arm with Stribeck or sigmoid friction
+        (the message names the link).
     armdyn.ArgumentError
         When ``arm`` is not a Robot or has symbolic parameters (use derive for closed forms in symbols).
     """
@@ -1103,6 +1105,8 @@ def generate_code(arm: Robot, functions: Sequence[str] = FUNCTIONS) -> Generated
         names = None
     if names is None or not names or any(not isinstance(f, str) or f not in ARGUMENTS for f in names):
         raise ModelError(f"functions must be some of {tuple(ARGUMENTS)} (one or more names), got {functions!r}")
+    if "tau" in names or "N" in names:
+        refuse_nonlinear_friction(arm, "generated code of tau and N")
     base = base_parameters(arm, at_rest=True) if "Wb" in names else None
     columns = () if base is None else [int(c) for c in base.columns]
     return GeneratedCode(arm, {name: generate(packed, name, columns) for name in names}, base)
