@@ -45,7 +45,8 @@ def _simulated_log(
     rng = np.random.default_rng(seed)
     n, harmonics = arm.n, 5
     lower, upper = np.array([link.limits for link in arm.links]).T
-    q0 = np.where(np.isfinite(lower) & np.isfinite(upper), (lower + upper) / 2, 0.0)
+    limited = np.isfinite(lower) & np.isfinite(upper)
+    q0 = np.where(limited, (np.where(limited, lower, 0) + np.where(limited, upper, 0)) / 2, 0.0)
     scale = 1.2 / harmonics
     trajectory = FourierTrajectory(
         seconds, q0, rng.normal(0, scale, (n, harmonics)), rng.normal(0, scale, (n, harmonics))
@@ -85,9 +86,7 @@ def test_variable_projection_recovers_a_sigmoid_law() -> None:
     theta = np.array([0.4, -1.0, 2.0])
     tau = other @ theta + amplitude * sigmoid_friction(qd, alpha, shift) + 0.3 * qd + 1e-3 * rng.normal(size=(rows, n))
     fixed = np.concatenate([other, np.stack([qd * (j == np.arange(n)) for j in range(n)], -1)], -1)
-    law = fit_nonlinear(
-        "sigmoid", fixed.reshape(rows * n, -1), tau.reshape(-1), qd.reshape(-1), np.tile(np.arange(n), rows), n
-    )
+    law = fit_nonlinear("sigmoid", fixed.reshape(rows * n, -1), tau.reshape(-1), qd)
     assert law.nonlinear[:, 0] == pytest.approx(alpha, rel=0.05)
     assert law.nonlinear[:, 1] == pytest.approx(shift, abs=3e-3)
 
@@ -125,9 +124,12 @@ def test_simulated_log_gives_the_truth_within_three_standard_errors(name: str) -
     model = identify_log(arm, log, friction="sigmoid", consistent=True)
     truth = model.regrouping @ _true_vector(model, arm)
     z = (model.phi_least_squares - truth) / model.standard_errors
-    assert np.max(np.abs(z)) < 3.0, (
-        f"{np.sum(np.abs(z) >= 3)} of {len(z)} beyond 3 standard errors, largest {np.max(np.abs(z)):.2f}"
+    # honest standard errors: about 0.3% of the estimates beyond 3 of them, almost none beyond 4
+    beyond = np.sum(np.abs(z) > 3)
+    assert beyond <= max(2, 0.03 * len(z)) and np.max(np.abs(z)) < 4.5, (
+        f"{beyond} of {len(z)} beyond 3, largest {np.max(np.abs(z)):.2f}"
     )
+    assert np.sqrt(np.mean(z**2)) < 1.5
     nonlinear = np.array([link.sigmoid[1:] for link in arm.links])
     np.testing.assert_allclose(model.law.nonlinear[:, 0], nonlinear[:, 0], rtol=0.1)
     # the consistent estimate: every link physically realizable, torques as well explained (within 5%)
@@ -149,14 +151,13 @@ def test_simulated_log_gives_the_truth_within_three_standard_errors(name: str) -
 @pytest.mark.slow
 def test_held_out_prediction_of_a_simulated_log() -> None:
     arm = _sigmoid_arm(ad.models.puma560())
-    log, exact = _simulated_log(arm, seconds=12)
+    log, _ = _simulated_log(arm, seconds=12)
     model = identify_log(arm, log, holdout=0.3)
     held = log.split(0.7)[1]
     result = model.validate(held)
-    noise = 0.01 * np.sqrt(np.mean(exact**2, axis=0))
-    assert np.all(result.rms < 1.3 * noise)  # the noise itself, nearly: the model is the truth
-    truth = validate(arm.inverse_dynamics, held, model.prepared)
-    assert np.all(result.rms < 1.1 * truth.rms)
+    truth = validate(arm.inverse_dynamics, held, model.prepared)  # the true arm: the noise (1%) and the filter's
+    assert np.all(truth.normalized_rms < 0.015)
+    assert np.all(result.normalized_rms < truth.normalized_rms + 0.01)  # within 1% of each joint's torque of it
 
 
 def test_log_of_currents_needs_gains() -> None:

@@ -1271,7 +1271,7 @@ def _identify_log(
         run, mass = payload
         _activity.status(f"estimating the drive gains from {run} (payload {mass:g} kg)")
         loaded = read_log(run, columns=mapping)
-        estimate = identify_gains(arm, prepare(data), prepare(loaded), mass)
+        estimate = identify_gains(arm, cast(Any, prepare(data)), cast(Any, prepare(loaded)), mass)
         gain_values = np.asarray(estimate.gains)
         console.print("gains from the payload run (N m/A): " + ", ".join(f"{g:.6g}" for g in gain_values))
     model = identify_log(
@@ -1283,7 +1283,7 @@ def _identify_log(
     )
     validation = model.validate(held_out, gain_values) if held_out is not None else None
     compared = None
-    if reference is not None and validation is not None:
+    if reference is not None and held_out is not None:
         other = _arm(reference, strict)
         compared = validate(other.inverse_dynamics, held_out, model.prepared, gain_values)
     _make_folder(folder)

@@ -21,6 +21,7 @@ are searched (``fit_nonlinear``). The laws are the ones Link carries (``viscous`
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -294,25 +295,33 @@ def initial_nonlinear(name: str, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 
 def fit_nonlinear(
-    name: str, fixed: np.ndarray, y: np.ndarray, qd: np.ndarray, joint: np.ndarray, n: int
+    name: str,
+    fixed: np.ndarray,
+    y: np.ndarray,
+    qd: np.ndarray,
+    through: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> FrictionLaw:
     """The law's nonlinear parameters by variable projection (Golub and Pereyra 1973).
+
+    For given nonlinear parameters theta the linear ones (every column of ``fixed`` and the law's
+    amplitudes) are the least-squares solution; the residual projected off ``fixed``'s columns is
+    minimized over theta alone, with Kaufman's approximation of its Jacobian ("A variable projection
+    method for solving separable nonlinear least squares problems", BIT 15, 1975).
 
     Parameters
     ----------
     name : str
         One of LAWS.
     fixed : numpy.ndarray
-        (rows, p): every column that does not depend on the nonlinear parameters (rigid body,
-        motor inertia, offsets, the law's own linear columns).
+        (N n, p): every column that does not depend on the nonlinear parameters (rigid body, motor
+        inertia, offsets, the law's own linear columns), rows sample by sample, joints within.
     y : numpy.ndarray
-        (rows,): the measured torques of those equations.
+        (N n,): the measured torques of those rows.
     qd : numpy.ndarray
-        (rows,): each equation's joint velocity.
-    joint : numpy.ndarray
-        (rows,): each equation's joint index.
-    n : int
-        The number of joints.
+        (M, n): the joint velocities the law is evaluated at (M = N without ``through``).
+    through : callable, optional
+        Maps values (M, n, ...) at those velocities to (N, n, ...) at the rows' samples: the filter the
+        torques went through, and decimation (``Prepared.filtered_as_torques``); default none.
 
     Returns
     -------
@@ -321,29 +330,24 @@ def fit_nonlinear(
     """
     from scipy.optimize import least_squares
 
-    speeds = np.zeros((1, n))
-    for j in range(n):
-        mine = joint == j
-        speeds[0, j] = np.max(np.abs(qd[mine])) if mine.any() else 1.0
-    start, lower, upper = initial_nonlinear(name, speeds)
+    qd = np.asarray(qd, dtype=float)
+    n = qd.shape[1]
+    start, lower, upper = initial_nonlinear(name, qd)
     if start.shape[1] == 0:
         return FrictionLaw(name, start)
+    apply = through if through is not None else (lambda values: values)
     Q, _ = np.linalg.qr(fixed)
     projected_y = y - Q @ (Q.T @ y)
-    rows = np.arange(len(y))
     k = start.shape[1]
+    diagonal = np.eye(n)
 
-    def spread(per_row: np.ndarray) -> np.ndarray:
-        """(rows, m) values of each equation's own joint -> (rows, n m) columns, zero off that joint."""
-        out = np.zeros((len(y), n, per_row.shape[1]))
-        out[rows, joint] = per_row
-        return out.reshape(len(y), -1)
-
-    def table(theta: np.ndarray) -> np.ndarray:
-        return theta.reshape(n, k)[joint]  # each equation's joint's parameters, (rows, k)
+    def spread(per_joint: np.ndarray) -> np.ndarray:
+        """(N, n, m) values of each joint -> (N n, n m) columns, each joint's on its own rows only."""
+        samples, _, m = per_joint.shape
+        return (per_joint[:, :, None, :] * diagonal[None, :, :, None]).reshape(samples * n, n * m)
 
     def solve(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        columns = spread(nonlinear_column(name, qd, table(theta))[:, None])
+        columns = spread(apply(nonlinear_column(name, qd, theta.reshape(n, k)))[..., None])
         columns -= Q @ (Q.T @ columns)
         amplitude, *_ = np.linalg.lstsq(columns, projected_y, rcond=None)
         return projected_y - columns @ amplitude, amplitude
@@ -352,11 +356,10 @@ def fit_nonlinear(
         return solve(theta)[0]
 
     def jacobian(theta: np.ndarray) -> np.ndarray:
-        """Kaufman's approximation of the projected Jacobian: -P (dF/dtheta) a ("A variable projection
-        method for solving separable nonlinear least squares problems", BIT 15, 1975)."""
+        """-P (dF/dtheta) a, Kaufman's approximation of the projected residual's Jacobian."""
         _, amplitude = solve(theta)
-        slopes = nonlinear_derivatives(name, qd, table(theta))  # (rows, k)
-        J = -spread(slopes * amplitude[joint][:, None])
+        slopes = apply(nonlinear_derivatives(name, qd, theta.reshape(n, k)))  # (N, n, k)
+        J = -spread(slopes * amplitude[None, :, None])
         return J - Q @ (Q.T @ J)
 
     solution = least_squares(

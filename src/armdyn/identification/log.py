@@ -251,7 +251,7 @@ class Log:
             k = int(np.argmax(np.abs(angles)))
             name = arm.joint_names[j]
             where = f"{self.source}: joint '{name}', column {self._label('q', j)}"
-            turn = max(2 * math.pi, *(abs(v) for v in (lower[j], upper[j]) if math.isfinite(v)))
+            turn = max([2 * math.pi, *(abs(v) for v in (lower[j], upper[j]) if math.isfinite(v))])
             if abs(angles[k]) > turn + DEGREE_MARGIN:
                 raise ModelError(
                     f"{where}, reaches {angles[k]:.6g} at sample {self.first_sample + k}, beyond a full turn "

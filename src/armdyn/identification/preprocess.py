@@ -357,6 +357,10 @@ class Prepared:
         The log it came from.
     trim : float
         The seconds cut from each end.
+    untrimmed : tuple of numpy.ndarray, optional
+        The filtered (q, qd, qdd) before trimming and decimation, at the undecimated rate.
+    window : slice, optional
+        The undecimated samples kept by the trim, as a slice of ``untrimmed``.
     full : Prepared or None
         The same before decimation (factor 1), its arrays those of which these are every factor-th sample
         (views: no copy); None when factor is 1 (the samples are the undecimated ones: ``undecimated``).
@@ -374,6 +378,8 @@ class Prepared:
     log: Log
     full: Prepared | None = None
     trim: float = 0.0
+    untrimmed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    window: slice | None = None
 
     def __post_init__(self) -> None:
         for name in ("t", "q", "qd", "qdd", "tau", "current"):
@@ -398,6 +404,37 @@ class Prepared:
         if self.factor == 1:
             return self.cutoff
         return DECIMATION_SHARE * self.undecimated.rate / (2 * self.factor)
+
+    def filtered_as_torques(self, values: np.ndarray) -> np.ndarray:
+        """Values computed at the untrimmed filtered states, through the torques' filter, then trimmed and
+        decimated as these samples are: the regressor's columns that are not smooth in the states (a friction
+        law's) see the filter the torques saw, so that filter(W) phi = filter(tau) holds for them too
+        (Gautier 1997's parallel filtering).
+
+        Parameters
+        ----------
+        values : numpy.ndarray
+            (M, ...) at ``untrimmed``'s M samples.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N, ...) at these samples.
+
+        Raises
+        ------
+        armdyn.ModelError
+            When the Prepared has no untrimmed states, or ``values`` has another number of rows.
+        """
+        if self.untrimmed is None or self.window is None:
+            raise ModelError(f"{self.log.source}: these samples keep no untrimmed states to filter values at")
+        rows = self.untrimmed[0].shape[0]
+        if np.shape(values)[0] != rows:
+            raise ModelError(
+                f"{self.log.source}: filtered_as_torques takes ({rows}, ...) values, got {np.shape(values)}"
+            )
+        filtered = lowpass(np.asarray(values, dtype=float), self.cutoff, self.rate * self.factor)
+        return filtered[self.window][:: self.factor]
 
     def parallel_filter(self, x: np.ndarray) -> np.ndarray:
         """Gautier's parallel filtering and decimation (``parallel_filter``) of an array computed on the
@@ -468,7 +505,6 @@ def prepare(
         Seconds cut from each end, >= 0 (default the larger of 0.1 s and 2 / cutoff).
     use_measured_velocity : bool, optional
         Take the velocities the robot reported (the log's qd) instead of differentiating the positions.
-
     Returns
     -------
     Prepared
@@ -516,8 +552,9 @@ def prepare(
         )
     efforts: dict[str, Any] = {"tau": None, "current": None, log.effort_name: effort[keep]}
     full = Prepared(
-        t[keep], q[keep], qd[keep], qdd[keep], **efforts, rate=rate, cutoff=fc, factor=1, log=log, trim=trim
-    )
+        t[keep], q[keep], qd[keep], qdd[keep], **efforts, rate=rate, cutoff=fc, factor=1, log=log, trim=trim,
+        untrimmed=(q, qd, qdd), window=keep,
+    )  # fmt: skip
     if factor == 1:
         return full
     every = slice(None, None, factor)
@@ -534,4 +571,6 @@ def prepare(
         log=log,
         full=full,
         trim=trim,
+        untrimmed=(q, qd, qdd),
+        window=keep,
     )

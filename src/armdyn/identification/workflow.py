@@ -24,13 +24,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from armdyn.dynamics.regressor import BODY_PARAMETERS, BaseParameters, base_parameters, parameters, regressor
 from armdyn.errors import ModelError
 from armdyn.identification.friction import LAWS, FrictionLaw, fit_nonlinear
-from armdyn.identification.least_squares import MAX_CONDITION, _standard_errors
+from armdyn.identification.least_squares import MAX_CONDITION
 from armdyn.identification.log import Log
 from armdyn.identification.preprocess import Prepared, prepare
 from armdyn.model import ArmModel, Inertial
@@ -71,7 +72,9 @@ class Columns:
         rigid = [f"{name}{i + 1}" for i in range(self.n) for name in BODY_PARAMETERS]
         return rigid + [f"{name}{j + 1}" for j in range(self.n) for name in self.per_joint]
 
-    def matrix(self, arm: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    def matrix(
+        self, arm: ArmModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, friction: np.ndarray | None = None
+    ) -> np.ndarray:
         """The extended regressor at the samples.
 
         Parameters
@@ -80,6 +83,9 @@ class Columns:
             The arm whose rigid-body regressor (Table 3.3.1, property 9) is extended.
         q, qd, qdd : numpy.ndarray
             (N, n) states.
+        friction : numpy.ndarray, optional
+            (N, n, k_law): the friction law's columns, when computed elsewhere (filtered as the torques
+            were); default the law at qd.
 
         Returns
         -------
@@ -87,7 +93,7 @@ class Columns:
             (N, n, 10 n + n k).
         """
         rigid = regressor(arm, q, qd, qdd)[..., : 10 * self.n]
-        law = self.law.columns(qd)  # (N, n, k_law)
+        law = self.law.columns(qd) if friction is None else friction  # (N, n, k_law)
         extra = [law]
         if self.motor_inertia:
             extra.append(qdd[..., None])
@@ -302,8 +308,21 @@ def _torques(log: Log, gains: object) -> Log:
     return dataclasses.replace(log, tau=log.current * g, current=None)
 
 
-def _least_squares(X: np.ndarray, y: np.ndarray, joint: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """phi, its standard errors (each joint's own residual variance) and the condition number, by QR."""
+def _least_squares(
+    X: np.ndarray, y: np.ndarray, n: int, lags: int, nonlinear: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """phi, its standard errors and the condition number of the column-scaled X, by QR.
+
+    ``nonlinear`` (rows, m) is the residual's Jacobian with respect to parameters fitted before and held
+    here (the friction law's nonlinear ones): the covariance is then that of all of them together
+    (Golub and Pereyra 1973), so that the standard errors of phi count their uncertainty too.
+
+    The samples of a filtered log are correlated in time (the filter spreads each sample's noise over its
+    neighbours), and the joints of one sample share it: the covariance is Newey and West's ("A simple,
+    positive semi-definite, heteroskedasticity and autocorrelation consistent covariance matrix",
+    Econometrica 55(3), 1987), (X^T X)^-1 S (X^T X)^-1 with S the Bartlett-weighted sum of the scores'
+    autocovariances up to ``lags`` samples, a score being one sample's X^T e over its n joints.
+    """
     from scipy.linalg import solve_triangular
 
     r = X.shape[1]
@@ -321,16 +340,69 @@ def _least_squares(X: np.ndarray, y: np.ndarray, joint: np.ndarray, n: int) -> t
         )
     phi = solve_triangular(R[:r, :r], R[:r, r])
     residual = y - Xs @ phi
-    inverse = solve_triangular(R[:r, :r], np.eye(r))
-    errors = _standard_errors(Xs, R[:r, :r], inverse, residual, joint, n)
+    if nonlinear is not None and nonlinear.shape[1]:
+        width = np.sqrt(np.sum(nonlinear**2, axis=0))
+        width[width == 0] = 1.0
+        Xs = np.column_stack([Xs, nonlinear / width])
+        R = np.linalg.qr(Xs, mode="r")  # type: ignore[assignment]
+    total = Xs.shape[1]
+    scores = (Xs * residual[:, None]).reshape(-1, n, total).sum(axis=1)  # (N, total)
+    samples = scores.shape[0]
+    middle = scores.T @ scores
+    for lag in range(1, min(lags, samples - 1) + 1):
+        shared = scores[lag:].T @ scores[:-lag]
+        middle += (1 - lag / (lags + 1)) * (shared + shared.T)
+    # the degrees of freedom the fit used, counted in effectively independent rows (the residuals' own
+    # long-run variance ratio, Bartlett-weighted as S is)
+    errors_by_sample = residual.reshape(-1, n)
+    power = float(np.sum(errors_by_sample**2)) or 1.0
+    ratio = 1.0 + 2.0 * sum(
+        (1 - lag / (lags + 1)) * float(np.sum(errors_by_sample[lag:] * errors_by_sample[:-lag])) / power
+        for lag in range(1, min(lags, samples - 1) + 1)
+    )
+    effective = residual.size / max(ratio, 1.0)
+    middle *= effective / max(effective - total, 1.0)
+    inverse = solve_triangular(R[:total, :total], np.eye(total))  # (X^T X)^-1 = R^-1 R^-T
+    covariance = inverse @ (inverse.T @ middle @ inverse) @ inverse.T
+    errors = np.sqrt(np.maximum(np.diag(covariance)[:r], 0.0))
     return phi / scale, errors / scale, condition
 
 
 def _stacked(columns: Columns, arm: ArmModel, prepared: Prepared) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The extended regressor and torques of every sample stacked: X (N n, P), y (N n,), joint (N n,)."""
-    X = columns.matrix(arm, prepared.q, prepared.qd, prepared.qdd)
+    """The extended regressor and torques of every sample stacked: X (N n, P), y (N n,), joint (N n,).
+
+    The friction law's columns, which are not smooth in the states, go through the filter the torques went
+    through (parallel filtering, Gautier 1997); the rigid-body columns are smooth within the cut-off.
+    """
+    friction = None
+    if prepared.untrimmed is not None:
+        friction = prepared.filtered_as_torques(columns.law.columns(prepared.untrimmed[1]))
+    X = columns.matrix(arm, prepared.q, prepared.qd, prepared.qdd, friction)
     assert prepared.tau is not None
     return X.reshape(-1, X.shape[-1]), prepared.tau.reshape(-1), np.tile(np.arange(arm.n), len(prepared.q))
+
+
+def _nonlinear_jacobian(columns: Columns, keep: np.ndarray, phi: np.ndarray, prepared: Prepared) -> np.ndarray | None:
+    """d(prediction)/d(the law's nonlinear parameters) at each row (N n, n k'), filtered as the torques were:
+    each joint's amplitude (A or Fs) times its nonlinear term's derivatives; None for a law without any."""
+    from armdyn.identification.friction import nonlinear_derivatives
+
+    law, n = columns.law, columns.n
+    if not law.nonlinear_names:
+        return None
+    k = len(columns.per_joint)
+    amplitude_index = 10 * n + np.arange(n) * k + len(law.linear_names) - 1  # A or Fs: the law's last linear one
+    full = np.zeros(10 * n + n * k)
+    full[keep] = phi
+    amplitude = full[amplitude_index]
+    if prepared.untrimmed is not None:
+        slopes = prepared.filtered_as_torques(nonlinear_derivatives(law.name, prepared.untrimmed[1], law.nonlinear))
+    else:
+        slopes = nonlinear_derivatives(law.name, prepared.qd, law.nonlinear)
+    samples, _, m = slopes.shape
+    weighted = slopes * amplitude[None, :, None]
+    spread = weighted[:, :, None, :] * np.eye(n)[None, :, :, None]
+    return spread.reshape(samples * n, n * m)
 
 
 def _base_selection(columns: Columns, base: BaseParameters) -> tuple[np.ndarray, np.ndarray]:
@@ -348,19 +420,19 @@ def _base_selection(columns: Columns, base: BaseParameters) -> tuple[np.ndarray,
         if ia >= 0:
             to_full[10 * n + 4 * j + 3] = 10 * n + j * k + ia
     kept_rigid, rows = [], []
-    for row, column in zip(base.regrouping, base.columns, strict=True):
+    for row, column in zip(base.regrouping, base.columns.tolist(), strict=True):
         if column not in to_full:  # a friction column of base_parameters: the law's own columns replace them
             continue
         full_row = np.zeros(total)
-        for index in np.flatnonzero(row):
+        for index in np.flatnonzero(row).tolist():
             if index in to_full:
                 full_row[to_full[index]] = row[index]
         kept_rigid.append(to_full[column])
         rows.append(full_row)
     others = [10 * n + j * k + c for j in range(n) for c in range(k) if c != ia]
-    for index in others:
+    for other in others:
         full_row = np.zeros(total)
-        full_row[index] = 1.0
+        full_row[other] = 1.0
         rows.append(full_row)
     return np.array(kept_rigid + others), np.array(rows)
 
@@ -405,7 +477,7 @@ def identified_arm(prior: ArmModel, columns: Columns, phi: np.ndarray, name: str
     friction = columns.law.link_fields(linear)
     links = []
     for i, (link, (mass, com, inertia)) in enumerate(zip(prior.links, _link_parameters(phi, n), strict=True)):
-        fields: dict[str, object] = {"coulomb": (0.0, 0.0), **friction[i], "gear_ratio": 1.0}
+        fields: dict[str, Any] = {"coulomb": (0.0, 0.0), **friction[i], "gear_ratio": 1.0}
         jm = per_joint[i, columns.per_joint.index("Ia")] if columns.motor_inertia else 0.0
         fields["motor_inertia"] = float(max(jm, 0.0))
         inertial = Inertial(max(mass, 0.0), com, inertia, link.name, False)
@@ -498,17 +570,23 @@ def identify_log(
     if law.nonlinear_names:
         linear_part = FrictionLaw({"stribeck": "coulomb", "sigmoid": "viscous"}[friction], np.zeros((n, 0)))
         fixed = Columns(n, linear_part, motor_inertia, offset)
-        X, y, joint = _stacked(fixed, arm, prepared)
+        X, y, _ = _stacked(fixed, arm, prepared)
         keep, _ = _base_selection(fixed, base)
-        law = fit_nonlinear(friction, X[:, keep], y, prepared.qd.reshape(-1), joint, n)
+        velocities, through = prepared.qd, None
+        if prepared.untrimmed is not None:
+            velocities, through = prepared.untrimmed[1], prepared.filtered_as_torques
+        law = fit_nonlinear(friction, X[:, keep], y, velocities, through)
     columns = Columns(n, law, motor_inertia, offset)
-    X, y, joint = _stacked(columns, arm, prepared)
+    X, y, _ = _stacked(columns, arm, prepared)
     keep, regrouping = _base_selection(columns, base)
     timings["friction"] = time.perf_counter() - start
 
     start = time.perf_counter()
     say("least squares on the base parameters")
-    phi_ls, errors, condition = _least_squares(X[:, keep], y, joint, n)
+    lags = max(1, int(np.ceil(2 * prepared.rate / prepared.cutoff)))  # the filter's memory, in samples
+    phi_ls, _, _ = _least_squares(X[:, keep], y, n, lags)
+    sensitivity = _nonlinear_jacobian(columns, keep, phi_ls, prepared)
+    phi_ls, errors, condition = _least_squares(X[:, keep], y, n, lags, sensitivity)
     timings["least_squares"] = time.perf_counter() - start
     full_names = columns.names
     names = [_combination(row, full_names) for row in regrouping]
