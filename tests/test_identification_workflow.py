@@ -4,6 +4,7 @@ known truth, and on a real Panda's log against the model its authors published (
 from __future__ import annotations
 
 import dataclasses
+import re
 import warnings
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from armdyn.identification.excitation import FourierTrajectory
 from armdyn.identification.friction import FrictionLaw, fit_nonlinear, sigmoid_friction
 from armdyn.identification.log import Log, read_gaz_panda
 from armdyn.identification.workflow import identify_log, validate
-from tests.helpers import URDFS
+from tests.helpers import URDFS, assert_one_error_line, invoke
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "panda-gaz2019"
 FINGERS = {"panda_finger_joint1": 0.02, "panda_finger_joint2": 0.02}
@@ -202,3 +203,66 @@ def test_real_panda_log_is_predicted_at_least_as_well_as_the_published_model(pan
     assert np.all(ours.rms <= published.rms), f"ours {ours.rms.round(3)}, published {published.rms.round(3)}"
     eigenvalues = np.linalg.eigvalsh(pseudo_inertia(model.phi[:70].reshape(7, 10)))
     assert np.all(eigenvalues.min(axis=1) >= -1e-9), "7 of 7 links physically consistent"
+
+
+# ----- the command line ---------------------------------------------------------------------------------------
+@pytest.fixture
+def log_csv(tmp_path: Path) -> Path:
+    """A simulated two-link log as a CSV file of time, positions and torques (the reader's default names)."""
+    arm = ad.models.two_link_planar()
+    log, _ = _simulated_log(arm, seconds=6)
+    path = tmp_path / "log.csv"
+    table = np.column_stack([log.t, log.q, log.tau])
+    np.savetxt(path, table, delimiter=",", header="time,q1,q2,tau1,tau2", comments="")
+    return path
+
+
+def test_cli_identifies_from_a_log_and_writes_the_report_and_the_arm(log_csv: Path, tmp_path: Path) -> None:
+    out = tmp_path / "ident"
+    result = invoke("identify", "two_link_planar", "--log", log_csv, "--holdout", "0.3", "--friction", "viscous",
+                    "--reference", "two_link_planar", "-o", out)  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "two_link_planar rms" in result.output and "Held-out samples" in result.output
+    for name in ("report.md", "report.html", "validation_torques.png", "validation_residuals.png"):
+        assert (out / name).is_file(), name
+    identified = ad.load_arm(out / "identified.json")
+    truth = ad.models.two_link_planar()
+    q = np.array([[0.3, -0.4], [1.0, 0.2]])
+    np.testing.assert_allclose(identified.gravity_vector(q), truth.gravity_vector(q), rtol=0.02, atol=0.02)
+    assert "Physical consistency of each link" in (out / "report.md").read_text()
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragments"),
+    [
+        (["--generate"], ["without a samples CSV file and without --generate"]),
+        (["--current"], ["--current needs the current-to-torque gains"]),
+        (["--current", "--gains", "1,1"], ["the log holds torques; leave out --current"]),
+        (["--holdout", "0.95"], ["--holdout must be a share between 0 and 0.9"]),
+        (["--lock", "q1=0"], ["--lock takes joints of a URDF file"]),
+        (["--columns", "t"], ["--columns 't': give name=value pairs"]),
+        (["--friction", "lugre"], ["friction must be one of"]),
+    ],
+)
+def test_cli_identify_log_errors_are_one_line(
+    log_csv: Path, tmp_path: Path, extra: list[str], fragments: list[str]
+) -> None:
+    assert_one_error_line(
+        invoke("identify", "two_link_planar", "--log", log_csv, "-o", tmp_path / "o", *extra), *fragments
+    )
+
+
+def test_cli_identify_log_needs_an_output_folder_and_log_options_need_a_log(log_csv: Path) -> None:
+    assert_one_error_line(invoke("identify", "two_link_planar", "--log", log_csv), "give the folder with -o DIR")
+    assert_one_error_line(
+        invoke("identify", "two_link_planar", "--generate", "--holdout", "0.3"), "--holdout goes with --log"
+    )
+
+
+@pytest.mark.slow
+def test_cli_on_the_real_panda_log(panda_log: Log, tmp_path: Path) -> None:
+    result = invoke("identify", URDFS["panda"], "--lock", "panda_finger_joint1=0.02,panda_finger_joint2=0.02", "--log",
+                    SHARED, "--holdout", "0.3", "--reference", "panda_gaz2019", "-o", tmp_path / "panda")  # fmt: skip
+    assert result.exit_code == 0, result.output
+    changes = [float(x) for x in re.findall(r"([+-]\d+\.\d)%", result.output)]
+    assert len(changes) == 7 and max(changes) <= 0.0, result.output
