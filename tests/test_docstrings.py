@@ -45,6 +45,8 @@ MODULES = (
     "armdyn.identification.report",
     "armdyn.identification.payload",
     "armdyn.identification.gains",
+    "armdyn.io.urdf_out",
+    "armdyn.io.model_file",
     "armdyn.task_space",
     "armdyn.control.task",
     "armdyn.control.drives",

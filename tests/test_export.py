@@ -22,7 +22,7 @@ from armdyn.io.urdf_out import UNBOUNDED, rpy, to_urdf
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint, rot_x, rot_z, trans
-from armdyn.urdf import ARMDYN_NAMESPACE
+from armdyn.io.urdf_out import ARMDYN_NAMESPACE
 from tests.helpers import URDFS, pin_q
 
 DRIVE = f"{{{ARMDYN_NAMESPACE}}}drive"

@@ -314,7 +314,7 @@ ALLOWED_REPEATS = {
         for name, module in (
             ("check", "armdyn.properties"),
             ("derive", "armdyn.symbolic.closed_form"),
-            ("identify", "armdyn.dynamics.regressor"),
+            ("identify", "armdyn.identification.least_squares"),
             ("simulate", "armdyn.simulation"),
         )
     },

@@ -67,28 +67,6 @@ class Robot(ArmModel):
 
         return to_urdf(self, path)
 
-    def save(self, path: str | Path) -> Path:
-        """Write the arm to armdyn's own model file (JSON), exact in every number (``armdyn.load_arm``).
-
-        Parameters
-        ----------
-        path : str or Path
-            The file, ending in .json.
-
-        Returns
-        -------
-        Path
-            The file written.
-
-        Raises
-        ------
-        armdyn.ModelError
-            For a symbolic arm, another suffix, or a path that cannot be written.
-        """
-        from armdyn.io.model_file import save_arm
-
-        return save_arm(self, path)
-
     # dynamics (armdyn.dynamics.api)
     inverse_dynamics = api.inverse_dynamics
     forward_dynamics = api.forward_dynamics

@@ -24,6 +24,7 @@ import numpy as np
 
 from armdyn import inputs
 from armdyn.errors import ModelError
+from armdyn.io.urdf_out import ARMDYN_NAMESPACE
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
@@ -34,7 +35,6 @@ if TYPE_CHECKING:
 
 _MOVING = {"revolute", "continuous", "prismatic"}
 # The XML namespace of armdyn's URDF extension, declared as xmlns:armdyn on <robot>
-ARMDYN_NAMESPACE = "urn:armdyn:urdf"
 # <armdyn:drive> attributes: the Link field each gives and how many numbers it holds
 _DRIVE = {"viscous": 1, "coulomb": 2, "motor_inertia": 1, "gear_ratio": 1, "stribeck": 2, "sigmoid": 3}
 # The test for joints that move no mass: M(q) is factored at this many random configurations

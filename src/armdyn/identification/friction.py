@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armdyn.dynamics.friction import logistic_vector
 from armdyn.errors import ModelError
 
 LAWS = ("viscous", "coulomb", "stribeck", "sigmoid")
@@ -125,22 +126,6 @@ class FrictionLaw:
         return fields
 
 
-def logistic(x: np.ndarray) -> np.ndarray:
-    """1 / (1 + exp(-x)), without overflow for large |x|.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Any shape.
-
-    Returns
-    -------
-    numpy.ndarray
-        The logistic function of x, same shape.
-    """
-    return np.exp(-np.logaddexp(0.0, -x))
-
-
 def sigmoid_friction(qd: np.ndarray, alpha: np.ndarray, shift: np.ndarray) -> np.ndarray:
     """s(alpha (qd + shift)) - s(alpha shift): Gaz et al.'s law (2019) per unit amplitude A; 0 at rest.
 
@@ -156,7 +141,7 @@ def sigmoid_friction(qd: np.ndarray, alpha: np.ndarray, shift: np.ndarray) -> np
     numpy.ndarray
         The law per unit amplitude.
     """
-    return logistic(alpha * (qd + shift)) - logistic(alpha * shift)
+    return logistic_vector(alpha * (qd + shift)) - logistic_vector(alpha * shift)
 
 
 def stribeck_friction(qd: np.ndarray, vs: np.ndarray) -> np.ndarray:
@@ -224,7 +209,7 @@ def nonlinear_derivatives(name: str, qd: np.ndarray, parameters: np.ndarray) -> 
         vs = parameters[..., 0]
         return (2 * qd**2 / vs**3 * stribeck_friction(qd, vs))[..., None]
     alpha, shift = parameters[..., 0], parameters[..., 1]
-    moving, rest = logistic(alpha * (qd + shift)), logistic(alpha * shift)
+    moving, rest = logistic_vector(alpha * (qd + shift)), logistic_vector(alpha * shift)
     slope_moving, slope_rest = moving * (1 - moving), rest * (1 - rest)
     d_alpha = slope_moving * (qd + shift) - slope_rest * shift
     d_shift = alpha * (slope_moving - slope_rest)

@@ -30,7 +30,9 @@ from lxml import etree
 
 from armdyn.errors import ModelError
 from armdyn.model.arm import ArmModel, Link
-from armdyn.urdf import ARMDYN_NAMESPACE
+
+ARMDYN_NAMESPACE = "urn:armdyn:urdf"
+"""The XML namespace of the <armdyn:drive> element: friction and motors that <dynamics> cannot hold."""
 
 # The number written where URDF requires one that armdyn does not have: an infinite joint limit, the
 # <limit> effort and velocity (required by the URDF specification for revolute and prismatic joints)
