@@ -52,8 +52,10 @@ FIELDS = ("t", "q", "qd", "tau", "current", "q_desired", "qd_desired")
 MIN_LOG_SAMPLES = 20
 """The fewest samples a Log holds (a zero-phase filter of order 4 pads each end with 15)."""
 DEGREE_MARGIN = 0.2
-"""How far (rad) a revolute joint may go beyond a full turn, or beyond its limits, before its angles are taken
-for degrees."""
+"""How far (rad) a revolute joint may go beyond a full turn before its angles are taken for degrees."""
+DEGREE_EXCESS = 0.5
+"""How far (rad, about 30 degrees) a revolute joint's angles must go beyond its limits, all of them fitting the
+limits when read as degrees, before they are taken for degrees (a log may pass a limit by a little)."""
 _DEFAULT_NAMES = {
     "t": ("t", "time"),
     "q": ("q",),
@@ -257,7 +259,7 @@ class Log:
                     f"{where}, reaches {angles[k]:.6g} at sample {self.first_sample + k}, beyond a full turn "
                     f"({turn:.4g} rad): the angles look like degrees; give radians (numpy.radians)"
                 )
-            below, above = angles < lower[j] - DEGREE_MARGIN, angles > upper[j] + DEGREE_MARGIN
+            below, above = angles < lower[j] - DEGREE_EXCESS, angles > upper[j] + DEGREE_EXCESS
             if below.any() or above.any():
                 radians = np.radians(angles)
                 fits = np.all((radians >= lower[j] - DEGREE_MARGIN) & (radians <= upper[j] + DEGREE_MARGIN))
