@@ -18,11 +18,10 @@ from scipy.spatial.transform import Rotation
 import armdyn as ad
 from armdyn import ModelError, load_urdf
 from armdyn.io.model_file import FORMAT, VERSION, arm_from_dict, arm_to_dict, load_arm, save_arm
-from armdyn.io.urdf_out import UNBOUNDED, rpy, to_urdf
+from armdyn.io.urdf_out import ARMDYN_NAMESPACE, UNBOUNDED, rpy, to_urdf
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint, rot_x, rot_z, trans
-from armdyn.io.urdf_out import ARMDYN_NAMESPACE
 from tests.helpers import URDFS, pin_q
 
 DRIVE = f"{{{ARMDYN_NAMESPACE}}}drive"

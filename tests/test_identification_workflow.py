@@ -266,3 +266,25 @@ def test_cli_on_the_real_panda_log(panda_log: Log, tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     changes = [float(x) for x in re.findall(r"([+-]\d+\.\d)%", result.output)]
     assert len(changes) == 7 and max(changes) <= 0.0, result.output
+
+
+@pytest.mark.slow
+def test_cli_gains_from_a_payload_run_then_identification_from_currents(tmp_path: Path) -> None:
+    """Two logs of motor currents (gains 0.5 to 3 N m/A), one with a 3 kg payload off the wrist's axis: the gains
+    within 2% (Gautier and Briot 2014), the Coulomb steps filtered as the currents were."""
+    arm = ad.models.puma560()
+    gains = np.array([0.5, 1.2, 3.0, 0.8, 2.0, 1.5])
+    com = [0.05, 0.03, 0.08]
+    names = ",".join(f"q{j + 1}" for j in range(6)) + "," + ",".join(f"i{j + 1}" for j in range(6))
+    for label, truth, seed in (("unloaded", arm, 1), ("loaded", arm.with_payload(3.0, com), 2)):
+        log, _ = _simulated_log(truth, seed=seed)
+        table = np.column_stack([log.t, log.q, log.tau / gains])
+        np.savetxt(tmp_path / f"{label}.csv", table, delimiter=",", header="time," + names, comments="")
+    result = invoke("identify", "puma560", "--log", tmp_path / "unloaded.csv", "--current", "--gains-from-payload",
+                    tmp_path / "loaded.csv", "3.0", "--payload-com", "0.05,0.03,0.08", "--friction", "coulomb",
+                    "-o", tmp_path / "out")  # fmt: skip
+    assert result.exit_code == 0, result.output
+    found = re.search(r"gains from the payload run \(N m/A\): (.*)", result.output)
+    assert found is not None
+    estimated = np.array([float(x) for x in found.group(1).split(",")])
+    np.testing.assert_allclose(estimated, gains, rtol=0.02)

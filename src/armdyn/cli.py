@@ -1116,9 +1116,15 @@ def identify(
     gains_from_payload: tuple[str, float] | None = typer.Option(
         None,
         "--gains-from-payload",
-        help="With --current: estimate the gains from a second log RUN carrying a payload of known MASS (kg) at the "
-        "tool link's origin.",
+        help="With --current: estimate the gains from a second log RUN carrying a payload of known MASS (kg) "
+        "(Gautier and Briot 2014); its centre of mass is --payload-com.",
         metavar="RUN MASS",
+    ),
+    payload_com: str = typer.Option(
+        "0,0,0",
+        "--payload-com",
+        help="With --gains-from-payload: the payload's centre of mass in the tool link's frame (m), x,y,z; off the "
+        "last joint's axis, or that joint's gain is not determined.",
     ),
     friction: str = typer.Option(
         "sigmoid", "--friction", help="With --log: the friction law, viscous, coulomb, stribeck or sigmoid."
@@ -1156,6 +1162,7 @@ def identify(
             name, log, output, strict, columns=columns, current=current, gains=gains, payload=gains_from_payload,
             friction=friction, consistent=consistent, validate_log=validate_log, holdout=holdout,
             reference=reference, cutoff=cutoff, decimate=decimate, velocity_band=velocity_band, lock=lock,
+            payload_com=payload_com,
         )  # fmt: skip
         return
     log_options = (("--columns", columns), ("--gains", gains), ("--gains-from-payload", gains_from_payload),
@@ -1164,6 +1171,7 @@ def identify(
     given = [option for option, value in log_options if value is not None]
     given += [option for option, on in (("--current", current), ("--holdout", holdout != 0.0)) if on]
     given += ["--friction"] if friction != "sigmoid" else []
+    given += ["--payload-com"] if payload_com != "0,0,0" else []
     if given:
         _fail(f"{', '.join(given)} {'goes' if len(given) == 1 else 'go'} with --log")
 
@@ -1230,7 +1238,7 @@ def _identify_log(
     name: str, path: str, output: str | None, strict: bool, *, columns: str | None, current: bool,
     gains: str | None, payload: tuple[str, float] | None, friction: str, consistent: bool,
     validate_log: str | None, holdout: float, reference: str | None, cutoff: float | None,
-    decimate: int | None, velocity_band: float, lock: str | None,
+    decimate: int | None, velocity_band: float, lock: str | None, payload_com: str = "0,0,0",
 ) -> None:  # fmt: skip
     """``identify ARM --log FILE``: the whole workflow of armdyn.identification, its report and exports."""
     from armdyn.identification.log import read_log
@@ -1271,7 +1279,10 @@ def _identify_log(
         run, mass = payload
         _activity.status(f"estimating the drive gains from {run} (payload {mass:g} kg)")
         loaded = read_log(run, columns=mapping)
-        estimate = identify_gains(arm, cast(Any, prepare(data)), cast(Any, prepare(loaded)), mass)
+        com = _values(payload_com, "--payload-com")
+        if com.shape != (3,):
+            _fail(f"--payload-com must be three numbers x,y,z (m), got {payload_com!r}")
+        estimate = identify_gains(arm, cast(Any, prepare(data)), cast(Any, prepare(loaded)), mass, payload_com=com)
         gain_values = np.asarray(estimate.gains)
         console.print("gains from the payload run (N m/A): " + ", ".join(f"{g:.6g}" for g in gain_values))
     model = identify_log(

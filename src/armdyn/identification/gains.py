@@ -25,7 +25,7 @@ from typing import Protocol
 import numpy as np
 
 from armdyn import inputs
-from armdyn.dynamics.regressor import BaseParameters, base_parameters, regressor
+from armdyn.dynamics.regressor import BaseParameters, base_parameters
 from armdyn.errors import ArgumentError, ModelError
 from armdyn.identification.payload import (
     BODY,
@@ -33,6 +33,7 @@ from armdyn.identification.payload import (
     body_parameters,
     payload_link,
     run_arrays,
+    run_regressor,
     stacked_least_squares,
 )
 from armdyn.kinematics import check_arm
@@ -255,7 +256,7 @@ def identify_gains(
     rows, rights, groups = [], [], []
     for number, (run, label) in enumerate(((unloaded, "the unloaded run"), (loaded, "the loaded run"))):
         q, qd, qdd, current = run_arrays(run, arm, label, CURRENT_FIELDS)
-        W = regressor(arm, q, qd, qdd)
+        W = run_regressor(arm, run, q, qd, qdd)
         rows.append(np.column_stack([_current_block(current), -W[..., base.columns].reshape(-1, r)]))
         payload = W[..., BODY * index : BODY * (index + 1)] @ known
         rights.append(payload.reshape(-1) if number else np.zeros(len(q) * n))

@@ -61,6 +61,41 @@ class TorqueSamples(Protocol):
     tau: object
 
 
+def run_regressor(arm: ArmModel, run: object, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """The full regressor W (N, n, 14 n) of a run's samples (``armdyn.dynamics.regressor.regressor``).
+
+    For a run that went through a filter (a ``Prepared`` log: it has ``filtered_as_torques``), the
+    friction columns (Fv, Fc+, Fc-), which are not smooth in the states, are computed at the untrimmed
+    filtered states and passed through the filter the torques or currents went through (Gautier 1997's
+    parallel filtering); for plain arrays, W as it is.
+
+    Parameters
+    ----------
+    arm : ArmModel
+        The arm.
+    run : object
+        The run (a Prepared log, or anything else).
+    q, qd, qdd : numpy.ndarray
+        The run's samples, (N, n).
+
+    Returns
+    -------
+    numpy.ndarray
+        (N, n, 14 n).
+    """
+    W = regressor(arm, q, qd, qdd)
+    through = getattr(run, "filtered_as_torques", None)
+    untrimmed = getattr(run, "untrimmed", None)
+    if through is None or untrimmed is None:
+        return W
+    velocity = untrimmed[1]
+    friction = through(np.stack([velocity, (velocity > 0).astype(float), (velocity < 0).astype(float)], axis=-1))
+    n = arm.n
+    for j in range(n):
+        W[:, j, BODY * n + 4 * j : BODY * n + 4 * j + 3] = friction[:, j, :]
+    return W
+
+
 def run_arrays(
     run: object, arm: ArmModel, label: str, fields: tuple[str, ...] = TORQUE_FIELDS
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -638,7 +673,7 @@ def identify_payload(
         raise ArgumentError(f"drives must be True or False, got {drives!r}")
     n, columns = arm.n, slice(BODY * index, BODY * (index + 1))
     q, qd, qdd, tau = run_arrays(loaded, arm, "the loaded run")
-    W_loaded = regressor(arm, q, qd, qdd)
+    W_loaded = run_regressor(arm, loaded, q, qd, qdd)
     joints = np.tile(np.arange(n), len(q))
     name = arm.links[index].name
     if unloaded is None:
@@ -653,7 +688,7 @@ def identify_payload(
     base = base_parameters(arm, drives=bool(drives))
     r = len(base)
     q_u, qd_u, qdd_u, tau_u = run_arrays(unloaded, arm, "the unloaded run")
-    W_unloaded = regressor(arm, q_u, qd_u, qdd_u)
+    W_unloaded = run_regressor(arm, unloaded, q_u, qd_u, qdd_u)
     A = np.zeros((len(q_u) * n + len(q) * n, r + BODY))
     A[: len(q_u) * n, :r] = W_unloaded[..., base.columns].reshape(-1, r)
     A[len(q_u) * n :, :r] = W_loaded[..., base.columns].reshape(-1, r)
