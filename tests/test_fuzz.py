@@ -217,6 +217,9 @@ def dynamics_targets() -> list[Target]:
     args["out"] = _out_arg(lambda arm: (arm.n, 14 * arm.n))
     targets.append(_method("regressor", args))
     targets.append(Target("Robot.parameters", lambda arm: arm.parameters(), {}, ARMS, sweeps=3))
+    targets.append(
+        Target("Robot.to_urdf", lambda arm: arm.to_urdf(), {}, ARMS, view=lambda text: np.array([len(text)]))
+    )
     return targets
 
 

@@ -59,7 +59,7 @@ _PSEUDO[3, 3, 0] = 1.0
 def pseudo_inertia(phi10: object) -> np.ndarray:
     """The pseudo-inertia J = [[tr(I)/2 1 - I, h], [h^T, m]] of one link's ten parameters, or a batch.
 
-    J is the second moment of the link's mass distribution, integral of [r; 1][r; 1]^T dm (Lewis,
+    J is the second moment of the link's mass distribution, the integral of (r, 1)(r, 1)^T dm (Lewis,
     Dawson and Abdallah 2004, (3.2.27)); a density of mass with these parameters exists if and only
     if J is positive semi-definite (Wensing, Kim and Slotine, IEEE RA-L 3(1), 2018, Theorem 1).
 
