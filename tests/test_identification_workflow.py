@@ -288,3 +288,25 @@ def test_cli_gains_from_a_payload_run_then_identification_from_currents(tmp_path
     assert found is not None
     estimated = np.array([float(x) for x in found.group(1).split(",")])
     np.testing.assert_allclose(estimated, gains, rtol=0.02)
+
+
+def test_a_log_that_does_not_excite_the_parameters_is_refused_naming_the_condition_number() -> None:
+    arm = ad.models.two_link_planar()
+    log, _ = _simulated_log(arm, seconds=4)
+    still = dataclasses.replace(log, q=np.column_stack([log.q[:, 0], np.full(log.samples, 0.3)]))
+    with pytest.raises(ad.ModelError, match=r"do not excite the .* condition number"):
+        identify_log(arm, still, friction="viscous")
+
+
+def test_mass_bounds_hold_in_the_consistent_estimate(log_csv: Path, tmp_path: Path) -> None:
+    arm = ad.models.two_link_planar()
+    log, _ = _simulated_log(arm, seconds=6)
+    heavier = [ad.Inertial(1.5 * x.mass, x.com, 1.5 * x.inertia, x.name) for x in (link.inertial for link in arm.links)]
+    wrong = arm.replace([dataclasses.replace(link, inertial=i) for link, i in zip(arm.links, heavier, strict=True)])
+    model = identify_log(wrong, log, friction="viscous", mass_tolerance=0.1)
+    masses = model.phi[: 10 * arm.n : 10]
+    prior = np.array([link.inertial.mass for link in wrong.links])
+    assert np.all(masses >= 0.9 * prior - 1e-6) and np.all(masses <= 1.1 * prior + 1e-6)
+    result = invoke("identify", "two_link_planar", "--log", log_csv, "--friction", "viscous", "--mass-tolerance",
+                    "0.05", "-o", tmp_path / "o")  # fmt: skip
+    assert result.exit_code == 0, result.output

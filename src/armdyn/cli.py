@@ -1144,6 +1144,11 @@ def identify(
     ),
     cutoff: float | None = typer.Option(None, "--cutoff", help="With --log: the low-pass cut-off (Hz)."),
     decimate: int | None = typer.Option(None, "--decimate", help="With --log: the decimation factor."),
+    mass_tolerance: float | None = typer.Option(
+        None,
+        "--mass-tolerance",
+        help="With --log and --consistent: each link's mass within this share of the arm's own (0.1: within 10%).",
+    ),
     lock: str | None = typer.Option(
         None,
         "--lock",
@@ -1162,12 +1167,12 @@ def identify(
             name, log, output, strict, columns=columns, current=current, gains=gains, payload=gains_from_payload,
             friction=friction, consistent=consistent, validate_log=validate_log, holdout=holdout,
             reference=reference, cutoff=cutoff, decimate=decimate, velocity_band=velocity_band, lock=lock,
-            payload_com=payload_com,
+            payload_com=payload_com, mass_tolerance=mass_tolerance,
         )  # fmt: skip
         return
     log_options = (("--columns", columns), ("--gains", gains), ("--gains-from-payload", gains_from_payload),
                    ("--validate", validate_log), ("--reference", reference), ("--cutoff", cutoff),
-                   ("--decimate", decimate), ("--lock", lock))  # fmt: skip
+                   ("--decimate", decimate), ("--lock", lock), ("--mass-tolerance", mass_tolerance))  # fmt: skip
     given = [option for option, value in log_options if value is not None]
     given += [option for option, on in (("--current", current), ("--holdout", holdout != 0.0)) if on]
     given += ["--friction"] if friction != "sigmoid" else []
@@ -1239,6 +1244,7 @@ def _identify_log(
     gains: str | None, payload: tuple[str, float] | None, friction: str, consistent: bool,
     validate_log: str | None, holdout: float, reference: str | None, cutoff: float | None,
     decimate: int | None, velocity_band: float, lock: str | None, payload_com: str = "0,0,0",
+    mass_tolerance: float | None = None,
 ) -> None:  # fmt: skip
     """``identify ARM --log FILE``: the whole workflow of armdyn.identification, its report and exports."""
     from armdyn.identification.log import read_log
@@ -1287,7 +1293,7 @@ def _identify_log(
         console.print("gains from the payload run (N m/A): " + ", ".join(f"{g:.6g}" for g in gain_values))
     model = identify_log(
         arm, data, friction=friction, consistent=consistent, holdout=holdout, gains=gain_values, cutoff=cutoff,
-        decimate=decimate, progress=_activity.status,
+        decimate=decimate, mass_tolerance=mass_tolerance, progress=_activity.status,
     )  # fmt: skip
     held_out = (
         read_log(validate_log, columns=mapping) if validate_log else (data.split(1 - holdout)[1] if holdout else None)
