@@ -262,6 +262,10 @@ class IdentifiedModel:
         -------
         Validation
         """
+        if log.joint_names is None:
+            import dataclasses
+
+            log = dataclasses.replace(log, joint_names=tuple(self.prior.joint_names))
         return validate(self.predict, log, self.prepared, gains)
 
     def parameter_table(self) -> object:
