@@ -1149,7 +1149,7 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
         q, qd = arrays["q"][:rows], arrays["qd"][:rows]
         return Result(times[:rows], q, qd, arrays["qdd"][:rows], arrays["tau"][:rows],
                       arrays["q_d"][:rows] if trajectory is not None else None, arm,
-                      {"method": "rk4 (compiled)", "dt": dt, "integral": e_int, **extra},
+                      {"method": "rk4 (compiled)", "dt": dt, "integral": e_int, "coulomb_smoothing": plant[4], **extra},
                       lambda: _energies(arms, events, times[:rows], q, qd))  # fmt: skip
 
     in_chunks(advance, steps + 1, progress, lambda rows: recorded(rows, {"stopped": "interrupted"}))
@@ -1367,7 +1367,7 @@ def _python_rk4(arms, events, controller, period, trajectory, q0, qd0, disturban
         raise RunInterrupted(f"interrupted after {k} of {steps + 1} samples", partial) from None
     q_d = out["q_d"][:rows] if trajectory is not None else None
     result = Result(times[:rows], out["q"][:rows], out["qd"][:rows], out["qdd"][:rows], out["tau"][:rows], q_d,
-                    arms[0], {"method": "rk4 (Python)", "dt": dt, "integral": e_int},
+                    arms[0], {"method": "rk4 (Python)", "dt": dt, "integral": e_int, "coulomb_smoothing": smoothing},
                     lambda: _energies(arms, events, times[:rows], out["q"][:rows], out["qd"][:rows]))  # fmt: skip
     if rows <= steps:
         raise _stopped(arms[0], STOPPED_DIVERGED, joint, rows * dt, q, result)

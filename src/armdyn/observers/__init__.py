@@ -1,0 +1,1 @@
+"""Observers: the generalized-momentum observer, collision detection, isolation and contact forces."""

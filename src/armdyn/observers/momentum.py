@@ -1,0 +1,253 @@
+"""The generalized-momentum observer: the external joint torque without acceleration, without M's inverse.
+
+With p = M(q) qd, the robot equation M qdd + Vm qd + F + G = tau + tau_ext (3.3.1, tau_ext = -tau_d) and
+the skew property of Table 3.3.1, Mdot = Vm + Vm^T for the Christoffel Vm, give
+
+    pdot = tau + Vm^T(q, qd) qd - G(q) - F(qd) + tau_ext = tau - beta(q, qd) + tau_ext,
+
+so the residual r(t) = K [p(t) - p(0) - integral of (tau - beta + r) ds] obeys rdot = K (tau_ext - r): a
+first-order filter of tau_ext with a gain K per joint (De Luca and Mattone, "Actuator failure detection
+and isolation using generalized momenta", ICRA 2003; Haddadin, De Luca and Albu-Schaeffer, "Robot
+collisions: a survey on detection, isolation, and identification", IEEE T-RO 33(6), 2017).
+
+Sampled data: over a step the known terms are integrated by the trapezoid rule (or, for a torque held
+over each step as simulate's RK4 applies it, by its held value) and the residual's first-order dynamics
+taken exactly for a tau_ext constant over the step,
+
+    w_k - w_{k-1} = p_k - p_{k-1} - integral over the step of (tau - beta),
+    r_k = a r_{k-1} + (1 - a) (w_k - w_{k-1}) / dt_k,      a = exp(-K dt_k),
+
+which tends to the continuous observer as the step shrinks (first order in dt). The friction and the
+motor inertia are the arm's (M includes the reflected motor inertias): an identified arm plugs in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from armdyn.dynamics.friction import friction_vector
+from armdyn.errors import ModelError
+from armdyn.model import ArmModel
+
+
+def _gains(gains: object, n: int) -> np.ndarray:
+    """K per joint: positive finite numbers, one or n, or a ModelError naming the rule."""
+    try:
+        K = np.broadcast_to(np.asarray(gains, dtype=float), (n,)).copy()
+    except (TypeError, ValueError):
+        raise ModelError(f"gains must be one positive number or {n} (1/s), got {gains!r}") from None
+    if not np.all(np.isfinite(K)) or np.any(K <= 0):
+        raise ModelError(f"gains must be positive finite numbers (1/s), one per joint; got {K.tolist()}")
+    return K
+
+
+def _smoothing(arm: ArmModel, coulomb_smoothing: object) -> np.ndarray | None:
+    if coulomb_smoothing is None:
+        return None
+    try:
+        eps = np.broadcast_to(np.asarray(coulomb_smoothing, dtype=float), (arm.n,)).copy()
+    except (TypeError, ValueError):
+        raise ModelError(f"coulomb_smoothing must be a number >= 0 or {arm.n}, got {coulomb_smoothing!r}") from None
+    if not np.all(np.isfinite(eps)) or np.any(eps < 0):
+        raise ModelError(f"coulomb_smoothing must be finite numbers >= 0, got {eps.tolist()}")
+    return eps if np.any(eps > 0) else None
+
+
+def momentum(arm: ArmModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """p = M(q) qd, the generalized momentum, (..., n).
+
+    Parameters
+    ----------
+    arm : ArmModel
+        A Robot (its compiled M).
+    q, qd : numpy.ndarray
+        States, (..., n).
+
+    Returns
+    -------
+    numpy.ndarray
+        p, (..., n).
+    """
+    return np.einsum("...ij,...j->...i", arm.inertia_matrix(q), qd)  # type: ignore[attr-defined]
+
+
+def known_rate(arm: ArmModel, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, eps: np.ndarray | None) -> np.ndarray:
+    """tau - beta(q, qd) = tau + Vm^T(q, qd) qd - G(q) - F(qd): pdot without the external torque, (..., n).
+
+    Parameters
+    ----------
+    arm : ArmModel
+        A Robot (its compiled Vm and G).
+    q, qd, tau : numpy.ndarray
+        States and the applied joint torques, (..., n).
+    eps : numpy.ndarray or None
+        The Coulomb smoothing per joint (the law simulate's plant follows), None for the exact sign law.
+
+    Returns
+    -------
+    numpy.ndarray
+        (..., n).
+    """
+    coriolis = np.einsum("...ji,...j->...i", arm.coriolis_matrix(q, qd), qd)  # type: ignore[attr-defined]
+    return tau + coriolis - arm.gravity_vector(q) - friction_vector(arm, qd, eps)  # type: ignore[attr-defined]
+
+
+@njit(cache=True)
+def _residual(increments: np.ndarray, dt: np.ndarray, gains: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """r_k = a r_{k-1} + (1 - a) dw_k / dt_k per joint, a = exp(-K dt_k); r_0 = start."""
+    samples, n = increments.shape[0] + 1, gains.shape[0]
+    r = np.empty((samples, n))
+    r[0] = start
+    for k in range(1, samples):
+        for j in range(n):
+            a = np.exp(-gains[j] * dt[k - 1])
+            r[k, j] = a * r[k - 1, j] + (1.0 - a) * increments[k - 1, j] / dt[k - 1]
+    return r
+
+
+def observe(
+    arm: ArmModel,
+    t: object,
+    q: object,
+    qd: object,
+    tau: object,
+    gains: object = 50.0,
+    held_torque: bool = False,
+    coulomb_smoothing: object = None,
+) -> np.ndarray:
+    """The momentum observer's residual r over a whole log, in a few batched calls (see the module docstring).
+
+    Parameters
+    ----------
+    arm : ArmModel
+        A Robot: its M, Vm, G and friction are the model (an identified arm plugs in).
+    t : array_like
+        Sample times (N,), increasing.
+    q, qd, tau : array_like
+        Joint positions, velocities and applied torques, (N, n).
+    gains : float or array_like, optional
+        K per joint (1/s), > 0 (default 50: a time constant of 20 ms).
+    held_torque : bool, optional
+        True when tau_k was applied over the whole step [t_k, t_k+1] (simulate's RK4 holds it so); False
+        (default) integrates it by the trapezoid rule, as for a measured torque.
+    coulomb_smoothing : float or array_like, optional
+        The smoothing eps of the Coulomb and Stribeck signs (as simulate's plant has it); default the exact law.
+
+    Returns
+    -------
+    numpy.ndarray
+        r, (N, n): r_0 = 0, then the estimate of tau_ext filtered by K / (s + K).
+
+    Raises
+    ------
+    armdyn.ModelError
+        When the arrays are not finite numbers of shapes (N,) and (N, n), t does not increase, or the
+        gains are not positive.
+    """
+    times = np.asarray(t, dtype=float)
+    n = arm.n
+    arrays = []
+    for name, value in (("q", q), ("qd", qd), ("tau", tau)):
+        array = np.asarray(value, dtype=float)
+        if array.ndim != 2 or array.shape[1] != n or array.shape[0] != times.shape[0]:
+            raise ModelError(f"{name} must have shape ({times.shape[0]}, {n}) to match t, got {array.shape}")
+        bad = np.argwhere(~np.isfinite(array))
+        if bad.size:
+            raise ModelError(f"{name} holds {array[tuple(bad[0])]} at sample {bad[0][0]}, joint {bad[0][1] + 1}")
+        arrays.append(array)
+    if times.ndim != 1 or times.shape[0] < 2 or not np.all(np.isfinite(times)):
+        raise ModelError(f"t must be at least 2 finite sample times (N,), got shape {times.shape}")
+    dt = np.diff(times)
+    if np.any(dt <= 0):
+        raise ModelError(f"t must increase: sample {int(np.argmax(dt <= 0)) + 1} is not after the one before")
+    K = _gains(gains, n)
+    eps = _smoothing(arm, coulomb_smoothing)
+    q_, qd_, tau_ = arrays
+    p = momentum(arm, q_, qd_)
+    rate = known_rate(arm, q_, qd_, tau_, eps)
+    if held_torque:
+        minus_beta = rate - tau_
+        known = dt[:, None] * (tau_[:-1] + 0.5 * (minus_beta[1:] + minus_beta[:-1]))
+    else:
+        known = 0.5 * dt[:, None] * (rate[1:] + rate[:-1])
+    return _residual(np.diff(p, axis=0) - known, dt, K, np.zeros(n))
+
+
+@dataclass
+class MomentumObserver:
+    """The observer for a control loop: one sample per ``step`` call, its state kept between calls.
+
+    Parameters
+    ----------
+    arm : ArmModel
+        A Robot (the model).
+    gains : float or array_like
+        K per joint (1/s), > 0.
+    held_torque : bool, optional
+        As ``observe``.
+    coulomb_smoothing : float or array_like, optional
+        As ``observe``.
+    """
+
+    arm: ArmModel
+    gains: object = 50.0
+    held_torque: bool = False
+    coulomb_smoothing: object = None
+
+    def __post_init__(self) -> None:
+        self._K = _gains(self.gains, self.arm.n)
+        self._eps = _smoothing(self.arm, self.coulomb_smoothing)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the past: the next step starts the observer (r = 0 there)."""
+        self._last: tuple[float, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.residual = np.zeros(self.arm.n)
+
+    def step(self, t: float, q: object, qd: object, tau: object) -> np.ndarray:
+        """Take one sample and return the residual r (n,), the estimate of tau_ext.
+
+        Parameters
+        ----------
+        t : float
+            The sample's time (s), after the last one.
+        q, qd, tau : array_like
+            The sample's state and applied torque, (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            r, (n,) (the observer's own array, updated in place by the next step).
+
+        Raises
+        ------
+        armdyn.ModelError
+            When a value is not n finite numbers, or t is not after the last sample.
+        """
+        n = self.arm.n
+        values = []
+        for name, value in (("q", q), ("qd", qd), ("tau", tau)):
+            array = np.asarray(value, dtype=float)
+            if array.shape != (n,) or not np.all(np.isfinite(array)):
+                raise ModelError(f"{name} must be {n} finite numbers, got {value!r}")
+            values.append(array)
+        q_, qd_, tau_ = values
+        p = momentum(self.arm, q_, qd_)
+        rate = known_rate(self.arm, q_, qd_, tau_, self._eps)
+        if self._last is not None:
+            t0, p0, rate0, tau0 = self._last
+            dt = float(t) - t0
+            if not dt > 0:
+                raise ModelError(f"t must increase: {t} is not after {t0}")
+            if self.held_torque:
+                known = dt * (tau0 + 0.5 * ((rate - tau_) + (rate0 - tau0)))
+            else:
+                known = 0.5 * dt * (rate + rate0)
+            a = np.exp(-self._K * dt)
+            self.residual *= a
+            self.residual += (1.0 - a) * (p - p0 - known) / dt
+        self._last = (float(t), p, rate, tau_)
+        return self.residual
