@@ -1,0 +1,1 @@
+"""Sensing contact without a sensor: momentum observers, detection, isolation and contact estimation."""
