@@ -3,6 +3,8 @@ push on a link recovered, detected, isolated and its force estimated; the real P
 
 from __future__ import annotations
 
+import dataclasses
+import re
 import warnings
 from pathlib import Path
 
@@ -131,3 +133,70 @@ def test_bad_input_is_one_clear_error(change: dict, message: str) -> None:
         args.update(change)
     with pytest.raises(ad.ModelError, match=message.replace("(", r"\(").replace(")", r"\)")):
         observe(arm, **args)
+
+
+def test_no_false_alarm_over_60_s_with_masses_10_percent_off() -> None:
+    """The plant's links 10% heavier than the observer's model: thresholds from 10 s of collision-free motion, then
+    60 s without an alarm (the model error repeats with the motion; the band holds it)."""
+    arm = ad.models.puma560()
+    heavier = [
+        dataclasses.replace(link, inertial=ad.Inertial(1.1 * x.mass, x.com, 1.1 * x.inertia, x.name, False))
+        for link, x in ((link, link.inertial) for link in arm.links)
+    ]
+    result = _run(arm.replace(heavier), 70.2)
+    r = observe(arm, result.t, result.q, result.qd, result.tau, gains=50.0, held_torque=True,
+                coulomb_smoothing=result.info["coulomb_smoothing"])  # fmt: skip
+    first = (result.t > 0.2) & (result.t <= 10.2)
+    band = Band.from_residuals(r[first], quantile=0.999, margin=2.0)
+    later = result.t > 10.2
+    assert np.abs(r[later]).max() > 1.0  # the model error is there, well above rounding
+    assert detect(result.t[later], r[later], band).time is None
+
+
+def test_the_sampled_observer_converges_to_the_continuous_one_at_first_order() -> None:
+    """No external torque: the continuous observer's residual is 0; the sampled one's (friction's reversals integrated
+    by the trapezoid rule) falls in proportion to the step."""
+    arm = ad.models.puma560()
+    errors = []
+    for dt in (2e-3, 1e-3, 5e-4):
+        q0 = arm.configuration("qn")
+        result = ad.simulate(arm, ComputedTorque(kp=100, kv=20), Sinusoid(0.2 * np.ones(6), 0.5, offset=q0),
+                             t_final=2.0, dt=dt, q0=q0)  # fmt: skip
+        r = observe(arm, result.t, result.q, result.qd, result.tau, gains=50.0, held_torque=True,
+                    coulomb_smoothing=result.info["coulomb_smoothing"])  # fmt: skip
+        errors.append(np.sqrt(np.mean(r[result.t > 0.2] ** 2)))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(orders > 0.85), orders
+
+
+def test_cli_observe_detects_a_contact_in_a_log(tmp_path: Path) -> None:
+    from tests.helpers import assert_one_error_line, invoke
+
+    arm = ad.models.two_link_planar()
+    external = np.array([0.0, 3.0])
+
+    def contact(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        return -external if t >= 2.0 else np.zeros(2)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = ad.simulate(arm, ComputedTorque(kp=100, kv=20), Sinusoid([0.3, 0.3], 0.5), t_final=3.0, dt=1e-3,
+                          disturbance=contact)  # fmt: skip
+    path = tmp_path / "log.csv"
+    table = np.column_stack([run.t, run.q, run.qd, run.tau])
+    np.savetxt(path, table, delimiter=",", header="time,q1,q2,qd1,qd2,tau1,tau2", comments="")
+    result = invoke(
+        "observe", "two_link_planar", "--log", path, "--free", "0.5", "--gains", "100", "-o", tmp_path / "o"
+    )
+    assert result.exit_code == 0, result.output
+    found = re.search(
+        r"contact detected at t = ([0-9.]+) s on joint (\w+); the last link in contact: (\w+)", result.output
+    )
+    assert found is not None, result.output
+    assert 2.0 <= float(found.group(1)) <= 2.01 and found.group(3) == arm.joint_names[1]
+    for name in ("residuals.csv", "residuals.png", "report.md"):
+        assert (tmp_path / "o" / name).is_file()
+    assert_one_error_line(invoke("observe", "two_link_planar", "--log", path, "--free", "0.99", "-o", tmp_path / "p"),
+                          "--free must be a share")  # fmt: skip
+    assert_one_error_line(invoke("observe", "two_link_planar", "--log", path, "--gains", "-1", "-o", tmp_path / "p"),
+                          "gains must be positive")  # fmt: skip

@@ -1331,6 +1331,86 @@ def _identify_log(
     console.print(f"wrote {report} and report.html")
 
 
+@app.command()
+def observe(
+    name: str = typer.Argument(..., help=ARM_HELP),
+    log: str = typer.Option(..., "--log", help="The log: CSV, NPZ, Parquet, or the Panda log folder (as identify)."),
+    output: str = typer.Option(..., "--output", "-o", help="The folder for residuals.csv, the report and the figure."),
+    columns: str | None = typer.Option(None, "--columns", help='The column map, e.g. "t=time,q=q{j},tau=tau{j}".'),
+    gains: str = typer.Option("25", "--gains", help="The observer's gain K per joint (1/s): one number or n."),
+    free: float = typer.Option(
+        0.3, "--free", help="The share of the log, at its start, taken as free of contact: the band is set from it."
+    ),
+    quantile: float = typer.Option(0.999, "--quantile", help="The band's quantile of the free residuals per joint."),
+    margin: float = typer.Option(2.0, "--margin", help="The band widened about its centre by this factor."),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    lock: str | None = typer.Option(None, "--lock", help='A URDF\'s joints held fixed, "name=value,...".'),
+) -> None:
+    """Run the generalized-momentum observer over a log (the external joint torque without a sensor), set a band
+    from its collision-free start, and report detections, the link in contact and the residual's rms."""
+    from armdyn.identification.log import read_log
+    from armdyn.identification.preprocess import prepare
+    from armdyn.observers.contact import contact_link
+    from armdyn.observers.detection import Band, detect, plot_residuals
+    from armdyn.observers.momentum import observe as residual_of
+
+    if not (np.isfinite(free) and 0.05 <= free <= 0.95):
+        _fail(f"--free must be a share of the log between 0.05 and 0.95, got {free}")
+    folder = _output_folder(output, "-o")
+    locked = (
+        {key: float(catalog._value(value, "--lock")) for key, value in _column_map(lock, "--lock").items()}
+        if lock
+        else None
+    )
+    arm = _arm(name, strict, locked)
+    _activity.status(f"reading {log}")
+    data = read_log(log, columns=_column_map(columns) if columns else None)
+    data.check_arm(arm)
+    if data.tau is None:
+        _fail(f"{log}: the observer needs the applied joint torques (tau columns); this log holds motor currents")
+    K = _values(gains, "--gains")
+    qd = data.qd if data.qd is not None else None
+    if qd is None:  # velocities by central differences of the low-passed positions, at the log's own times
+        prepared = prepare(data, decimate=1, trim=0.0)
+        qd = np.column_stack([np.interp(data.t, prepared.t, prepared.qd[:, j]) for j in range(arm.n)])
+    _activity.status(f"observing {data.samples} samples")
+    r = residual_of(arm, data.t, data.q, qd, data.tau, gains=K if K.size > 1 else float(K[0]))
+    settle = data.t[0] + 5.0 / float(np.min(K))
+    cut = data.t[0] + free * (data.t[-1] - data.t[0])
+    free_part = (data.t > settle) & (data.t <= cut)
+    if np.count_nonzero(free_part) < 20:
+        _fail(f"--free {free}: the collision-free part after the observer settles ({settle:.3g} s) has too few samples")
+    band = Band.from_residuals(r[free_part], quantile=quantile, margin=margin)
+    watched = data.t > cut
+    before = r.copy()
+    before[~watched] = band.centre  # the collision-free part, where the band was set, is not watched
+    detection = detect(data.t, before, band)
+    _make_folder(folder)
+    table = np.column_stack([data.t, r])
+    header = "t," + ",".join(f"r{j + 1}" for j in range(arm.n))
+    with atomic_write(folder / "residuals.csv", newline="", encoding="utf-8") as handle:
+        np.savetxt(handle, table, delimiter=",", header=header, comments="")
+    plot_residuals(data.t, r, band, detection, path=folder / "residuals.png")
+    rms = np.sqrt(np.mean(r[watched] ** 2, axis=0))
+    lines = [f"# Momentum observer on {log}", "", f"arm {arm.name}, gains {K.tolist()} 1/s, {data.samples} samples; "
+             f"band from {free:.0%} of the log (quantile {quantile}, margin {margin})", "",
+             "| joint | band low | band high | residual rms after (N m) |", "|---|---|---|---|"]  # fmt: skip
+    for j, joint in enumerate(arm.joint_names):
+        lines.append(f"| {joint} | {band.lower[j]:.4g} | {band.upper[j]:.4g} | {rms[j]:.4g} |")
+    if detection.time is None:
+        verdict = "no contact detected after the collision-free part"
+    else:
+        k = int(np.searchsorted(data.t, detection.time))
+        link = contact_link(r[k], np.vstack([band.lower, band.upper]))
+        named = arm.joint_names[link] if link is not None else "none"
+        verdict = (f"contact detected at t = {detection.time:.4g} s on joint {arm.joint_names[detection.joint]}; "
+                   f"the last link in contact: {named}; {len(detection.intervals)} interval(s)")  # fmt: skip
+    lines += ["", verdict]
+    write_text(folder / "report.md", "\n".join(lines) + "\n")
+    console.print(verdict, highlight=False)
+    console.print(f"wrote {folder / 'residuals.csv'}, {folder / 'residuals.png'} and {folder / 'report.md'}")
+
+
 def _generated_samples(
     arm: Robot, noise: float, seed: int, period: float, harmonics: int, dt: float
 ) -> tuple[dict[str, np.ndarray], FourierTrajectory]:
