@@ -49,6 +49,7 @@ MODULES = (
     "armdyn.observers.momentum",
     "armdyn.observers.detection",
     "armdyn.observers.contact",
+    "armdyn.observers.reaction",
     "armdyn.io.model_file",
     "armdyn.task_space",
     "armdyn.control.task",

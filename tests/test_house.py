@@ -315,6 +315,7 @@ ALLOWED_REPEATS = {
             ("check", "armdyn.properties"),
             ("derive", "armdyn.symbolic.closed_form"),
             ("identify", "armdyn.identification.least_squares"),
+            ("observe", "armdyn.observers.momentum"),
             ("simulate", "armdyn.simulation"),
         )
     },

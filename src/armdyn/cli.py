@@ -1403,7 +1403,8 @@ def observe(
         k = int(np.searchsorted(data.t, detection.time))
         link = contact_link(r[k], np.vstack([band.lower, band.upper]))
         named = arm.joint_names[link] if link is not None else "none"
-        verdict = (f"contact detected at t = {detection.time:.4g} s on joint {arm.joint_names[detection.joint]}; "
+        first = arm.joint_names[detection.joint] if detection.joint is not None else "none"
+        verdict = (f"contact detected at t = {detection.time:.4g} s on joint {first}; "
                    f"the last link in contact: {named}; {len(detection.intervals)} interval(s)")  # fmt: skip
     lines += ["", verdict]
     write_text(folder / "report.md", "\n".join(lines) + "\n")

@@ -251,3 +251,25 @@ class MomentumObserver:
             self.residual += (1.0 - a) * (p - p0 - known) / dt
         self._last = (float(t), p, rate, tau_)
         return self.residual
+
+    def hold(self, tau: object) -> None:
+        """Set the torque held from the last sample on (``held_torque``): a controller knows the residual at a
+        sample before it decides the torque it applies from there, and the residual does not depend on it.
+
+        Parameters
+        ----------
+        tau : array_like
+            The torque applied from the last sample's time to the next's, (n,).
+
+        Raises
+        ------
+        armdyn.ModelError
+            Without a sample yet, or when ``tau`` is not n finite numbers.
+        """
+        array = np.asarray(tau, dtype=float)
+        if self._last is None:
+            raise ModelError("hold needs a sample first (step)")
+        if array.shape != (self.arm.n,) or not np.all(np.isfinite(array)):
+            raise ModelError(f"tau must be {self.arm.n} finite numbers, got {tau!r}")
+        t, p, rate, old = self._last
+        self._last = (t, p, rate - old + array, array)
