@@ -200,3 +200,25 @@ def test_cli_observe_detects_a_contact_in_a_log(tmp_path: Path) -> None:
                           "--free must be a share")  # fmt: skip
     assert_one_error_line(invoke("observe", "two_link_planar", "--log", path, "--gains", "-1", "-o", tmp_path / "p"),
                           "gains must be positive")  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["puma560", "panda_gaz2019"])
+def test_the_compiled_kernel_equals_the_readable_numpy_terms(name: str) -> None:
+    """p = M qd and tau + Vm^T qd - G - F of the compiled loop against the NumPy reference, friction smoothed or not."""
+    from armdyn.dynamics.friction import sign_law_table
+    from armdyn.dynamics.packed import workspace_size
+    from armdyn.observers.momentum import _momentum_and_rate, known_rate, momentum
+
+    arm = ad.models.load(name)
+    rng = np.random.default_rng(0)
+    n = arm.n
+    scratch = (np.empty(workspace_size(n)), np.empty((n, n)), np.empty((n, n)), np.empty(n))
+    for eps in (None, np.full(n, 0.01)):
+        for _ in range(10):
+            q, qd, tau = rng.uniform(-1, 1, (3, n))
+            qd[0] = 1e-3  # inside the smoothing
+            p, rate = np.empty(n), np.empty(n)
+            _momentum_and_rate(arm.packed, sign_law_table(arm), np.zeros(n) if eps is None else eps, scratch, q, qd,
+                               tau, p, rate)  # fmt: skip
+            np.testing.assert_allclose(p, momentum(arm, q, qd), rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(rate, known_rate(arm, q, qd, tau, eps), rtol=1e-11, atol=1e-11)

@@ -28,7 +28,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from armdyn.dynamics.friction import friction_vector
+from armdyn.dynamics.coriolis import coriolis_core
+from armdyn.dynamics.crba import crba_core
+from armdyn.dynamics.friction import friction_vector, sigmoid, sign_law_table, smooth_coulomb
+from armdyn.dynamics.packed import HEADER, STRIDE, VISCOUS, workspace_size
+from armdyn.dynamics.rnea import gravity_core
 from armdyn.errors import ModelError
 from armdyn.model import ArmModel
 
@@ -42,6 +46,14 @@ def _gains(gains: object, n: int) -> np.ndarray:
     if not np.all(np.isfinite(K)) or np.any(K <= 0):
         raise ModelError(f"gains must be positive finite numbers (1/s), one per joint; got {K.tolist()}")
     return K
+
+
+def _packed(arm: ArmModel) -> np.ndarray:
+    """The arm's packed model for the compiled kernels, or a ModelError: the observer needs a numeric Robot."""
+    packed = getattr(arm, "packed", None)
+    if packed is None:
+        raise ModelError(f"the observer needs a numeric armdyn Robot (its compiled dynamics), got {arm!r:.60}")
+    return packed
 
 
 def _smoothing(arm: ArmModel, coulomb_smoothing: object) -> np.ndarray | None:
@@ -108,6 +120,112 @@ def _residual(increments: np.ndarray, dt: np.ndarray, gains: np.ndarray, start: 
     return r
 
 
+@njit(cache=True)
+def _momentum_and_rate(
+    model: np.ndarray,
+    table: np.ndarray,
+    eps: np.ndarray,
+    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    q: np.ndarray,
+    qd: np.ndarray,
+    tau: np.ndarray,
+    p: np.ndarray,
+    rate: np.ndarray,
+) -> None:
+    """p = M qd and tau + Vm^T qd - G - F (the friction's sign smoothed by eps where eps > 0), compiled."""
+    work, M, C, G = scratch
+    crba_core(model, work, q, M)
+    coriolis_core(model, work, q, qd, C)
+    gravity_core(model, work, q, G)
+    for i in range(q.shape[0]):
+        momentum_i, coriolis_i = 0.0, 0.0
+        for j in range(q.shape[0]):
+            momentum_i += M[i, j] * qd[j]
+            coriolis_i += C[j, i] * qd[j]
+        friction = model[HEADER + STRIDE * i + VISCOUS] * qd[i] + smooth_coulomb(table, eps, i, qd[i])
+        p[i] = momentum_i
+        rate[i] = tau[i] + coriolis_i - G[i] - (friction + sigmoid(model, i, qd[i]))
+
+
+@njit(cache=True)
+def _update(
+    r: np.ndarray,
+    gains: np.ndarray,
+    dt: float,
+    held: bool,
+    before: tuple[np.ndarray, np.ndarray, np.ndarray],
+    now: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """r <- a r + (1 - a) (p - p0 - integral of the known terms) / dt, a = exp(-K dt), in place."""
+    p0, rate0, tau0 = before
+    p, rate, tau = now
+    for j in range(r.shape[0]):
+        if held:
+            known = dt * (tau0[j] + 0.5 * ((rate[j] - tau[j]) + (rate0[j] - tau0[j])))
+        else:
+            known = 0.5 * dt * (rate[j] + rate0[j])
+        a = np.exp(-gains[j] * dt)
+        r[j] = a * r[j] + (1.0 - a) * (p[j] - p0[j] - known) / dt
+
+
+@njit(cache=True)
+def _observe_log(
+    model: np.ndarray,
+    table: np.ndarray,
+    eps: np.ndarray,
+    t: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    tau: np.ndarray,
+    gains: np.ndarray,
+    held: bool,
+) -> np.ndarray:
+    """The residual over a whole log in one compiled loop, no per-sample array."""
+    samples, n = q.shape
+    scratch = (np.empty(workspace_size(n)), np.empty((n, n)), np.empty((n, n)), np.empty(n))
+    p0, rate0, p, rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    r = np.zeros((samples, n))
+    _momentum_and_rate(model, table, eps, scratch, q[0], qd[0], tau[0], p0, rate0)
+    for k in range(1, samples):
+        _momentum_and_rate(model, table, eps, scratch, q[k], qd[k], tau[k], p, rate)
+        r[k] = r[k - 1]
+        _update(r[k], gains, t[k] - t[k - 1], held, (p0, rate0, tau[k - 1]), (p, rate, tau[k]))
+        p0[:] = p
+        rate0[:] = rate
+    return r
+
+
+@njit(cache=True)
+def _step(
+    model: np.ndarray,
+    table: np.ndarray,
+    eps: np.ndarray,
+    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    gains: np.ndarray,
+    held: bool,
+    memory: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    t: float,
+    q: np.ndarray,
+    qd: np.ndarray,
+    tau: np.ndarray,
+    r: np.ndarray,
+) -> int:
+    """One sample into the observer's memory (last time and count, p, rate, tau, and the current p, rate), r in
+    place; 0, or 1 when t is not after the last sample."""
+    last, p0, rate0, tau0, p, rate = memory
+    _momentum_and_rate(model, table, eps, scratch, q, qd, tau, p, rate)
+    if last[1] > 0.0:
+        dt = t - last[0]
+        if not dt > 0.0:
+            return 1
+        _update(r, gains, dt, held, (p0, rate0, tau0), (p, rate, tau))
+    last[0], last[1] = t, 1.0
+    p0[:] = p
+    rate0[:] = rate
+    tau0[:] = tau
+    return 0
+
+
 def observe(
     arm: ArmModel,
     t: object,
@@ -166,14 +284,8 @@ def observe(
     K = _gains(gains, n)
     eps = _smoothing(arm, coulomb_smoothing)
     q_, qd_, tau_ = arrays
-    p = momentum(arm, q_, qd_)
-    rate = known_rate(arm, q_, qd_, tau_, eps)
-    if held_torque:
-        minus_beta = rate - tau_
-        known = dt[:, None] * (tau_[:-1] + 0.5 * (minus_beta[1:] + minus_beta[:-1]))
-    else:
-        known = 0.5 * dt[:, None] * (rate[1:] + rate[:-1])
-    return _residual(np.diff(p, axis=0) - known, dt, K, np.zeros(n))
+    table, smoothing = sign_law_table(arm), np.zeros(n) if eps is None else eps
+    return _observe_log(_packed(arm), table, smoothing, times, q_, qd_, tau_, K, bool(held_torque))
 
 
 @dataclass
@@ -198,14 +310,19 @@ class MomentumObserver:
     coulomb_smoothing: object = None
 
     def __post_init__(self) -> None:
+        self._model = _packed(self.arm)
         self._K = _gains(self.gains, self.arm.n)
         self._eps = _smoothing(self.arm, self.coulomb_smoothing)
         self.reset()
 
     def reset(self) -> None:
         """Forget the past: the next step starts the observer (r = 0 there)."""
-        self._last: tuple[float, np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.residual = np.zeros(self.arm.n)
+        n = self.arm.n
+        self._scratch = (np.empty(workspace_size(n)), np.empty((n, n)), np.empty((n, n)), np.empty(n))
+        self._memory = (np.zeros(2), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+        self._table = sign_law_table(self.arm)
+        self._eps_array = np.zeros(n) if self._eps is None else self._eps
+        self.residual = np.zeros(n)
 
     def step(self, t: float, q: object, qd: object, tau: object) -> np.ndarray:
         """Take one sample and return the residual r (n,), the estimate of tau_ext.
@@ -230,26 +347,14 @@ class MomentumObserver:
         n = self.arm.n
         values = []
         for name, value in (("q", q), ("qd", qd), ("tau", tau)):
-            array = np.asarray(value, dtype=float)
-            if array.shape != (n,) or not np.all(np.isfinite(array)):
+            array = value if isinstance(value, np.ndarray) and value.dtype == np.float64 else np.asarray(value, float)
+            if array.shape != (n,) or not np.isfinite(array).all():
                 raise ModelError(f"{name} must be {n} finite numbers, got {value!r}")
             values.append(array)
-        q_, qd_, tau_ = values
-        p = momentum(self.arm, q_, qd_)
-        rate = known_rate(self.arm, q_, qd_, tau_, self._eps)
-        if self._last is not None:
-            t0, p0, rate0, tau0 = self._last
-            dt = float(t) - t0
-            if not dt > 0:
-                raise ModelError(f"t must increase: {t} is not after {t0}")
-            if self.held_torque:
-                known = dt * (tau0 + 0.5 * ((rate - tau_) + (rate0 - tau0)))
-            else:
-                known = 0.5 * dt * (rate + rate0)
-            a = np.exp(-self._K * dt)
-            self.residual *= a
-            self.residual += (1.0 - a) * (p - p0 - known) / dt
-        self._last = (float(t), p, rate, tau_)
+        status = _step(self._model, self._table, self._eps_array, self._scratch, self._K, self.held_torque,
+                       self._memory, float(t), values[0], values[1], values[2], self.residual)  # fmt: skip
+        if status:
+            raise ModelError(f"t must increase: {t} is not after {self._memory[0][0]}")
         return self.residual
 
     def hold(self, tau: object) -> None:
@@ -267,9 +372,10 @@ class MomentumObserver:
             Without a sample yet, or when ``tau`` is not n finite numbers.
         """
         array = np.asarray(tau, dtype=float)
-        if self._last is None:
+        last, _, rate0, tau0, _, _ = self._memory
+        if last[1] == 0.0:
             raise ModelError("hold needs a sample first (step)")
         if array.shape != (self.arm.n,) or not np.all(np.isfinite(array)):
             raise ModelError(f"tau must be {self.arm.n} finite numbers, got {tau!r}")
-        t, p, rate, old = self._last
-        self._last = (t, p, rate - old + array, array)
+        rate0 += array - tau0
+        tau0[:] = array
