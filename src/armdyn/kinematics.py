@@ -55,14 +55,16 @@ def _numbers(value: ArrayLike, name: str) -> np.ndarray:
 
 
 def link_index(arm: ArmModel, link: object) -> int:
-    """The tool link for None, else ``link`` checked as an integer index of a link of the arm.
+    """The tool link for None, else ``link`` as the index of a link of the arm: an integer index, or the
+    name of the joint that moves the link.
 
     Parameters
     ----------
     arm : ArmModel
         The arm.
-    link : int or None
-        A link index (an int or NumPy integer, not a bool or a float), or None for the tool link.
+    link : int, str or None
+        A link index (an int or NumPy integer, not a bool or a float), a joint's name (``arm.joint_names``),
+        or None for the tool link.
 
     Returns
     -------
@@ -72,16 +74,27 @@ def link_index(arm: ArmModel, link: object) -> int:
     Raises
     ------
     armdyn.ModelError
-        When ``link`` is not an integer or is out of range.
+        When ``link`` is not an integer or a name, is out of range, or names no link of the arm (the message
+        lists the links).
     """
     if link is None:
         return arm.tool_link
+    names = arm.joint_names
+    if isinstance(link, str):
+        if link not in names:
+            listed = ", ".join(f"{i} '{name}'" for i, name in enumerate(names))
+            raise ModelError(
+                f"link must be an integer link index (0..{arm.n - 1}) or None, got {link!r} (str), and "
+                f"'{arm.name}' has no link '{link}' (its links: {listed})"
+            )
+        return names.index(link)
     if isinstance(link, (bool, np.bool_)) or not isinstance(link, (int, np.integer)):
         raise ModelError(
-            f"link must be an integer link index (0..{arm.n - 1}) or None, got {link!r} ({type(link).__name__})"
+            f"link must be an integer link index (0..{arm.n - 1}) or None, got {link!r} ({type(link).__name__}); "
+            "a joint's name is taken too"
         )
     if not 0 <= link < arm.n:
-        raise ModelError(f"link index {link} is out of range for '{arm.name}' (0..{arm.n - 1})")
+        raise ModelError(f"link index {link} is out of range for '{arm.name}' (0..{arm.n - 1}): it has no link {link}")
     return int(link)
 
 
@@ -370,7 +383,7 @@ def _joint_axes(arm: ArmModel, joints: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.einsum("...jab,jb->...ja", joints[..., :3, :3], axes), joints[..., :3, 3]
 
 
-def _target(arm: ArmModel, q: np.ndarray, link: int | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+def _target(arm: ArmModel, q: np.ndarray, link: int | str | None) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Which link, its pose (tool applied for the tool link), and the joint axes/origins."""
     links, joints = joint_frames(arm, q)
     index = link_index(arm, link)
@@ -394,7 +407,7 @@ def _in_frame(jac: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     return np.concatenate([rt @ jac[..., :3, :], rt @ jac[..., 3:, :]], axis=-2)
 
 
-def jacobian(arm: ArmModel, q: np.ndarray, frame: str = "base", link: int | None = None) -> np.ndarray:
+def jacobian(arm: ArmModel, q: np.ndarray, frame: str = "base", link: int | str | None = None) -> np.ndarray:
     """The geometric Jacobian J(q), (..., 6, n): [v; w] = J qd, linear rows first.
 
     Column j is [z_j x (p - o_j); z_j] for a revolute joint and [z_j; 0] for a prismatic
@@ -408,8 +421,8 @@ def jacobian(arm: ArmModel, q: np.ndarray, frame: str = "base", link: int | None
         Joint positions, (n,) or a batch (..., n).
     frame : str, optional
         "base" (default) expresses J in the world; "tool" in the moving frame itself.
-    link : int, optional
-        The index of the link whose frame origin is the point; default (None) the tool.
+    link : int or str, optional
+        The link whose frame origin is the point, by index or by its joint's name; default (None) the tool.
 
     Returns
     -------
@@ -437,7 +450,7 @@ def _expressed(jac: np.ndarray, pose: np.ndarray, frame: str) -> np.ndarray:
 
 
 def jacobian_dot(
-    arm: ArmModel, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | None = None
+    arm: ArmModel, q: np.ndarray, qd: np.ndarray, frame: str = "base", link: int | str | None = None
 ) -> np.ndarray:
     """dJ/dt for the Jacobian of ``jacobian`` (same point and frame), (..., 6, n).
 
@@ -454,8 +467,8 @@ def jacobian_dot(
     frame : str, optional
         "base" (default) for the derivative of the world-frame Jacobian; "tool" for that of
         the Jacobian expressed in the moving frame.
-    link : int, optional
-        The index of the link whose frame origin is the point; default (None) the tool.
+    link : int or str, optional
+        The link whose frame origin is the point, by index or by its joint's name; default (None) the tool.
 
     Returns
     -------

@@ -31,12 +31,11 @@ from armdyn.identification.payload import (
     BODY,
     LEAST_SQUARES,
     body_parameters,
-    payload_link,
     run_arrays,
     run_regressor,
     stacked_least_squares,
 )
-from armdyn.kinematics import check_arm
+from armdyn.kinematics import check_arm, link_index
 from armdyn.model import ArmModel
 
 CURRENT_FIELDS = ("q", "qd", "qdd", "current")
@@ -237,7 +236,7 @@ def identify_gains(
         the four attributes, or ``drives`` is not a bool.
     """
     check_arm(arm, True)
-    index = payload_link(arm, link)
+    index = link_index(arm, link)
     mass = inputs.number(payload_mass, "payload_mass")
     if not mass > 0:
         raise ModelError(

@@ -151,34 +151,6 @@ def run_arrays(
     return q, qd, qdd, y
 
 
-def payload_link(arm: ArmModel, link: object) -> int:
-    """The index of the link a payload is fixed to, given by index or name; None is the tool link.
-
-    Parameters
-    ----------
-    arm : ArmModel
-        The arm.
-    link : int, str or None
-        A link index (0 to n - 1), a link's name, or None for ``arm.tool_link``.
-
-    Returns
-    -------
-    int
-        The link's index.
-
-    Raises
-    ------
-    armdyn.ModelError
-        When no link has that index or name, or ``link`` is neither an integer, a str nor None.
-    """
-    if isinstance(link, str):
-        names = [item.name for item in arm.links]
-        if link not in names:
-            raise ModelError(f"'{arm.name}' has no link '{link}'; its links are {', '.join(names)}")
-        return names.index(link)
-    return link_index(arm, link)
-
-
 def body_parameters(mass: object, com: object = (0.0, 0.0, 0.0), inertia: object = None) -> np.ndarray:
     """The ten parameters [m, m c, I_O] of a rigid body given by its mass, centre of mass and inertia.
 
@@ -667,7 +639,7 @@ def identify_payload(
         the four attributes, or ``drives`` is not a bool.
     """
     check_arm(arm, True)
-    index = payload_link(arm, link)
+    index = link_index(arm, link)
     level = _confidence(confidence)
     if not isinstance(drives, (bool, np.bool_)):
         raise ArgumentError(f"drives must be True or False, got {drives!r}")

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from armdyn import inputs
 from armdyn.errors import ModelError
-from armdyn.kinematics import _columns, _skew, _target, as_state, check_arm, link_transforms
+from armdyn.kinematics import _columns, _skew, _target, as_state, check_arm, link_index, link_transforms
 from armdyn.model import ArmModel
 
 __all__ = [
@@ -44,39 +44,6 @@ OBSERVABLE_CONDITION = 1e3  # above this condition number of J_p^T the force is 
 class ContactObservabilityWarning(UserWarning):
     """The contact force (or wrench) is not observable from the joints that move the point: fewer joints
     than unknowns, or J_p^T too ill-conditioned (condition number above OBSERVABLE_CONDITION)."""
-
-
-def contact_link_index(arm: ArmModel, link: object) -> int:
-    """The index of a link given by index or by name (the name of the joint that moves it).
-
-    Parameters
-    ----------
-    arm : ArmModel
-        The arm.
-    link : int or str
-        A link index (0..n-1) or one of ``arm.joint_names``.
-
-    Returns
-    -------
-    int
-        The link's index.
-
-    Raises
-    ------
-    armdyn.ModelError
-        When no link of the arm has that index or name (the message lists the links).
-    """
-    names = arm.joint_names
-    listed = ", ".join(f"{i} '{name}'" for i, name in enumerate(names))
-    if isinstance(link, str):
-        if link not in names:
-            raise ModelError(f"'{arm.name}' has no link '{link}' (its links: {listed})")
-        return names.index(link)
-    if isinstance(link, (bool, np.bool_)) or not isinstance(link, (int, np.integer)):
-        raise ModelError(f"link must be a link index or name, got {link!r} ({type(link).__name__})")
-    if not 0 <= link < arm.n:
-        raise ModelError(f"'{arm.name}' has no link {link} (its links: {listed})")
-    return int(link)
 
 
 def _point(value: object, name: str = "point") -> np.ndarray:
@@ -114,7 +81,7 @@ def point_jacobian(arm: ArmModel, q: ArrayLike, link: int | str, point: ArrayLik
         When ``arm`` is not a numeric arm.
     """
     check_arm(arm)
-    index = contact_link_index(arm, link)
+    index = link_index(arm, link)
     offset = _point(point)
     q = as_state(arm, q)
     _, pose, z, o = _target(arm, q, index)  # as jacobian(arm, q, link=index): one pass over the chain for both
@@ -152,7 +119,7 @@ class _Contact:
 
     def _place(self, where: str) -> None:
         check_arm(self.arm)
-        object.__setattr__(self, "link", contact_link_index(self.arm, self.link))
+        object.__setattr__(self, "link", link_index(self.arm, self.link))
         object.__setattr__(self, "point", _point(self.point, f"{where} point"))
 
     def force(self, t: float, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
@@ -541,7 +508,7 @@ def _estimate(
     arm: ArmModel, q: ArrayLike, residual: ArrayLike, link: int | str, point: ArrayLike, damping: float, rows: int
 ) -> ForceEstimate:
     check_arm(arm)
-    index = contact_link_index(arm, link)
+    index = link_index(arm, link)
     lam = inputs.number(damping, "damping", minimum=0.0)
     q = as_state(arm, q)
     r = inputs.state(residual, arm.n, "residual", f" for '{arm.name}'")
