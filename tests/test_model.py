@@ -309,3 +309,14 @@ def test_puma560_configurations_lie_within_its_limits_as_the_toolbox_gives_them(
     np.testing.assert_allclose(puma.qn, [0, np.pi / 4, -np.pi, 0, np.pi / 4, 0])
     for name, q in puma.configurations.items():
         assert np.all(puma.qlim[0] <= q) and np.all(q <= puma.qlim[1]), name
+
+
+def test_an_inertial_from_its_ten_parameters_is_itself() -> None:
+    for link in ad.models.puma560().links + ad.models.panda_gaz2019().links:
+        body = link.inertial
+        back = ad.Inertial.from_parameters(body.parameters(), body.name, strict=False)
+        assert back.mass == pytest.approx(body.mass, abs=1e-15)
+        np.testing.assert_allclose(back.com, body.com if body.mass > 0 else np.zeros(3), atol=1e-14)
+        np.testing.assert_allclose(back.inertia, body.inertia, atol=1e-14)
+    with pytest.raises(ad.ModelError, match="phi10 must be 10 numbers"):
+        ad.Inertial.from_parameters(np.zeros(9))

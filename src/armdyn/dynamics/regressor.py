@@ -121,10 +121,7 @@ def parameters(arm: ArmModel) -> np.ndarray:
     _check_arm(arm)
     values = []
     for link in arm.links:
-        body = link.inertial
-        inertia = body.inertia_about_origin()
-        values += [body.mass, *body.first_moment]
-        values += [inertia[0, 0], inertia[0, 1], inertia[1, 1], inertia[0, 2], inertia[1, 2], inertia[2, 2]]
+        values += list(link.inertial.parameters())
     coulomb = arm.coulomb_friction
     for i in range(arm.n):
         values += [arm.viscous_friction[i], coulomb[i, 0], coulomb[i, 1], arm.reflected_inertia[i]]

@@ -38,11 +38,11 @@ from armdyn.errors import ArgumentError, ModelError
 from armdyn.identification.least_squares import MAX_CONDITION, POOR_CONDITION, PoorExcitationWarning
 from armdyn.kinematics import check_arm, link_index
 from armdyn.model import ArmModel
-from armdyn.model.inertial import Inertial
+from armdyn.model.inertial import PARAMETER_ENTRIES, Inertial
 
 BODY = 10
 """Inertial parameters of one body: [m, mx, my, mz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]."""
-INERTIA_ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
+INERTIA_ENTRIES = PARAMETER_ENTRIES
 """The entries of a symmetric 3x3 inertia held in a body's parameters 4 to 9, in that order."""
 TORQUE_FIELDS = ("q", "qd", "qdd", "tau")
 LEAST_SQUARES = ("ols", "tls")
@@ -179,8 +179,7 @@ def body_parameters(mass: object, com: object = (0.0, 0.0, 0.0), inertia: object
         When the mass properties are not those of a rigid body (see armdyn.model.Inertial).
     """
     body = Inertial(mass, com, np.zeros((3, 3)) if inertia is None else inertia, "payload")  # type: ignore[arg-type]
-    about_origin = body.inertia_about_origin()
-    return np.array([body.mass, *body.first_moment, *(about_origin[r, c] for r, c in INERTIA_ENTRIES)], dtype=float)
+    return body.parameters()
 
 
 @dataclass(frozen=True, eq=False)

@@ -441,18 +441,6 @@ def _base_selection(columns: Columns, base: BaseParameters) -> tuple[np.ndarray,
     return np.array(kept_rigid + others), np.array(rows)
 
 
-def _link_parameters(phi: np.ndarray, n: int) -> list[tuple[float, np.ndarray, np.ndarray]]:
-    """(mass, c.o.m., inertia about the c.o.m.) of each link from its ten parameters about the link origin."""
-    links = []
-    for i in range(n):
-        m, hx, hy, hz, xx, xy, yy, xz, yz, zz = phi[10 * i : 10 * i + 10]
-        origin = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-        com = np.array([hx, hy, hz]) / m if m > 0 else np.zeros(3)
-        about_com = origin - m * (com @ com * np.eye(3) - np.outer(com, com))
-        links.append((float(m), com, (about_com + about_com.T) / 2))
-    return links
-
-
 def identified_arm(prior: ArmModel, columns: Columns, phi: np.ndarray, name: str | None = None) -> ArmModel:
     """The arm of a full parameter vector: the prior's kinematics and limits, the estimated links, friction
     (joint side, gear 1) and motor inertias. Offsets are not the arm's (they are the sensor's).
@@ -480,11 +468,13 @@ def identified_arm(prior: ArmModel, columns: Columns, phi: np.ndarray, name: str
     linear = per_joint[:, : len(columns.law.linear_names)]
     friction = columns.law.link_fields(linear)
     links = []
-    for i, (link, (mass, com, inertia)) in enumerate(zip(prior.links, _link_parameters(phi, n), strict=True)):
+    for i, link in enumerate(prior.links):
         fields: dict[str, Any] = {"coulomb": (0.0, 0.0), **friction[i], "gear_ratio": 1.0}
         jm = per_joint[i, columns.per_joint.index("Ia")] if columns.motor_inertia else 0.0
         fields["motor_inertia"] = float(max(jm, 0.0))
-        inertial = Inertial(max(mass, 0.0), com, inertia, link.name, False)
+        body = phi[10 * i : 10 * i + 10].copy()
+        body[0] = max(body[0], 0.0)  # a consistent estimate's mass is >= 0 up to the solver's tolerance
+        inertial = Inertial.from_parameters(body, link.name, strict=False)
         links.append(dataclasses.replace(link, inertial=inertial, **fields))
     return prior.replace(links, name=name or f"{prior.name}_identified")
 

@@ -35,6 +35,10 @@ _LARGEST = 1e15  # armdyn.inputs.LARGEST_STATE: products of larger values overfl
 _T = TypeVar("_T")
 
 
+PARAMETER_ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
+"""The inertia entries among a body's ten parameters, in their order: Ixx, Ixy, Iyy, Ixz, Iyz, Izz."""
+
+
 def _is_symbolic(*values: object) -> bool:
     """True when any value is or holds a SymPy expression (symbolic parameters skip numeric checks)."""
     return any(_has_sympy(v) for v in values)
@@ -327,6 +331,52 @@ class Inertial:
         pseudo[:3, 3] = pseudo[3, :3] = self.first_moment
         pseudo[3, 3] = self.mass
         return pseudo
+
+    def parameters(self) -> np.ndarray:
+        """The body's ten inertial parameters [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz], the inertia
+        about the frame origin: the body's columns of the regressor W (Table 3.3.1, property 9).
+
+        Returns
+        -------
+        numpy.ndarray
+            (10,).
+        """
+        inertia = self.inertia_about_origin()
+        return np.array([self.mass, *self.first_moment, *(inertia[r, c] for r, c in PARAMETER_ENTRIES)], dtype=float)
+
+    @classmethod
+    def from_parameters(cls, phi10: object, name: str = "link", strict: bool = True) -> Inertial:
+        """The body of ten inertial parameters (the inverse of ``parameters``): c = h / m (the origin for a
+        massless body) and the inertia about c, I_O - m ((c . c) 1 - c c^T).
+
+        Parameters
+        ----------
+        phi10 : array_like
+            [m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz], (10,).
+        name : str, optional
+            Names the body in error messages.
+        strict : bool, optional
+            As Inertial's (triangle inequality refused, or only warned of).
+
+        Returns
+        -------
+        Inertial
+
+        Raises
+        ------
+        armdyn.ModelError
+            When phi10 is not ten finite numbers, or the body they make is not physical (see Inertial).
+        """
+        phi = real_array(phi10, "phi10", name)
+        if phi.shape != (10,):
+            raise ModelError(f"{name}: phi10 must be 10 numbers, got shape {phi.shape}")
+        mass, first_moment = float(phi[0]), phi[1:4]
+        origin = np.empty((3, 3))
+        for k, (r, c) in enumerate(PARAMETER_ENTRIES):
+            origin[r, c] = origin[c, r] = phi[4 + k]
+        com = first_moment / mass if mass > 0 else np.zeros(3)
+        about_com = origin - mass * ((com @ com) * np.eye(3) - np.outer(com, com))
+        return cls(mass, com, (about_com + about_com.T) / 2, name, strict)
 
     def transformed(self, transform: np.ndarray) -> Inertial:
         """The same body described in a frame F, given transform = pose of this frame in F.
