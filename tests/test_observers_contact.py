@@ -253,3 +253,58 @@ def test_bad_input_is_refused_with_a_clear_message() -> None:
         estimate_force(arm, q, np.zeros(arm.n), 3, damping=-1.0)
     with pytest.raises(ModelError, match="q must"):
         Push(arm, 3, POINT, FORCE, 0.0).external_torque(1.0, np.zeros(5), np.zeros(5))
+
+
+@pytest.mark.parametrize("name", ["puma560", "panda", "stanford"])
+def test_the_compiled_contacts_equal_the_transposed_jacobian_law(name: str) -> None:
+    """simulate's compiled J_p^T F of a push with a ramp, a pulse and a clamp (its anchor taken at the first call from
+    its start), against each contact's own external_torque; the Stanford arm has a prismatic joint."""
+    from armdyn.dynamics.packed import workspace_size
+    from armdyn.observers.contact import contact_torques, contacts_table
+
+    arm = _arm(name) if name in ARMS else ad.models.load(name)
+    rng = np.random.default_rng(5)
+    last = arm.n - 1
+    contacts = [Push(arm, 3, POINT, FORCE, 0.5, rise=0.1), Impulse(arm, 2, -POINT, FORCE, 0.6, 0.01),
+                Clamp(arm, last, POINT, 500.0, 20.0, 0.2)]  # fmt: skip
+    table = contacts_table(arm, contacts)
+    q, qd = rng.uniform(-1, 1, (2, arm.n))
+    out, work = np.empty(arm.n), np.empty(workspace_size(arm.n))
+    for t in (0.1, 0.3, 0.55, 0.605, 1.0):
+        contact_torques(arm.packed, table, work, t, q, qd, out)
+        expected = sum(contact.external_torque(t, q, qd) for contact in contacts)
+        assert_allclose(out, expected, rtol=0, atol=1e-13 * max(1.0, np.abs(expected).max()))
+        q = q + 0.01 * rng.standard_normal(arm.n)  # the clamp pulls back to where the point was at 0.3 s
+
+
+def test_contacts_in_simulate_run_compiled_and_equal_the_python_loop() -> None:
+    """A push, a pulse and a clamp, given as a list, run in the compiled loop (no PythonLoopWarning) and give the run
+    the Python loop gives with the same law as a function; their torque is recorded and the clamp keeps its anchor."""
+    arm = _arm("puma560")
+    q0 = _configuration(arm)
+
+    def contacts() -> list:
+        return [Push(arm, 3, POINT, FORCE, 0.1, rise=0.05), Impulse(arm, 2, POINT, FORCE, 0.2, 0.01),
+                Clamp(arm, 5, POINT, 2e3, 50.0, 0.25)]  # fmt: skip
+
+    compiled_contacts, python_contacts = contacts(), contacts()
+    run = functools.partial(ad.simulate, arm, ComputedTorque(kp=100, kv=20), Sinusoid(0.2, 0.5, offset=q0),
+                            t_final=0.4, dt=1e-3, q0=q0)  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ad.simulation.PythonLoopWarning)
+        compiled = run(disturbance=compiled_contacts)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ad.simulation.PythonLoopWarning)
+        python = run(disturbance=lambda t, q, qd: sum(c(t, q, qd) for c in python_contacts))
+    assert compiled.info["method"] == "rk4 (compiled)" and python.info["method"] == "rk4 (Python)"
+    assert_allclose(compiled.q, python.q, rtol=0, atol=1e-11)
+    expected = [sum(c.external_torque(t, q, qd) for c in python_contacts) for t, q, qd in
+                zip(python.t, python.q, python.qd, strict=True)]  # fmt: skip
+    assert_allclose(compiled.external_torque, expected, rtol=0, atol=1e-9)
+    assert_allclose(compiled_contacts[2]._held["anchor"], python_contacts[2]._held["anchor"], rtol=0, atol=1e-12)
+    assert np.abs(compiled.external_torque[compiled.t >= 0.25]).max() > 0.1  # the clamp holds
+
+
+def test_contacts_of_another_arm_are_refused() -> None:
+    with pytest.raises(ModelError, match="acts on an arm of 2 joints, not the simulated arm's 6"):
+        ad.simulate(_arm("puma560"), t_final=0.01, disturbance=Push(ad.models.two_link_planar(), 1, POINT, FORCE, 0.0))

@@ -63,6 +63,8 @@ from armdyn.dynamics.status import OK
 from armdyn.errors import ArgumentError, ModelError, SimulationError
 from armdyn.files import atomic_write
 from armdyn.inputs import LARGEST_STATE
+from armdyn.observers.contact import ROW_SIZE, contact_torques, contacts_table
+from armdyn.observers.momentum import MomentumObserver, momentum_and_rate
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
 
@@ -191,6 +193,10 @@ class Result(RunSummaries):
     """The task-space record (armdyn.control.Tracking: y, y_d, error) under a task-space controller."""
     drives: DriveRecord | None = None
     """The drives' record (armdyn.actuators.DriveRecord: state, voltages, currents) of an arm with actuators."""
+    residual: np.ndarray | None = None
+    """The momentum observer's residual r at every sample, (N, n), of a run with an ``observer``."""
+    external_torque: np.ndarray | None = None
+    """The contacts' torque tau_ext = J_p^T F at every sample, (N, n), of a run whose disturbance is contacts."""
 
     @cached_property
     def energy(self) -> np.ndarray:
@@ -420,7 +426,9 @@ def rk4_advance(y: np.ndarray, k1: np.ndarray, k2: np.ndarray, k3: np.ndarray, k
 
 
 @njit(**NUMBA_OPTIONS)
-def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, state: tuple, record: tuple) -> None:
+def run_rk4(
+    plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, state: tuple, record: tuple, watch: tuple
+) -> None:
     """Steps first..last-1 of fixed-step RK4 (the book's TRESP), recording each step's start.
 
     plant = (models (P, L), Coulomb and Stribeck tables (P, n, 4), switch times (P - 1,), disturbance (n,),
@@ -434,8 +442,15 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     advanced in place. record = (t, q, qd, qdd, tau, q_d), each indexed by step.
     The run stops where M becomes singular or the state non-finite: outcome = (rows recorded,
     STOPPED_SINGULAR or STOPPED_DIVERGED, joint); it stays (-1, 0, -1) while all is well.
+    watch = (contacts (C, ROW_SIZE) of observers.contact, held over each step as the disturbance is; the
+    momentum observer (on, model, Coulomb and Stribeck (n, 4), eps (n,), gains (n,), memory (4, n)): its
+    known terms integrated with the plant's own RK4 stages (observer_sample); record (residual, external
+    torque), each indexed by step, written when the observer is on / there are contacts).
     """
     models, coulombs, switches, disturbance, eps, stops = plant
+    contacts, observer, watched = watch
+    observing, observer_model, observer_coulomb, observer_eps, observer_gains, observer_memory = observer
+    residuals, external_torques = watched
     kind, model, model_coulomb, gain, hold, shares_plant = controller
     trajectory_kind, params, q0 = trajectory
     t0, dt, first, last = steps
@@ -452,6 +467,8 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
     scratch = np.empty((6, n))
     qs, vs, net, applied, u, Nv = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
     M_, Mp = np.empty((n, n)), np.empty((n, n))
+    external, momentum, known = np.zeros(n), np.empty(n), np.empty(n)
+    observer_work = np.empty(workspace_size(n))
     for k in range(first, last):
         t = t0 + k * dt
         p = 0
@@ -464,8 +481,16 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             for i in range(n):
                 e_int[i] += (goal[0, i] - q[i]) * dt * hold
             control_law(kind, model, model_coulomb, eps, control_work, q, qd, goal, e_int, gain, u, M_, Nv, tau_held)
+        if contacts.shape[0] > 0:
+            contact_torques(plant_model, contacts, work, t, q, qd, external)
+            external_torques[k] = external
         for i in range(n):
-            applied[i] = tau_held[i] - disturbance[i]
+            applied[i] = tau_held[i] - disturbance[i] + external[i]
+        if observing:
+            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, q, qd, tau_held, momentum,
+                              known)  # fmt: skip
+            observer_sample(observer_memory, observer_gains, dt, momentum, known)
+            residuals[k] = observer_memory[0]
         if fresh:  # the controller has just computed this state's M and N on the plant itself
             Mp[:, :] = M_
             singular = _solve(Mp, Nv, applied, coulomb, eps, stops, q, qd, k1v, plant_model[PIVOT_FLOOR])
@@ -482,16 +507,28 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
         rk4_stage_state(q, k1q, 0.5, dt, qs)
         rk4_stage_state(qd, k1v, 0.5, dt, vs)
         singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k2v))
+        if observing:
+            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, qs, vs, tau_held, momentum,
+                              known)  # fmt: skip
+            observer_stage(observer_memory, 2.0, dt, known)
         for i in range(n):
             k2q[i] = vs[i]
         rk4_stage_state(q, k2q, 0.5, dt, qs)
         rk4_stage_state(qd, k2v, 0.5, dt, vs)
         singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k3v))
+        if observing:
+            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, qs, vs, tau_held, momentum,
+                              known)  # fmt: skip
+            observer_stage(observer_memory, 2.0, dt, known)
         for i in range(n):
             k3q[i] = vs[i]
         rk4_stage_state(q, k3q, 1.0, dt, qs)
         rk4_stage_state(qd, k3v, 1.0, dt, vs)
         singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k4v))
+        if observing:
+            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, qs, vs, tau_held, momentum,
+                              known)  # fmt: skip
+            observer_stage(observer_memory, 1.0, dt, known)
         for i in range(n):
             k4q[i] = vs[i]
         rk4_advance(q, k1q, k2q, k3q, k4q, dt)
@@ -506,6 +543,31 @@ def run_rk4(plant: tuple, controller: tuple, trajectory: tuple, steps: tuple, st
             break
     x[:n] = q
     x[n:] = qd
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def observer_sample(memory: np.ndarray, gains: np.ndarray, h: float, momentum: np.ndarray, known: np.ndarray) -> None:
+    """The momentum observer at a sample, in the loop: r = a r + (1 - a) (p - p_prev - integral) / h with
+    a = exp(-K h) (the sampled observer's exact first-order filter, observers.momentum), the integral of the
+    known terms tau - beta over the step just taken being the plant's RK4 quadrature h/6 (k1 + 2 k2 + 2 k3 + k4)
+    of them (observer_stage), so that it is as exact as the plant's integration where a sampled log's
+    trapezoid rule is not (the friction's reversals). Then the next step's integral starts with its first
+    stage. memory = (r, p_prev, integral, [started, ...])."""
+    r, previous, integral, started = memory[0], memory[1], memory[2], memory[3]
+    for j in range(r.shape[0]):
+        if started[0] > 0.0:
+            a = np.exp(-gains[j] * h)
+            r[j] = a * r[j] + (1.0 - a) * (momentum[j] - previous[j] - integral[j]) / h
+        previous[j] = momentum[j]
+        integral[j] = h / 6.0 * known[j]
+    started[0] = 1.0
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def observer_stage(memory: np.ndarray, weight: float, h: float, known: np.ndarray) -> None:
+    """Adds an RK4 stage's known terms, weighted 2, 2 or 1, to the observer's integral over the step."""
+    for j in range(known.shape[0]):
+        memory[2, j] += weight * h / 6.0 * known[j]
 
 
 @njit(**NUMBA_OPTIONS)
@@ -765,6 +827,7 @@ def simulate(
     after: float | None = None,
     threads: int | None = None,
     joint_limits: str = "warn",
+    observer: MomentumObserver | None = None,
 ) -> Result | Ensemble:
     """Simulate a plant under control from (q0, qd0) for t_final seconds (Lewis, Dawson and Abdallah 2004, Chapter 4).
 
@@ -807,7 +870,9 @@ def simulate(
     q0, qd0 : array_like, optional
         Initial joint positions and velocities (zeros by default).
     disturbance : array_like or callable, optional
-        tau_d: a constant (n,) vector or a callable ``(t, q, qd) -> tau_d``.
+        tau_d: a constant (n,) vector, a callable ``(t, q, qd) -> tau_d``, or contacts on link points
+        (armdyn.observers.contact's Push, Impulse or Clamp, or a list of them: tau_d = -J_p^T F, run in the
+        compiled loop, their torque recorded as ``Result.external_torque``).
     events : sequence of (float, Robot)
         (time, arm) pairs: from that time on the plant is that arm (a payload change).
     coulomb_smoothing : float or "auto"
@@ -843,14 +908,20 @@ def simulate(
         is a critically damped spring-damper stop of time constant STOP_TIME_CONSTANT (0.02 s, MuJoCo's
         soft limit) on the joint's own inertia, which a joint enters only slightly; "ignore": nothing.
         Many runs ignore the limits. An arm with drives takes "warn", "stop" and "ignore".
+    observer : MomentumObserver, optional
+        One run of a Robot: a generalized-momentum observer (armdyn.observers.momentum) that watches the run on
+        its own model and gains, its residual recorded as ``Result.residual``. In the compiled loop it
+        integrates its known terms with the plant's own RK4 stages; after a Python loop (or an adaptive
+        method) it runs on the recorded samples. Its Coulomb smoothing is the plant's unless it has its own.
 
     Returns
     -------
     Result or Ensemble
         One run: times, joint positions, velocities, accelerations and torques (time first), the
-        desired positions with a trajectory, energies, ``info`` (the route taken) and, for an arm
-        with drives, ``drives`` (a DriveRecord). Many runs: an Ensemble (per-run summaries, and the
-        samples kept, with dimensions run, time and joint).
+        desired positions with a trajectory, energies, ``info`` (the route taken), with an observer its
+        residual, with contacts their torque and, for an arm with drives, ``drives`` (a DriveRecord).
+        Many runs: an Ensemble (per-run summaries, and the samples kept, with dimensions run, time and
+        joint).
 
     Raises
     ------
@@ -882,7 +953,7 @@ def simulate(
     limits = joint_limits
     single_run_options = {"method": (method, "rk4"), "events": (given_events, ()), "progress": (progress, None),
                           "coulomb_smoothing": (coulomb_smoothing, "auto"),
-                          "joint_limits": (joint_limits, "warn")}  # fmt: skip
+                          "joint_limits": (joint_limits, "warn"), "observer": (observer, None)}  # fmt: skip
     per_run = {"runs": runs, "plants": plants, "models": models, "gains": gains, "keep": keep, "after": after,
                "threads": threads}  # fmt: skip
     if isinstance(arm, DrivenPlant):
@@ -912,6 +983,15 @@ def simulate(
     )
     _callable_argument(progress, "progress", "None or a callable taking the fraction done", "print")
     start, velocity = (np.zeros(n) if x is None else _one_state(x, n, name) for x, name in ((q0, "q0"), (qd0, "qd0")))
+    if observer is not None and not isinstance(observer, MomentumObserver):
+        raise ArgumentError(f"observer must be an armdyn.observers.momentum.MomentumObserver, got {observer!r:.60}")
+    if observer is not None and observer.arm.n != n:
+        raise ModelError(f"the observer's arm has {observer.arm.n} joints, the simulated arm {n}")
+    contacts = contacts_table(arm, disturbance)
+    contact_sum = None
+    if contacts is not None:
+        contact_sum = _ContactSum(list(disturbance) if isinstance(disturbance, (list, tuple)) else [disturbance])
+        disturbance = contact_sum
     if disturbance is not None and (isinstance(disturbance, type) or not callable(disturbance)):  # a class: no law
         disturbance = np.broadcast_to(_one_state(disturbance, n, "disturbance", allow_scalar=True), (n,)).copy()
     plant_events = _events(arm, events)
@@ -924,14 +1004,15 @@ def simulate(
     compiled = (
         spec is not None
         and trajectories.packed(trajectory, n) is not None
-        and (disturbance is None or not callable(disturbance))
+        and (disturbance is None or not callable(disturbance) or (contacts is not None and not adaptive))
         and (spec.model is None or not spec.model.is_symbolic)
     )
     stops = joint_stops(arm, start, limits == "spring")
-    setup = _compiled_setup(arm, arms, plant_events, spec, period, trajectory, start, disturbance, dt,
-                            coulomb_smoothing, stops) \
+    setup = _compiled_setup(arm, arms, plant_events, spec, period, trajectory, start,
+                            None if contacts is not None else disturbance, dt, coulomb_smoothing, stops) \
         if compiled else None  # fmt: skip
-    if not compiled and (_users_own(controller) or _users_own(trajectory) or callable(disturbance)):
+    users_disturbance = callable(disturbance) and contacts is None
+    if not compiled and (_users_own(controller) or _users_own(trajectory) or users_disturbance):
         warnings.warn(
             "simulate runs this controller, trajectory or disturbance of your own in Python, 80 to 300 times "
             "slower than the compiled code that armdyn.control's controllers with a Sinusoid or Quintic trajectory "
@@ -947,11 +1028,19 @@ def simulate(
         result = _adaptive(arms, plant_events, controller, trajectory, start, velocity, disturbance, steps, dt,
                            method, coulomb_smoothing, progress, setup, stops)  # fmt: skip
     elif compiled:
-        result = _compiled_rk4(arm, arms, plant_events, trajectory, start, velocity, steps, dt, progress, setup)
+        assert setup is not None
+        watch = _watch(arm, contacts, observer, setup[0][4], steps)
+        result = _compiled_rk4(arm, arms, plant_events, trajectory, start, velocity, steps, dt, progress, setup, watch)
+        if contact_sum is not None:
+            contact_sum.took(watch[0])
+        if observer is not None:
+            result.info["observer"] = "in the loop, its known terms integrated with the plant's RK4 stages"
     else:
         result = _python_rk4(arms, plant_events, controller, period, trajectory, start, velocity, disturbance,
                              steps, dt, coulomb_smoothing, stops)  # fmt: skip
     result.info.update(described)
+    if not compiled or adaptive:  # the compiled loop records them itself
+        _watched_after(result, contact_sum, observer, not adaptive)
     tracking = getattr(law, "tracking", None)
     if callable(tracking):  # a task-space law records its task error
         result.task = tracking(arm, result.t, result.q)
@@ -1133,7 +1222,7 @@ def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance
     )
 
 
-def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup):
+def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup, watch):
     n = arm.n
     plant, controller, desired_path = setup
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
@@ -1142,7 +1231,8 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
     record = (times, arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], arrays["q_d"])
 
     def advance(first: int, last: int) -> bool:
-        run_rk4(plant, controller, desired_path, (0.0, dt, first, last), (state, tau_held, e_int, outcome), record)
+        run_rk4(plant, controller, desired_path, (0.0, dt, first, last), (state, tau_held, e_int, outcome), record,
+                watch)  # fmt: skip
         return outcome[0] < 0
 
     def recorded(rows: int, extra: dict) -> Result:
@@ -1150,7 +1240,9 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
         return Result(times[:rows], q, qd, arrays["qdd"][:rows], arrays["tau"][:rows],
                       arrays["q_d"][:rows] if trajectory is not None else None, arm,
                       {"method": "rk4 (compiled)", "dt": dt, "integral": e_int, "coulomb_smoothing": plant[4], **extra},
-                      lambda: _energies(arms, events, times[:rows], q, qd))  # fmt: skip
+                      lambda: _energies(arms, events, times[:rows], q, qd),
+                      residual=watch[2][0][:rows] if watch[1][0] else None,
+                      external_torque=watch[2][1][:rows] if watch[0].shape[0] else None)  # fmt: skip
 
     in_chunks(advance, steps + 1, progress, lambda rows: recorded(rows, {"stopped": "interrupted"}))
     rows = steps + 1 if outcome[0] < 0 else int(outcome[0])
@@ -1158,6 +1250,59 @@ def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, s
     if outcome[0] >= 0:
         raise _stopped(arm, int(outcome[1]), int(outcome[2]), rows * dt, state[:n], result)
     return result
+
+
+def _watch(arm: Robot, contacts: np.ndarray | None, observer: MomentumObserver | None, eps: np.ndarray,
+           steps: int) -> tuple:  # fmt: skip
+    """run_rk4's ``watch``: the contacts, the observer (its model, friction, smoothing, gains and memory) and
+    their record, empty where there is none."""
+    n = arm.n
+    table = np.zeros((0, ROW_SIZE)) if contacts is None else contacts
+    if observer is None:
+        watcher = (False, arm.packed, np.zeros((n, 4)), np.zeros(n), np.ones(n), np.zeros((4, n)))
+    else:
+        own = observer.smoothing
+        smoothing = own if observer.coulomb_smoothing is not None else eps
+        watcher = (True, observer.arm.packed, sign_law_table(observer.arm), smoothing, observer.rates,  # type: ignore[attr-defined]
+                   np.zeros((4, n)))  # fmt: skip
+    rows = steps + 1
+    record = (np.empty((rows if observer is not None else 0, n)), np.zeros((rows if contacts is not None else 0, n)))
+    return table, watcher, record
+
+
+class _ContactSum:
+    """Contacts as one disturbance of the Python loop: tau_d = -sum of J_p^T F."""
+
+    def __init__(self, contacts: list) -> None:
+        self.contacts = contacts
+
+    def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        return sum((contact(t, q, qd) for contact in self.contacts), np.zeros(q.shape[-1]))
+
+    def external_torque(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        return -self(t, q, qd)
+
+    def took(self, table: np.ndarray) -> None:
+        """Clamps keep the anchors the compiled run took."""
+        for contact, row in zip(self.contacts, table, strict=True):
+            taker = getattr(contact, "take_anchor", None)
+            if taker is not None:
+                taker(row)
+
+
+def _watched_after(result: Result, contacts: _ContactSum | None, observer: MomentumObserver | None,
+                   held: bool) -> None:  # fmt: skip
+    """The contacts' torque and the observer's residual of a run not in the compiled loop, from its samples."""
+    from armdyn.observers.momentum import observe
+
+    if contacts is not None:
+        samples = zip(result.t, result.q, result.qd, strict=True)
+        result.external_torque = np.array([contacts.external_torque(t, q, qd) for t, q, qd in samples])
+    if observer is not None and len(result.t) >= 2:
+        given = observer.coulomb_smoothing
+        eps = given if given is not None else result.info.get("coulomb_smoothing")
+        result.residual = observe(observer.arm, result.t, result.q, result.qd, result.tau, observer.rates, held, eps)
+        result.info["observer"] = "on the samples after the run"
 
 
 CHUNK_SECONDS = 0.1
@@ -1721,6 +1866,8 @@ def run_many(
         p, m = plant_of[r], model_of[r]
         eps = _auto_smoothing(plant_rows[p], plant_coulombs[p], q0s[r], qd0s[r], dt)
         plant = (plant_rows[p : p + 1], plant_coulombs[p : p + 1], np.empty(0), disturbances[r], eps, free)
+        watch = (np.zeros((0, ROW_SIZE)), (False, plant_rows[p], plant_coulombs[p], eps, eps, np.zeros((4, n))),
+                 (np.empty((0, n)), np.empty((0, n))))  # fmt: skip
         law = (kind, model_rows[m], model_coulombs[m], gains[r], hold, shares[r])
         state = (np.concatenate((q0s[r], qd0s[r])), np.zeros(n), np.zeros(n), outcomes[r])
         record = (np.empty(chunk), np.empty((chunk, n)), np.empty((chunk, n)), np.empty((chunk, n)),
@@ -1729,7 +1876,7 @@ def run_many(
         summary[:, :] = 0.0
         for first in range(0, rows, chunk):
             count = min(chunk, rows - first)
-            run_rk4(plant, law, (path_kind, params[r], q0s[r]), (first * dt, dt, 0, count), state, record)
+            run_rk4(plant, law, (path_kind, params[r], q0s[r]), (first * dt, dt, 0, count), state, record, watch)
             done = count if outcomes[r, 0] < 0 else int(outcomes[r, 0])
             for k in range(done):
                 row = first + k

@@ -16,11 +16,15 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 
 from armdyn import inputs
+from armdyn.dynamics.packed import HEADER, KIND, LINK_POSITION, LINK_ROTATION, N_JOINTS, PARENT, STRIDE
+from armdyn.dynamics.spatial import NUMBA_OPTIONS, joint_transform, world_pose
 from armdyn.errors import ModelError
 from armdyn.kinematics import _columns, _skew, _target, as_state, check_arm, link_index, link_transforms
 from armdyn.model import ArmModel
@@ -33,12 +37,19 @@ __all__ = [
     "Impulse",
     "Push",
     "contact_link",
+    "contacts_table",
     "estimate_force",
     "estimate_wrench",
     "point_jacobian",
 ]
 
 OBSERVABLE_CONDITION = 1e3  # above this condition number of J_p^T the force is taken as not observable
+
+# One contact as a row of simulate's compiled loop (contacts_table): a push (Push, and Impulse as a push of
+# duration ``width``) or a clamp, its link and point, its force or spring, and a clamp's anchor once taken.
+PUSH_KIND, CLAMP_KIND = 0.0, 1.0
+(ROW_KIND, ROW_LINK, ROW_POINT, ROW_FORCE, ROW_START, ROW_DURATION, ROW_RISE, ROW_STIFFNESS, ROW_DAMPING, ROW_ANCHOR,
+ ROW_ANCHORED, ROW_SIZE) = 0, 1, 2, 5, 8, 9, 10, 11, 12, 13, 16, 17  # fmt: skip
 
 
 class ContactObservabilityWarning(UserWarning):
@@ -153,6 +164,16 @@ class _Contact:
         linear = point_jacobian(self.arm, q, self.link, self.point)[..., :3, :]
         return np.einsum("...an,...a->...n", linear, force)
 
+    def row(self) -> np.ndarray:
+        """The contact as one row of ``contacts_table`` (the layout ROW_*)."""
+        raise NotImplementedError
+
+    def _row(self, kind: float) -> np.ndarray:
+        row = np.zeros(ROW_SIZE)
+        row[ROW_KIND], row[ROW_LINK] = kind, float(cast(int, self.link))
+        row[ROW_POINT : ROW_POINT + 3] = np.asarray(self.point, dtype=float)
+        return row
+
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike) -> np.ndarray:
         """tau_d = -tau_ext, the disturbance of ``armdyn.simulate`` (M qdd + N + tau_d = tau).
 
@@ -253,6 +274,19 @@ class Push(_Contact):
         scale = 1.0 if self.rise == 0 else min(1.0, elapsed / self.rise)
         return scale * np.asarray(self.force_vector)
 
+    def row(self) -> np.ndarray:
+        """The push as one row of ``contacts_table``.
+
+        Returns
+        -------
+        numpy.ndarray
+            (ROW_SIZE,).
+        """
+        row = self._row(PUSH_KIND)
+        row[ROW_FORCE : ROW_FORCE + 3] = np.asarray(self.force_vector)
+        row[ROW_START], row[ROW_DURATION], row[ROW_RISE] = self.start, self.duration, self.rise
+        return row
+
 
 @dataclass(frozen=True, eq=False)
 class Impulse(_Contact):
@@ -323,6 +357,19 @@ class Impulse(_Contact):
         t = _time(t, "t", " of Impulse.force")
         inside = self.start <= t < self.start + self.width
         return np.asarray(self.force_vector) if inside else np.zeros(3)
+
+    def row(self) -> np.ndarray:
+        """The pulse as one row of ``contacts_table``: a push of duration ``width``.
+
+        Returns
+        -------
+        numpy.ndarray
+            (ROW_SIZE,).
+        """
+        row = self._row(PUSH_KIND)
+        row[ROW_FORCE : ROW_FORCE + 3] = np.asarray(self.force_vector)
+        row[ROW_START], row[ROW_DURATION] = self.start, self.width
+        return row
 
 
 @dataclass(frozen=True, eq=False)
@@ -414,6 +461,152 @@ class Clamp(_Contact):
         anchor = self._held.setdefault("anchor", position.copy())
         velocity = point_jacobian(self.arm, q, self.link, self.point)[..., :3, :] @ qd[..., None]
         return -self.stiffness * (position - anchor) - self.damping * velocity[..., 0]
+
+    def row(self) -> np.ndarray:
+        """The clamp as one row of ``contacts_table`` (its anchor, when given or already taken).
+
+        Returns
+        -------
+        numpy.ndarray
+            (ROW_SIZE,).
+        """
+        row = self._row(CLAMP_KIND)
+        row[ROW_START], row[ROW_STIFFNESS], row[ROW_DAMPING] = self.start, self.stiffness, self.damping
+        if "anchor" in self._held:
+            row[ROW_ANCHOR : ROW_ANCHOR + 3], row[ROW_ANCHORED] = self._held["anchor"], 1.0
+        return row
+
+    def take_anchor(self, row: np.ndarray) -> None:
+        """Keep the anchor a compiled run took (``row`` as the run left it), as a call at ``start`` would.
+
+        Parameters
+        ----------
+        row : numpy.ndarray
+            The clamp's row after the run, (ROW_SIZE,).
+        """
+        if row[ROW_ANCHORED] and "anchor" not in self._held:
+            self._held["anchor"] = np.array(row[ROW_ANCHOR : ROW_ANCHOR + 3])
+
+
+def contacts_table(arm: ArmModel, disturbance: object) -> np.ndarray | None:
+    """The contacts of a ``simulate`` disturbance as the rows of its compiled loop, or None when it is not contacts.
+
+    Parameters
+    ----------
+    arm : ArmModel
+        The simulated arm: every contact must act on it.
+    disturbance : object
+        A Push, Impulse or Clamp, or a list or tuple of them.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        (C, ROW_SIZE), one row per contact; None when ``disturbance`` is something else.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a contact acts on another arm (one with other joints).
+    """
+    given = list(disturbance) if isinstance(disturbance, (list, tuple)) else [disturbance]
+    if not given or not all(isinstance(item, _Contact) for item in given):
+        return None
+    items = cast(list[_Contact], given)
+    for item in items:
+        if item.arm is not arm and item.arm.n != arm.n:
+            kind = type(item).__name__
+            raise ModelError(f"the {kind} acts on an arm of {item.arm.n} joints, not the simulated arm's {arm.n}")
+    return np.array([item.row() for item in items])
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def _contact_force(row: np.ndarray, t: float, x: np.ndarray, v: np.ndarray, force: np.ndarray) -> None:
+    """F (world) of one contact at time t, the point at x moving at v: the push's s(t) F, or the clamp's
+    -K (x - anchor) - D v (its anchor taken at the first call from ``start`` on); zeros when inactive."""
+    force[0] = force[1] = force[2] = 0.0
+    elapsed = t - row[ROW_START]
+    if elapsed < 0.0:
+        return
+    if row[ROW_KIND] == PUSH_KIND:
+        if elapsed >= row[ROW_DURATION]:
+            return
+        scale = 1.0 if row[ROW_RISE] == 0.0 else min(1.0, elapsed / row[ROW_RISE])
+        for a in range(3):
+            force[a] = scale * row[ROW_FORCE + a]
+        return
+    if row[ROW_ANCHORED] == 0.0:
+        for a in range(3):
+            row[ROW_ANCHOR + a] = x[a]
+        row[ROW_ANCHORED] = 1.0
+    for a in range(3):
+        force[a] = -row[ROW_STIFFNESS] * (x[a] - row[ROW_ANCHOR + a]) - row[ROW_DAMPING] * v[a]
+
+
+@njit(**NUMBA_OPTIONS)
+def contact_torques(
+    model: np.ndarray, contacts: np.ndarray, work: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray,
+    out: np.ndarray,
+) -> None:  # fmt: skip
+    """tau_ext = sum over the contacts of J_p(q)^T F(t, q, qd): simulate's compiled contacts.
+
+    With the world pose (R_j, o_j) of every body, a point x on link i and the joint axes z_j = R_j e_3 of
+    i's ancestors: tau_j = z_j . ((x - o_j) x F) for a revolute joint, z_j . F for a prismatic one, and
+    the point's velocity v = sum of z_j x (x - o_j) qd_j (revolute) or z_j qd_j (prismatic) (Lewis,
+    Dawson and Abdallah 2004, Appendix A: the geometric Jacobian's columns). ``contacts`` rows as
+    ``contacts_table`` writes them (a clamp's anchor is written into its row); ``work`` holds 24 n values.
+    """
+    n = int(model[N_JOINTS])
+    for j in range(n):
+        out[j] = 0.0
+    if contacts.shape[0] == 0:
+        return
+    for j in range(n):
+        parent = int(model[HEADER + STRIDE * j + PARENT])
+        joint_transform(model, j, q[j], work, 24 * j)
+        world_pose(model, work, 24 * j, 24 * parent + 12, 24 * j + 12, parent >= 0)
+    x, v, lever, force = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    for c in range(contacts.shape[0]):
+        row = contacts[c]
+        link = int(row[ROW_LINK])
+        b, pose = HEADER + STRIDE * link, 24 * link + 12
+        for a in range(3):  # the point in the body frame, then in the world
+            lever[a] = model[b + LINK_POSITION + a]
+            for k in range(3):
+                lever[a] += model[b + LINK_ROTATION + 3 * a + k] * row[ROW_POINT + k]
+        for a in range(3):
+            x[a] = work[pose + 9 + a]
+            for k in range(3):
+                x[a] += work[pose + 3 * a + k] * lever[k]
+        v[0] = v[1] = v[2] = 0.0
+        if row[ROW_KIND] == CLAMP_KIND:
+            j = link
+            while j >= 0:
+                o = 24 * j + 12
+                zx, zy, zz = work[o + 2], work[o + 5], work[o + 8]
+                if model[HEADER + STRIDE * j + KIND] == 0.0:
+                    rx, ry, rz = x[0] - work[o + 9], x[1] - work[o + 10], x[2] - work[o + 11]
+                    v[0] += (zy * rz - zz * ry) * qd[j]
+                    v[1] += (zz * rx - zx * rz) * qd[j]
+                    v[2] += (zx * ry - zy * rx) * qd[j]
+                else:
+                    v[0] += zx * qd[j]
+                    v[1] += zy * qd[j]
+                    v[2] += zz * qd[j]
+                j = int(model[HEADER + STRIDE * j + PARENT])
+        _contact_force(row, t, x, v, force)
+        if force[0] == 0.0 and force[1] == 0.0 and force[2] == 0.0:
+            continue
+        j = link
+        while j >= 0:
+            o = 24 * j + 12
+            zx, zy, zz = work[o + 2], work[o + 5], work[o + 8]
+            if model[HEADER + STRIDE * j + KIND] == 0.0:
+                rx, ry, rz = x[0] - work[o + 9], x[1] - work[o + 10], x[2] - work[o + 11]
+                mx, my, mz = ry * force[2] - rz * force[1], rz * force[0] - rx * force[2], rx * force[1] - ry * force[0]
+                out[j] += zx * mx + zy * my + zz * mz
+            else:
+                out[j] += zx * force[0] + zy * force[1] + zz * force[2]
+            j = int(model[HEADER + STRIDE * j + PARENT])
 
 
 def contact_link(residual: ArrayLike, band: ArrayLike) -> int | None:

@@ -147,6 +147,32 @@ def _momentum_and_rate(
         rate[i] = tau[i] + coriolis_i - G[i] - (friction + sigmoid(model, i, qd[i]))
 
 
+@njit(inline="always", cache=True)
+def momentum_and_rate(
+    model: np.ndarray, table: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
+    tau: np.ndarray, p: np.ndarray, rate: np.ndarray,
+) -> None:  # fmt: skip
+    """p = M qd and tau + Vm^T qd - G - F (De Luca and Mattone 2003), one state, compiled.
+
+    Parameters
+    ----------
+    model : numpy.ndarray
+        The packed arm.
+    table : numpy.ndarray
+        Its Coulomb and Stribeck laws, (n, 4) (friction.sign_law_table).
+    eps : numpy.ndarray
+        The smoothing of their sign per joint, (n,), 0 for the exact law.
+    work : numpy.ndarray
+        A workspace of packed.workspace_size(n) values.
+    q, qd, tau : numpy.ndarray
+        The state and the applied torque, (n,).
+    p, rate : numpy.ndarray
+        Where p and the known terms are written, (n,).
+    """
+    n = q.shape[0]
+    _momentum_and_rate(model, table, eps, (work, np.empty((n, n)), np.empty((n, n)), np.empty(n)), q, qd, tau, p, rate)
+
+
 @njit(cache=True)
 def _update(
     r: np.ndarray,
@@ -314,6 +340,16 @@ class MomentumObserver:
         self._K = _gains(self.gains, self.arm.n)
         self._eps = _smoothing(self.arm, self.coulomb_smoothing)
         self.reset()
+
+    @property
+    def rates(self) -> np.ndarray:
+        """K per joint (1/s), (n,): the gains as checked."""
+        return self._K
+
+    @property
+    def smoothing(self) -> np.ndarray:
+        """The Coulomb smoothing eps per joint, (n,) (zeros: the exact sign law)."""
+        return np.zeros(self.arm.n) if self._eps is None else self._eps
 
     def reset(self) -> None:
         """Forget the past: the next step starts the observer (r = 0 there)."""
