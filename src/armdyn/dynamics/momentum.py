@@ -35,8 +35,8 @@ from armdyn.dynamics.packed import (
     MASS,
     MOMENTUM_ACCELERATION,
     MOMENTUM_BODY,
-    MOMENTUM_MASS,
     MOMENTUM_JOINT,
+    MOMENTUM_MASS,
     MOMENTUM_VELOCITY,
     N_JOINTS,
     PARENT,
@@ -99,7 +99,12 @@ def momentum_core(
         else:
             Wz += qd[i]
         m = b + INERTIA
-        mass, hx, hy, hz = model[b + MASS], model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2]
+        mass, hx, hy, hz = (
+            model[b + MASS],
+            model[b + FIRST_MOMENT],
+            model[b + FIRST_MOMENT + 1],
+            model[b + FIRST_MOMENT + 2],
+        )
         body = (mass, hx, hy, hz, model[m], model[m + 1], model[m + 2], model[m + 3], model[m + 4], model[m + 5])
         v, k, c, a = o + MOMENTUM_VELOCITY, o + MOMENTUM_BODY, o + MOMENTUM_MASS, o + MOMENTUM_ACCELERATION
         work[v], work[v + 1], work[v + 2], work[v + 3], work[v + 4], work[v + 5] = Wx, Wy, Wz, Ux, Uy, Uz

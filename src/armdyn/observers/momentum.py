@@ -118,12 +118,12 @@ def known_rate(arm: ArmModel, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, ep
 
 
 # The observer's memory: one flat array (every array argument of a compiled call costs its dispatch about 50 ns):
-# the packed model (_model_size(n) values), then a header and blocks of n values, block k at base + MEMORY_HEADER + k n
+# the packed model (_model_size(n) values), then a header and blocks of n values, block k at base + _MEMORY_HEADER + k n
 # (base = _model_size(n)), the last the sign-law table (4 n, rows per joint).
-LAST_TIME, COUNT, HELD, REFERENCE_STEP, LARGEST_GAIN, MEMORY_HEADER = 0, 1, 2, 3, 4, 5
-# DECAY: exp(-K dt0) at the reference step dt0; TABLE: 4 blocks, (n, 4); the workspace is the step's own (stack)
-GAINS, EPS, P0, RATE0, TAU0, RESIDUAL, DECAY, TABLE = range(8)
-MEMORY_BLOCKS = TABLE + 4
+_LAST_TIME, _COUNT, _HELD, _REFERENCE_STEP, _LARGEST_GAIN, _MEMORY_HEADER = 0, 1, 2, 3, 4, 5
+# _DECAY: exp(-K dt0) at the reference step dt0; _TABLE: 4 blocks, (n, 4); the workspace is the step's own (stack)
+_GAINS, _EPS, _P0, _RATE0, _TAU0, _RESIDUAL, _DECAY, _TABLE = range(8)
+_MEMORY_BLOCKS = _TABLE + 4
 NOT_AFTER = 100
 """The step kernel's status when t is not after the last sample's time (the others: armdyn.dynamics.status)."""
 DECAY_SHIFT = 1e-4
@@ -139,7 +139,7 @@ def _model_size(n: int) -> int:
 @njit(inline="always", **NUMBA_OPTIONS)
 def _memory_size(n: int) -> int:
     """The values of a MomentumObserver's memory for n joints."""
-    return _model_size(n) + MEMORY_HEADER + MEMORY_BLOCKS * n
+    return _model_size(n) + _MEMORY_HEADER + _MEMORY_BLOCKS * n
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -200,10 +200,7 @@ def momentum_and_rate(
 @njit(inline="always", **NUMBA_OPTIONS)
 def _increment(held: bool, dt: float, p: float, p0: float, rate: float, rate0: float, tau: float, tau0: float) -> float:
     """(p - p0 - the integral of the known terms over the step) / dt: the trapezoid rule, or tau0 held over it."""
-    if held:
-        known = dt * (tau0 + 0.5 * ((rate - tau) + (rate0 - tau0)))
-    else:
-        known = 0.5 * dt * (rate + rate0)
+    known = dt * (tau0 + 0.5 * ((rate - tau) + (rate0 - tau0))) if held else 0.5 * dt * (rate + rate0)
     return (p - p0 - known) / dt
 
 
@@ -308,34 +305,34 @@ def observer_step(memory: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray, t
     model = memory[:base]
     if not (_finite(q, n) & _finite(qd, n) & _finite(tau, n)):  # one test on the fast path; which rule, then
         return states_status(model, q, qd, tau, 3)
-    started = memory[base + COUNT] > 0.0
-    dt = t - memory[base + LAST_TIME]
+    started = memory[base + _COUNT] > 0.0
+    dt = t - memory[base + _LAST_TIME]
     if started and not dt > 0.0:
         return NOT_AFTER
-    o = base + MEMORY_HEADER
-    table = memory[o + TABLE * n : o + MEMORY_BLOCKS * n].reshape((n, 4))
-    eps = memory[o + EPS * n : o + (EPS + 1) * n]
+    o = base + _MEMORY_HEADER
+    table = memory[o + _TABLE * n : o + _MEMORY_BLOCKS * n].reshape((n, 4))
+    eps = memory[o + _EPS * n : o + (_EPS + 1) * n]
     # the workspace and p, rate on the stack: no allocation, and the compiler knows they are no other array's
     work, p, rate = scratch(workspace_size(n)), scratch(n), scratch(n)
     momentum_and_rate(model, table, eps, work, q, qd, tau, p, rate)
     if started:
-        if abs(dt - memory[base + REFERENCE_STEP]) * memory[base + LARGEST_GAIN] > DECAY_SHIFT:
+        if abs(dt - memory[base + _REFERENCE_STEP]) * memory[base + _LARGEST_GAIN] > DECAY_SHIFT:
             for j in range(n):
-                memory[o + DECAY * n + j] = np.exp(-memory[o + GAINS * n + j] * dt)
-            memory[base + REFERENCE_STEP] = dt
-        shift = dt - memory[base + REFERENCE_STEP]
-        held = memory[base + HELD] != 0.0
+                memory[o + _DECAY * n + j] = np.exp(-memory[o + _GAINS * n + j] * dt)
+            memory[base + _REFERENCE_STEP] = dt
+        shift = dt - memory[base + _REFERENCE_STEP]
+        held = memory[base + _HELD] != 0.0
         for j in range(n):
-            a = _decay(memory[o + DECAY * n + j], memory[o + GAINS * n + j] * shift)
-            step = _increment(held, dt, p[j], memory[o + P0 * n + j], rate[j], memory[o + RATE0 * n + j], tau[j],
-                              memory[o + TAU0 * n + j])  # fmt: skip
-            memory[o + RESIDUAL * n + j] = a * memory[o + RESIDUAL * n + j] + (1.0 - a) * step
-    memory[base + LAST_TIME] = t
-    memory[base + COUNT] += 1.0
+            a = _decay(memory[o + _DECAY * n + j], memory[o + _GAINS * n + j] * shift)
+            step = _increment(held, dt, p[j], memory[o + _P0 * n + j], rate[j], memory[o + _RATE0 * n + j], tau[j],
+                              memory[o + _TAU0 * n + j])  # fmt: skip
+            memory[o + _RESIDUAL * n + j] = a * memory[o + _RESIDUAL * n + j] + (1.0 - a) * step
+    memory[base + _LAST_TIME] = t
+    memory[base + _COUNT] += 1.0
     for j in range(n):
-        memory[o + P0 * n + j] = p[j]
-        memory[o + RATE0 * n + j] = rate[j]
-        memory[o + TAU0 * n + j] = tau[j]
+        memory[o + _P0 * n + j] = p[j]
+        memory[o + _RATE0 * n + j] = rate[j]
+        memory[o + _TAU0 * n + j] = tau[j]
     return OK
 
 
@@ -399,7 +396,9 @@ def observe(
     eps = _smoothing(arm, coulomb_smoothing)
     q_, qd_, tau_ = arrays
     table, smoothing = sign_law_table(arm), np.zeros(n) if eps is None else eps
-    return _observe_log(_packed(arm), table, smoothing, np.ascontiguousarray(times), q_, qd_, tau_, K, bool(held_torque))
+    return _observe_log(
+        _packed(arm), table, smoothing, np.ascontiguousarray(times), q_, qd_, tau_, K, bool(held_torque)
+    )
 
 
 @dataclass
@@ -431,23 +430,24 @@ class MomentumObserver:
         self._memory = np.zeros(_memory_size(n))
         base = _model_size(n)
         self._memory[:base] = model
-        self._header = self._memory[base : base + MEMORY_HEADER]
-        block = [self._memory[base + MEMORY_HEADER + k * n : base + MEMORY_HEADER + (k + 1) * n] for k in range(TABLE)]
-        block[GAINS][:] = self._K
+        self._header = self._memory[base : base + _MEMORY_HEADER]
+        start = base + _MEMORY_HEADER
+        block = [self._memory[start + k * n : start + (k + 1) * n] for k in range(_TABLE)]
+        block[_GAINS][:] = self._K
         if self._eps is not None:
-            block[EPS][:] = self._eps
-        table = self._memory[base + MEMORY_HEADER + TABLE * n : base + MEMORY_HEADER + MEMORY_BLOCKS * n]
+            block[_EPS][:] = self._eps
+        table = self._memory[start + _TABLE * n : start + _MEMORY_BLOCKS * n]
         table[:] = sign_law_table(self.arm).ravel()
-        self._header[HELD] = 1.0 if self.held_torque else 0.0
-        self._header[LARGEST_GAIN] = self._K.max()
-        self._decay = block[DECAY]
-        self.residual = block[RESIDUAL]
-        self._rate0, self._tau0 = block[RATE0], block[TAU0]
+        self._header[_HELD] = 1.0 if self.held_torque else 0.0
+        self._header[_LARGEST_GAIN] = self._K.max()
+        self._decay = block[_DECAY]
+        self.residual = block[_RESIDUAL]
+        self._rate0, self._tau0 = block[_RATE0], block[_TAU0]
         self.reset()
 
     def reset(self) -> None:
         """Forget the past: the next step starts the observer (r = 0 there)."""
-        self._header[LAST_TIME] = self._header[COUNT] = self._header[REFERENCE_STEP] = 0.0
+        self._header[_LAST_TIME] = self._header[_COUNT] = self._header[_REFERENCE_STEP] = 0.0
         self._decay[:] = 1.0  # exp(-K 0), the reference step 0 (as observe starts)
         self.residual[:] = 0.0
 
@@ -507,7 +507,7 @@ class MomentumObserver:
     def _refuse(self, status: int, t: object, q: object, qd: object, tau: object) -> None:
         """The ModelError of a step kernel's status."""
         if status == NOT_AFTER:
-            raise ModelError(f"t must increase: {t} is not after {self._header[LAST_TIME]}")
+            raise ModelError(f"t must increase: {t} is not after {self._header[_LAST_TIME]}")
         for base in (WRONG_LENGTH, NOT_FINITE):
             if base <= status < base + 3:
                 name, value = (("q", q), ("qd", qd), ("tau", tau))[status - base]
@@ -529,7 +529,7 @@ class MomentumObserver:
             Without a sample yet, or when ``tau`` is not n finite numbers.
         """
         array = np.asarray(tau, dtype=float)
-        if self._header[COUNT] == 0.0:
+        if self._header[_COUNT] == 0.0:
             raise ModelError("hold needs a sample first (step)")
         if array.shape != (self.arm.n,) or not np.all(np.isfinite(array)):
             raise ModelError(f"tau must be {self.arm.n} finite numbers, got {tau!r}")
