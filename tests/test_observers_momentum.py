@@ -290,7 +290,8 @@ def test_the_recursion_has_the_sign_of_dk_dq() -> None:
 
 
 def test_the_step_takes_lists_integers_and_strided_rows_as_arrays() -> None:
-    """The converted path gives the fast path's residual."""
+    """Lists, tuples, strided and read-only rows and an integer time take the converted path: the fast path's
+    residual."""
     arm = ad.models.puma560()
     rng = np.random.default_rng(5)
     samples = rng.uniform(-1, 1, (4, 3, arm.n))
@@ -300,7 +301,9 @@ def test_the_step_takes_lists_integers_and_strided_rows_as_arrays() -> None:
         expected = fast.step(float(k) * 1e-3 if k else 0.0, q, qd, tau).copy()
         wide[:, ::2] = samples[k]
         t = 0 if k == 0 else k * 1e-3  # an integer first
-        got = slow.step(t, q.tolist(), wide[1, ::2], tuple(tau))
+        fixed = tau.copy()
+        fixed.flags.writeable = False  # a read-only array: the compiled signature's arrays are writable ones
+        got = slow.step(t, q.tolist(), wide[1, ::2], fixed if k % 2 else tuple(tau))
         np.testing.assert_array_equal(got, expected)
     assert np.abs(fast.residual).max() > 0
 

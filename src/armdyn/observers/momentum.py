@@ -19,6 +19,13 @@ taken exactly for a tau_ext constant over the step,
 
 which tends to the continuous observer as the step shrinks (first order in dt). The friction and the
 motor inertia are the arm's (M includes the reflected motor inertias): an identified arm plugs in.
+
+Cost. p and tau - beta come from one O(n) recursion (armdyn.dynamics.momentum: neither M nor Vm is formed),
+in ``momentum_and_rate``, which simulate's compiled loop can call too. ``MomentumObserver.step`` is one compiled
+call of five arguments: the observer's whole state (the packed model, gains, smoothing, sign laws, the last
+sample's p, rate and torque, the residual) lives in one flat array, the checks of the sample are compiled in, and
+the workspace is on the call's stack. ``observe`` computes the samples' p and rate in parallel blocks (they are
+independent), then runs the filter in order.
 """
 
 from __future__ import annotations
@@ -166,11 +173,12 @@ def momentum_and_rate(
     eps : numpy.ndarray
         The Coulomb smoothing per joint, (n,): 0 for the exact sign law (friction.smooth_coulomb).
     work : numpy.ndarray
-        Scratch of packed.workspace_size(n) values.
+        Scratch of packed.workspace_size(n) values (momentum_core's records, then G in n values).
     q, qd, tau : numpy.ndarray
         The state and the applied torque, (n,).
     p, rate : numpy.ndarray
-        Outputs, (n,): the momentum and pdot without the external torque.
+        Outputs, (n,): the momentum and pdot without the external torque; arrays of their own (not views of
+        ``work``).
 
     Returns
     -------
