@@ -377,3 +377,16 @@ def test_the_log_equals_the_steps_across_the_log_blocks() -> None:
     observer = MomentumObserver(arm, gains=[20, 50, 50, 100, 100, 200, 200], coulomb_smoothing=0.01)
     steps = np.array([observer.step(t[k], q[k], qd[k], tau[k]).copy() for k in range(samples)])
     np.testing.assert_allclose(steps, whole, rtol=1e-12, atol=1e-12)
+
+
+def test_reset_starts_the_observer_again() -> None:
+    """After reset the same samples give the same residuals as a new observer (r = 0 at the first)."""
+    arm = ad.models.panda_gaz2019()
+    rng = np.random.default_rng(9)
+    samples = rng.uniform(-1, 1, (5, 3, arm.n))
+    observer = MomentumObserver(arm, gains=40.0)
+    first = [observer.step(k * 1e-3, *sample).copy() for k, sample in enumerate(samples)]
+    observer.reset()
+    again = [observer.step(10.0 + k * 1e-3, *sample).copy() for k, sample in enumerate(samples)]
+    assert np.abs(first[-1]).max() > 0 and not np.any(again[0])
+    np.testing.assert_allclose(again, first, rtol=1e-9, atol=1e-12)
