@@ -304,7 +304,7 @@ def observer_step(memory: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray, t
     int
         OK; WRONG_LENGTH + k or NOT_FINITE + k for state argument k (q, qd, tau) of the wrong length or not
         finite; WRONG_SHAPE for a memory of the wrong size; NOT_AFTER when t is not after the last sample.
-        Nothing but the scratch is changed unless OK.
+        The memory is changed only when OK.
     """
     n = int(memory[N_JOINTS])
     if n < 1 or memory.shape[0] != _memory_size(n):
@@ -412,6 +412,9 @@ def observe(
 @dataclass
 class MomentumObserver:
     """The observer for a control loop: one sample per ``step`` call, its state kept between calls.
+
+    The settings are read when the observer is made (its compiled memory holds them): for other gains, make a new
+    observer.
 
     Parameters
     ----------
