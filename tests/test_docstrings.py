@@ -34,6 +34,7 @@ MODULES = (
     "armdyn.properties",
     "armdyn.urdf",
     "armdyn.dynamics.regressor",
+    "armdyn.dynamics.momentum",
     "armdyn.model",
     "armdyn.identification.excitation",
     "armdyn.identification.least_squares",

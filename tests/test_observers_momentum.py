@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
 
 import armdyn as ad
 from armdyn.control import ComputedTorque
@@ -18,6 +19,7 @@ from armdyn.observers.detection import Band, detect
 from armdyn.observers.momentum import MomentumObserver, observe
 from armdyn.trajectories import Sinusoid
 from tests.helpers import URDFS
+from tests.strategies import robots
 
 WELL_CONDITIONED_PANDA = np.array([0.3, -0.4, 0.5, -2.0, 0.4, 1.6, 0.7])  # qr aligns joints 1 and 3: F not observable
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "panda-gaz2019"
@@ -270,18 +272,184 @@ def test_the_compiled_kernel_equals_the_readable_numpy_terms(name: str) -> None:
     """p = M qd and tau + Vm^T qd - G - F of the compiled loop against the NumPy reference, friction smoothed or not."""
     from armdyn.dynamics.friction import sign_law_table
     from armdyn.dynamics.packed import workspace_size
-    from armdyn.observers.momentum import _momentum_and_rate, known_rate, momentum
+    from armdyn.observers.momentum import known_rate, momentum, momentum_and_rate
 
     arm = ad.models.load(name)
     rng = np.random.default_rng(0)
     n = arm.n
-    scratch = (np.empty(workspace_size(n)), np.empty((n, n)), np.empty((n, n)), np.empty(n))
+    work = np.empty(workspace_size(n))
     for eps in (None, np.full(n, 0.01)):
         for _ in range(10):
             q, qd, tau = rng.uniform(-1, 1, (3, n))
             qd[0] = 1e-3  # inside the smoothing
             p, rate = np.empty(n), np.empty(n)
-            _momentum_and_rate(arm.packed, sign_law_table(arm), np.zeros(n) if eps is None else eps, scratch, q, qd,
-                               tau, p, rate)  # fmt: skip
+            momentum_and_rate(arm.packed, sign_law_table(arm), np.zeros(n) if eps is None else eps, work, q, qd, tau,
+                              p, rate)  # fmt: skip
             np.testing.assert_allclose(p, momentum(arm, q, qd), rtol=1e-12, atol=1e-12)
             np.testing.assert_allclose(rate, known_rate(arm, q, qd, tau, eps), rtol=1e-11, atol=1e-11)
+
+
+def _terms(arm: ad.Robot, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """p, Vm^T qd and G of the O(n) recursion."""
+    from armdyn.dynamics.momentum import momentum_core
+    from armdyn.dynamics.packed import workspace_size
+
+    p, transposed, G = np.empty(arm.n), np.empty(arm.n), np.empty(arm.n)
+    momentum_core(arm.packed, np.empty(workspace_size(arm.n)), q, qd, p, transposed, G)
+    return p, transposed, G
+
+
+def _assert_terms_match(arm: ad.Robot, seed: int) -> None:
+    """The recursion's p, Vm^T qd and G equal M qd, C^T qd (the Christoffel C) and G of the arm's own methods, to
+    1e-10 of their size (of 1 for a term near zero, as C^T qd of one joint: both are rounding there)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(5):
+        q, qd = rng.uniform(-2, 2, (2, arm.n))
+        p, transposed, G = _terms(arm, q, qd)
+        expected = (arm.inertia_matrix(q) @ qd, arm.coriolis_matrix(q, qd).T @ qd, arm.gravity_vector(q))
+        for value, truth in zip((p, transposed, G), expected, strict=True):
+            np.testing.assert_allclose(value, truth, rtol=0, atol=1e-10 * max(np.abs(truth).max(), 1.0))
+
+
+@pytest.mark.parametrize("name", ["puma560", "panda_gaz2019", "stanford", "scara"])
+def test_the_recursion_equals_m_qd_c_transposed_qd_and_g_of_the_built_in_arms(name: str) -> None:
+    """Revolute and prismatic joints (Stanford, SCARA); the PUMA's reflected motor inertias on M's diagonal."""
+    arm = ad.models.load(name)
+    if name == "puma560":
+        assert np.abs(arm.reflected_inertia).max() > 0
+    _assert_terms_match(arm, 1)
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_the_recursion_equals_m_qd_c_transposed_qd_and_g_of_urdf_arms(name: str) -> None:
+    """The Panda's URDF with its two fingers free is a tree: the hand has two children (prismatic joints)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        arm = ad.load_urdf(URDFS[name])
+    parents = [link.parent for link in arm.links]
+    if name == "panda":
+        assert len(parents) != len(set(parents))  # a branch
+    _assert_terms_match(arm, 2)
+
+
+@settings(max_examples=25, deadline=None)
+@given(robots)
+def test_the_recursion_equals_m_qd_c_transposed_qd_and_g_of_random_trees(arm: ad.Robot) -> None:
+    """Random trees of revolute and prismatic joints with motors (reflected inertia) and any gravity."""
+    _assert_terms_match(arm, 3)
+
+
+def test_the_recursion_has_the_sign_of_dk_dq() -> None:
+    """Vm^T qd = dK/dq (K = 1/2 qd^T M qd): against central differences of the kinetic energy."""
+    arm = ad.models.puma560()
+    rng = np.random.default_rng(4)
+    q, qd = rng.uniform(-1, 1, (2, arm.n))
+    h = 1e-6
+    kinetic = [
+        [0.5 * qd @ arm.inertia_matrix(q + s * h * np.eye(arm.n)[i]) @ qd for s in (1, -1)] for i in range(arm.n)
+    ]
+    derivative = np.array([(plus - minus) / (2 * h) for plus, minus in kinetic])
+    np.testing.assert_allclose(_terms(arm, q, qd)[1], derivative, atol=1e-6 * np.abs(derivative).max())
+
+
+def test_the_step_takes_lists_integers_and_strided_rows_as_arrays() -> None:
+    """Lists, tuples, strided and read-only rows and an integer time take the converted path: the fast path's
+    residual."""
+    arm = ad.models.puma560()
+    rng = np.random.default_rng(5)
+    samples = rng.uniform(-1, 1, (4, 3, arm.n))
+    fast, slow = MomentumObserver(arm, gains=30.0), MomentumObserver(arm, gains=30.0)
+    wide = np.zeros((3, 2 * arm.n))
+    for k, (q, qd, tau) in enumerate(samples):
+        expected = fast.step(float(k) * 1e-3 if k else 0.0, q, qd, tau).copy()
+        wide[:, ::2] = samples[k]
+        t = 0 if k == 0 else k * 1e-3  # an integer first
+        fixed = tau.copy()
+        fixed.flags.writeable = False  # a read-only array: the compiled signature's arrays are writable ones
+        got = slow.step(t, q.tolist(), wide[1, ::2], fixed if k % 2 else tuple(tau))
+        np.testing.assert_array_equal(got, expected)
+    assert np.abs(fast.residual).max() > 0
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"q": [0.0] * 5}, "q must be 6 finite numbers"),
+        ({"qd": np.full(7, 0.0)}, "qd must be 6 finite numbers"),
+        ({"tau": np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])}, "tau must be 6 finite numbers"),
+        ({"q": np.array([np.inf, 0.0, 0.0, 0.0, 0.0, 0.0])}, "q must be 6 finite numbers"),
+        ({"qd": "fast"}, "qd must be 6 finite numbers"),
+        ({"t": 0.001}, "t must increase: 0.001 is not after 0.001"),
+        ({"t": 0.0005}, "t must increase"),
+        ({"t": float("nan")}, "t must increase"),
+        ({"t": "later"}, "t must be a number"),
+    ],
+)
+def test_a_bad_step_is_one_clear_error_and_changes_nothing(change: dict, message: str) -> None:
+    arm = ad.models.puma560()
+    observer, twin = MomentumObserver(arm, gains=50.0), MomentumObserver(arm, gains=50.0)
+    rng = np.random.default_rng(6)
+    q, qd, tau = rng.uniform(-1, 1, (3, arm.n))
+    for each in (observer, twin):
+        each.step(0.0, q, qd, tau)
+        each.step(1e-3, q + 1e-3, qd, tau)
+    args = {"t": 2e-3, "q": q, "qd": qd, "tau": tau} | change
+    with pytest.raises(ad.ModelError, match=re.escape(message)):
+        observer.step(**args)
+    np.testing.assert_array_equal(observer.step(2e-3, q, qd, tau), twin.step(2e-3, q, qd, tau))
+
+
+def test_hold_replaces_the_held_torque_of_the_last_sample() -> None:
+    """step(tau_a) then hold(tau_b) is step(tau_b): the held torque enters only the next step's integral."""
+    arm = ad.models.puma560()
+    rng = np.random.default_rng(7)
+    q, qd, tau_a, tau_b = rng.uniform(-1, 1, (4, arm.n))
+    held, direct = MomentumObserver(arm, held_torque=True), MomentumObserver(arm, held_torque=True)
+    held.step(0.0, q, qd, tau_a)
+    held.hold(tau_b)
+    direct.step(0.0, q, qd, tau_b)
+    np.testing.assert_allclose(held.step(1e-3, q + 1e-3, qd, tau_a), direct.step(1e-3, q + 1e-3, qd, tau_a),
+                               rtol=1e-13, atol=1e-13)  # fmt: skip
+    with pytest.raises(ad.ModelError, match="hold needs a sample first"):
+        MomentumObserver(arm).hold(tau_a)
+    with pytest.raises(ad.ModelError, match="tau must be 6 finite numbers"):
+        held.hold([1.0, 2.0])
+
+
+def test_the_decay_factor_from_a_reference_step_is_exp() -> None:
+    """exp(-K dt) from exp(-K dt0) and the series of exp(-K (dt - dt0)): to rounding while K |dt - dt0| <= 1e-4."""
+    from armdyn.observers.momentum import DECAY_SHIFT, _decay
+
+    for gain, dt0 in ((1.0, 1e-3), (200.0, 1e-3), (5000.0, 2e-4)):
+        for x in (0.0, 1e-9, -3e-7, DECAY_SHIFT, -DECAY_SHIFT):
+            dt = dt0 + x / gain
+            assert abs(_decay(np.exp(-gain * dt0), x) - np.exp(-gain * dt)) <= 4e-16
+
+
+def test_the_log_equals_the_steps_across_the_log_blocks() -> None:
+    """A log longer than one block of observe's parallel pass, with uneven steps: equal to the step loop to 1e-12."""
+    from armdyn.observers.momentum import LOG_BLOCK
+
+    arm = ad.models.panda_gaz2019()
+    rng = np.random.default_rng(8)
+    samples = LOG_BLOCK + 1000
+    t = np.cumsum(rng.uniform(0.9e-3, 1.1e-3, samples))
+    q = arm.configurations["qr"] + 0.3 * np.sin(np.outer(t, rng.uniform(0.5, 2.0, arm.n)))
+    qd, tau = np.gradient(q, t, axis=0), rng.normal(size=(samples, arm.n))
+    whole = observe(arm, t, q, qd, tau, gains=[20, 50, 50, 100, 100, 200, 200], coulomb_smoothing=0.01)
+    observer = MomentumObserver(arm, gains=[20, 50, 50, 100, 100, 200, 200], coulomb_smoothing=0.01)
+    steps = np.array([observer.step(t[k], q[k], qd[k], tau[k]).copy() for k in range(samples)])
+    np.testing.assert_allclose(steps, whole, rtol=1e-12, atol=1e-12)
+
+
+def test_reset_starts_the_observer_again() -> None:
+    """After reset the same samples give the same residuals as a new observer (r = 0 at the first)."""
+    arm = ad.models.panda_gaz2019()
+    rng = np.random.default_rng(9)
+    samples = rng.uniform(-1, 1, (5, 3, arm.n))
+    observer = MomentumObserver(arm, gains=40.0)
+    first = [observer.step(k * 1e-3, *sample).copy() for k, sample in enumerate(samples)]
+    observer.reset()
+    again = [observer.step(10.0 + k * 1e-3, *sample).copy() for k, sample in enumerate(samples)]
+    assert np.abs(first[-1]).max() > 0 and not np.any(again[0])
+    np.testing.assert_allclose(again, first, rtol=1e-9, atol=1e-12)

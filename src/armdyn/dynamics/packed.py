@@ -74,8 +74,14 @@ ENERGY_FIXED = SPATIAL  # I v
  DERIVATIVE_VELOCITY, DERIVATIVE_ACCELERATION, DERIVATIVE_COMPOSITE, DERIVATIVE_BIAS, DERIVATIVE_FORCE,
  DERIVATIVE_JOINT) = fields(TRANSFORM, TRANSFORM, *(SPATIAL,) * 6, COMPOSITE, COMPOSITE_BIAS, SPATIAL)  # fmt: skip
 DERIVATIVE_FIXED = COMPOSITE + 3 * SPATIAL  # one inertia, three 6-vectors
+# momentum.momentum_core, one record per joint: R, p | v | I v, then the subtree's momentum H | the subtree's mass and
+# first moment (m, m c) | l = R^T l_parent (-g in the joint's axes); the observer's momentum_and_rate keeps G in n
+# more values after the records (MOMENTUM_JOINT * n on)
+_, MOMENTUM_VELOCITY, MOMENTUM_BODY, MOMENTUM_MASS, MOMENTUM_ACCELERATION, MOMENTUM_JOINT = fields(
+    TRANSFORM, SPATIAL, SPATIAL, 4, 3
+)
 WORK_PER_JOINT = max(RNEA_JOINT + COMPOSITE, TRANSFORM + COMPOSITE, GRAVITY_JOINT, CORIOLIS_JOINT, ABA_JOINT,
-                     ENERGY_JOINT)  # fmt: skip
+                     ENERGY_JOINT, MOMENTUM_JOINT + 1)  # fmt: skip
 WORK_FIXED = max(RNEA_FIXED, CORIOLIS_FIXED, ABA_FIXED, ENERGY_FIXED)
 
 

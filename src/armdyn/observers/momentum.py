@@ -19,6 +19,13 @@ taken exactly for a tau_ext constant over the step,
 
 which tends to the continuous observer as the step shrinks (first order in dt). The friction and the
 motor inertia are the arm's (M includes the reflected motor inertias): an identified arm plugs in.
+
+Cost. p and tau - beta come from one O(n) recursion (armdyn.dynamics.momentum: neither M nor Vm is formed),
+in ``momentum_and_rate``, which simulate's compiled loop can call too. ``MomentumObserver.step`` is one compiled
+call of five arguments: the observer's whole state (the packed model, gains, smoothing, sign laws, the last
+sample's p, rate and torque, the residual) lives in one flat array, the checks of the sample are compiled in, and
+the workspace is on the call's stack. ``observe`` computes the samples' p and rate in parallel blocks (they are
+independent), then runs the filter in order.
 """
 
 from __future__ import annotations
@@ -26,14 +33,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange, types
 
-from armdyn.dynamics.coriolis import coriolis_core
-from armdyn.dynamics.crba import crba_core
-from armdyn.dynamics.friction import friction_vector, sigmoid, sign_law_table, smooth_coulomb
-from armdyn.dynamics.packed import HEADER, STRIDE, VISCOUS, workspace_size
-from armdyn.dynamics.rnea import gravity_core
+from armdyn.dynamics.friction import coulomb_torque, friction_vector, sigmoid, sign_law_table, smooth_coulomb
+from armdyn.dynamics.momentum import momentum_core
+from armdyn.dynamics.packed import (
+    HEADER,
+    MOMENTUM_JOINT,
+    N_JOINTS,
+    SIGMOID_AMPLITUDE,
+    STRIDE,
+    VISCOUS,
+    workspace_size,
+)
+from armdyn.dynamics.rnea import BATCH_CHUNKS
+from armdyn.dynamics.spatial import NUMBA_OPTIONS, VECTOR, one_state, scratch, states_status
+from armdyn.dynamics.status import NOT_FINITE, OK, WRONG_LENGTH, WRONG_SHAPE
 from armdyn.errors import ModelError
+from armdyn.inputs import LARGEST_STATE
 from armdyn.model import ArmModel
 
 
@@ -107,94 +124,107 @@ def known_rate(arm: ArmModel, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, ep
     return tau + coriolis - arm.gravity_vector(q) - friction_vector(arm, qd, eps)  # type: ignore[attr-defined]
 
 
-@njit(cache=True)
-def _residual(increments: np.ndarray, dt: np.ndarray, gains: np.ndarray, start: np.ndarray) -> np.ndarray:
-    """r_k = a r_{k-1} + (1 - a) dw_k / dt_k per joint, a = exp(-K dt_k); r_0 = start."""
-    samples, n = increments.shape[0] + 1, gains.shape[0]
-    r = np.empty((samples, n))
-    r[0] = start
-    for k in range(1, samples):
-        for j in range(n):
-            a = np.exp(-gains[j] * dt[k - 1])
-            r[k, j] = a * r[k - 1, j] + (1.0 - a) * increments[k - 1, j] / dt[k - 1]
-    return r
+# The observer's memory: one flat array (every array argument of a compiled call costs its dispatch about 50 ns):
+# the packed model (_model_size(n) values), then a header and blocks of n values, block k at base + _MEMORY_HEADER + k n
+# (base = _model_size(n)), the last the sign-law table (4 n, rows per joint).
+_LAST_TIME, _COUNT, _HELD, _REFERENCE_STEP, _LARGEST_GAIN, _MEMORY_HEADER = 0, 1, 2, 3, 4, 5
+# _DECAY: exp(-K dt0) at the reference step dt0; _TABLE: 4 blocks, (n, 4); the workspace is the step's own (stack)
+_GAINS, _EPS, _P0, _RATE0, _TAU0, _RESIDUAL, _DECAY, _TABLE = range(8)
+_MEMORY_BLOCKS = _TABLE + 4
+NOT_AFTER = 100
+"""The step kernel's status when t is not after the last sample's time (the others: armdyn.dynamics.status)."""
+DECAY_SHIFT = 1e-4
+"""exp(-K dt) is taken from exp(-K dt0) at a reference step dt0 while K |dt - dt0| stays below this (_decay)."""
 
 
-@njit(cache=True)
-def _momentum_and_rate(
+@njit(inline="always", **NUMBA_OPTIONS)
+def _model_size(n: int) -> int:
+    """The values of the packed model of an arm of n joints: where the observer's own memory starts."""
+    return HEADER + STRIDE * n
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def _memory_size(n: int) -> int:
+    """The values of a MomentumObserver's memory for n joints."""
+    return _model_size(n) + _MEMORY_HEADER + _MEMORY_BLOCKS * n
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def momentum_and_rate(
     model: np.ndarray,
     table: np.ndarray,
     eps: np.ndarray,
-    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    work: np.ndarray,
     q: np.ndarray,
     qd: np.ndarray,
     tau: np.ndarray,
     p: np.ndarray,
     rate: np.ndarray,
 ) -> None:
-    """p = M qd and tau + Vm^T qd - G - F (the friction's sign smoothed by eps where eps > 0), compiled."""
-    work, M, C, G = scratch
-    crba_core(model, work, q, M)
-    coriolis_core(model, work, q, qd, C)
-    gravity_core(model, work, q, G)
-    for i in range(q.shape[0]):
-        momentum_i, coriolis_i = 0.0, 0.0
-        for j in range(q.shape[0]):
-            momentum_i += M[i, j] * qd[j]
-            coriolis_i += C[j, i] * qd[j]
-        friction = model[HEADER + STRIDE * i + VISCOUS] * qd[i] + smooth_coulomb(table, eps, i, qd[i])
-        p[i] = momentum_i
-        rate[i] = tau[i] + coriolis_i - G[i] - (friction + sigmoid(model, i, qd[i]))
-
-
-@njit(inline="always", cache=True)
-def momentum_and_rate(
-    model: np.ndarray, table: np.ndarray, eps: np.ndarray, work: np.ndarray, q: np.ndarray, qd: np.ndarray,
-    tau: np.ndarray, p: np.ndarray, rate: np.ndarray,
-) -> None:  # fmt: skip
-    """p = M qd and tau + Vm^T qd - G - F (De Luca and Mattone 2003), one state, compiled.
+    """p = M qd and the known rate tau - beta = tau + Vm^T qd - G - F of one state, by one O(n) recursion
+    (armdyn.dynamics.momentum.momentum_core: no M, no Vm), compiled and inlined into its caller.
 
     Parameters
     ----------
     model : numpy.ndarray
         The packed arm.
     table : numpy.ndarray
-        Its Coulomb and Stribeck laws, (n, 4) (friction.sign_law_table).
+        The sign laws, (n, 4) (friction.sign_law_table).
     eps : numpy.ndarray
-        The smoothing of their sign per joint, (n,), 0 for the exact law.
+        The Coulomb smoothing per joint, (n,): 0 for the exact sign law (friction.smooth_coulomb).
     work : numpy.ndarray
-        A workspace of packed.workspace_size(n) values.
+        Scratch of packed.workspace_size(n) values (momentum_core's records, then G in n values).
     q, qd, tau : numpy.ndarray
         The state and the applied torque, (n,).
     p, rate : numpy.ndarray
-        Where p and the known terms are written, (n,).
+        Outputs, (n,): the momentum and pdot without the external torque; arrays of their own (not views of
+        ``work``).
+
+    Returns
+    -------
+    None
+        p and rate are written in place.
     """
-    n = q.shape[0]
-    _momentum_and_rate(model, table, eps, (work, np.empty((n, n)), np.empty((n, n)), np.empty(n)), q, qd, tau, p, rate)
+    n = int(model[N_JOINTS])
+    G = work[MOMENTUM_JOINT * n : MOMENTUM_JOINT * n + n]
+    momentum_core(model, work, q, qd, p, rate, G)
+    # Which laws the arm has, decided once: with the tests inside the joints' loop, the compiled loop evaluates
+    # every law's exp and tanh for every joint (about 20 ns a joint), whether the joint has the law or not.
+    general, sigmoids = False, False
+    for i in range(n):
+        general |= (eps[i] > 0.0) | (table[i, 2] != 0.0)
+        sigmoids |= model[HEADER + STRIDE * i + SIGMOID_AMPLITUDE] != 0.0
+    for i in range(n):
+        friction = model[HEADER + STRIDE * i + VISCOUS] * qd[i]
+        if general:
+            friction += smooth_coulomb(table, eps, i, qd[i])
+        else:  # smooth_coulomb's exact law without Stribeck friction
+            friction += coulomb_torque(table[i, 0], table[i, 1], qd[i])
+        if sigmoids:
+            friction += sigmoid(model, i, qd[i])
+        rate[i] = tau[i] + rate[i] - G[i] - friction
 
 
-@njit(cache=True)
-def _update(
-    r: np.ndarray,
-    gains: np.ndarray,
-    dt: float,
-    held: bool,
-    before: tuple[np.ndarray, np.ndarray, np.ndarray],
-    now: tuple[np.ndarray, np.ndarray, np.ndarray],
-) -> None:
-    """r <- a r + (1 - a) (p - p0 - integral of the known terms) / dt, a = exp(-K dt), in place."""
-    p0, rate0, tau0 = before
-    p, rate, tau = now
-    for j in range(r.shape[0]):
-        if held:
-            known = dt * (tau0[j] + 0.5 * ((rate[j] - tau[j]) + (rate0[j] - tau0[j])))
-        else:
-            known = 0.5 * dt * (rate[j] + rate0[j])
-        a = np.exp(-gains[j] * dt)
-        r[j] = a * r[j] + (1.0 - a) * (p[j] - p0[j] - known) / dt
+@njit(inline="always", **NUMBA_OPTIONS)
+def _increment(held: bool, dt: float, p: float, p0: float, rate: float, rate0: float, tau: float, tau0: float) -> float:
+    """(p - p0 - the integral of the known terms over the step) / dt: the trapezoid rule, or tau0 held over it."""
+    known = dt * (tau0 + 0.5 * ((rate - tau) + (rate0 - tau0))) if held else 0.5 * dt * (rate + rate0)
+    return (p - p0 - known) / dt
 
 
-@njit(cache=True)
+@njit(inline="always", **NUMBA_OPTIONS)
+def _decay(reference: float, x: float) -> float:
+    """exp(-K dt) = exp(-K dt0) exp(-x), x = K (dt - dt0), |x| <= DECAY_SHIFT: exp(-x) by its series to x^3 (the next
+    term, x^4 / 24 <= 4e-18, is below rounding). A sampled log's steps differ in their last bits, so an exact exp
+    per step would cost one exp per joint and sample for nothing."""
+    return reference * (1.0 - x * (1.0 - x * (0.5 - x * (1.0 / 6.0))))
+
+
+LOG_BLOCK = 16384
+"""Samples whose p and rate observe computes at once (in parallel): its extra memory stays 2 LOG_BLOCK n values."""
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
 def _observe_log(
     model: np.ndarray,
     table: np.ndarray,
@@ -206,50 +236,112 @@ def _observe_log(
     gains: np.ndarray,
     held: bool,
 ) -> np.ndarray:
-    """The residual over a whole log in one compiled loop, no per-sample array."""
+    """The residual over a whole log: block by block, p and the known rate of the block's samples in parallel chunks
+    (they are independent), then the filter r_k = a r_{k-1} + (1 - a) dw_k / dt_k in order, a = exp(-K dt_k) by
+    _decay (as the step kernel); r_0 = 0."""
     samples, n = q.shape
-    scratch = (np.empty(workspace_size(n)), np.empty((n, n)), np.empty((n, n)), np.empty(n))
-    p0, rate0, p, rate = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    r = np.zeros((samples, n))
-    _momentum_and_rate(model, table, eps, scratch, q[0], qd[0], tau[0], p0, rate0)
-    for k in range(1, samples):
-        _momentum_and_rate(model, table, eps, scratch, q[k], qd[k], tau[k], p, rate)
-        r[k] = r[k - 1]
-        _update(r[k], gains, t[k] - t[k - 1], held, (p0, rate0, tau[k - 1]), (p, rate, tau[k]))
-        p0[:] = p
-        rate0[:] = rate
+    r = np.empty((samples, n))
+    block = min(samples, LOG_BLOCK)
+    p, rate = np.empty((block + 1, n)), np.empty((block + 1, n))  # row 0: the sample before the block
+    reference = np.ones(n)
+    reference_step, largest = 0.0, gains.max()
+    for j in range(n):
+        r[0, j] = 0.0
+    start = 0
+    while start < samples:
+        stop = min(start + block, samples)
+        count = stop - start
+        chunks = min(count, BATCH_CHUNKS)
+        for chunk in prange(chunks):
+            work = np.empty(workspace_size(n))
+            for k in range(start + chunk * count // chunks, start + (chunk + 1) * count // chunks):
+                row = k - start + 1
+                momentum_and_rate(model, table, eps, work, q[k], qd[k], tau[k], p[row], rate[row])
+        for k in range(max(start, 1), stop):
+            i = k - start + 1
+            dt = t[k] - t[k - 1]
+            if abs(dt - reference_step) * largest > DECAY_SHIFT:
+                for j in range(n):
+                    reference[j] = np.exp(-gains[j] * dt)
+                reference_step = dt
+            shift = dt - reference_step
+            for j in range(n):
+                a = _decay(reference[j], gains[j] * shift)
+                step = _increment(held, dt, p[i, j], p[i - 1, j], rate[i, j], rate[i - 1, j], tau[k, j], tau[k - 1, j])
+                r[k, j] = a * r[k - 1, j] + (1.0 - a) * step
+        for j in range(n):
+            p[0, j], rate[0, j] = p[count, j], rate[count, j]
+        start = stop
     return r
 
 
-@njit(cache=True)
-def _step(
-    model: np.ndarray,
-    table: np.ndarray,
-    eps: np.ndarray,
-    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    gains: np.ndarray,
-    held: bool,
-    memory: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    t: float,
-    q: np.ndarray,
-    qd: np.ndarray,
-    tau: np.ndarray,
-    r: np.ndarray,
-) -> int:
-    """One sample into the observer's memory (last time and count, p, rate, tau, and the current p, rate), r in
-    place; 0, or 1 when t is not after the last sample."""
-    last, p0, rate0, tau0, p, rate = memory
-    _momentum_and_rate(model, table, eps, scratch, q, qd, tau, p, rate)
-    if last[1] > 0.0:
-        dt = t - last[0]
-        if not dt > 0.0:
-            return 1
-        _update(r, gains, dt, held, (p0, rate0, tau0), (p, rate, tau))
-    last[0], last[1] = t, 1.0
-    p0[:] = p
-    rate0[:] = rate
-    tau0[:] = tau
-    return 0
+@njit(inline="always", **NUMBA_OPTIONS)
+def _finite(x: np.ndarray, n: int) -> bool:
+    """x has n values, each of magnitude below inputs.LARGEST_STATE (NaN fails): no branch per value."""
+    if x.shape[0] != n:
+        return False
+    good = True
+    for k in range(n):
+        good &= abs(x[k]) < LARGEST_STATE
+    return good
+
+
+@one_state(types.int64(VECTOR, types.float64, VECTOR, VECTOR, VECTOR))
+def observer_step(memory: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> int:
+    """One sample into a MomentumObserver's memory (its layout above): its residual block updated in place.
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The observer's memory, _memory_size(n) values, the packed model first.
+    t : float
+        The sample's time.
+    q, qd, tau : numpy.ndarray
+        The sample, (n,) each.
+
+    Returns
+    -------
+    int
+        OK; WRONG_LENGTH + k or NOT_FINITE + k for state argument k (q, qd, tau) of the wrong length or not
+        finite; WRONG_SHAPE for a memory of the wrong size; NOT_AFTER when t is not after the last sample.
+        The memory is changed only when OK.
+    """
+    n = int(memory[N_JOINTS])
+    if n < 1 or memory.shape[0] != _memory_size(n):
+        return WRONG_SHAPE
+    base = _model_size(n)
+    model = memory[:base]
+    if not (_finite(q, n) & _finite(qd, n) & _finite(tau, n)):  # one test on the fast path; which rule, then
+        return states_status(model, q, qd, tau, 3)
+    started = memory[base + _COUNT] > 0.0
+    dt = t - memory[base + _LAST_TIME]
+    if started and not dt > 0.0:
+        return NOT_AFTER
+    o = base + _MEMORY_HEADER
+    table = memory[o + _TABLE * n : o + _MEMORY_BLOCKS * n].reshape((n, 4))
+    eps = memory[o + _EPS * n : o + (_EPS + 1) * n]
+    # the workspace and p, rate on the stack: no allocation, and the compiler knows they are no other array's
+    work, p, rate = scratch(workspace_size(n)), scratch(n), scratch(n)
+    momentum_and_rate(model, table, eps, work, q, qd, tau, p, rate)
+    if started:
+        if abs(dt - memory[base + _REFERENCE_STEP]) * memory[base + _LARGEST_GAIN] > DECAY_SHIFT:
+            for j in range(n):
+                memory[o + _DECAY * n + j] = np.exp(-memory[o + _GAINS * n + j] * dt)
+            memory[base + _REFERENCE_STEP] = dt
+        shift = dt - memory[base + _REFERENCE_STEP]
+        held = memory[base + _HELD] != 0.0
+        for j in range(n):
+            a = _decay(memory[o + _DECAY * n + j], memory[o + _GAINS * n + j] * shift)
+            step = _increment(held, dt, p[j], memory[o + _P0 * n + j], rate[j], memory[o + _RATE0 * n + j], tau[j],
+                              memory[o + _TAU0 * n + j])  # fmt: skip
+            memory[o + _RESIDUAL * n + j] = a * memory[o + _RESIDUAL * n + j] + (1.0 - a) * step
+    memory[base + _LAST_TIME] = t
+    memory[base + _COUNT] += 1.0
+    for j in range(n):
+        memory[o + _P0 * n + j] = p[j]
+        memory[o + _RATE0 * n + j] = rate[j]
+        memory[o + _TAU0 * n + j] = tau[j]
+    return OK
 
 
 def observe(
@@ -295,12 +387,13 @@ def observe(
     n = arm.n
     arrays = []
     for name, value in (("q", q), ("qd", qd), ("tau", tau)):
-        array = np.asarray(value, dtype=float)
+        array = np.ascontiguousarray(value, dtype=float)
         if array.ndim != 2 or array.shape[1] != n or array.shape[0] != times.shape[0]:
             raise ModelError(f"{name} must have shape ({times.shape[0]}, {n}) to match t, got {array.shape}")
-        bad = np.argwhere(~np.isfinite(array))
-        if bad.size:
-            raise ModelError(f"{name} holds {array[tuple(bad[0])]} at sample {bad[0][0]}, joint {bad[0][1] + 1}")
+        finite = np.isfinite(array)
+        if not finite.all():
+            bad = np.argwhere(~finite)[0]
+            raise ModelError(f"{name} holds {array[tuple(bad)]} at sample {bad[0]}, joint {bad[1] + 1}")
         arrays.append(array)
     if times.ndim != 1 or times.shape[0] < 2 or not np.all(np.isfinite(times)):
         raise ModelError(f"t must be at least 2 finite sample times (N,), got shape {times.shape}")
@@ -311,12 +404,17 @@ def observe(
     eps = _smoothing(arm, coulomb_smoothing)
     q_, qd_, tau_ = arrays
     table, smoothing = sign_law_table(arm), np.zeros(n) if eps is None else eps
-    return _observe_log(_packed(arm), table, smoothing, times, q_, qd_, tau_, K, bool(held_torque))
+    return _observe_log(
+        _packed(arm), table, smoothing, np.ascontiguousarray(times), q_, qd_, tau_, K, bool(held_torque)
+    )
 
 
 @dataclass
 class MomentumObserver:
     """The observer for a control loop: one sample per ``step`` call, its state kept between calls.
+
+    The settings are read when the observer is made (its compiled memory holds them): for other gains, make a new
+    observer.
 
     Parameters
     ----------
@@ -336,9 +434,26 @@ class MomentumObserver:
     coulomb_smoothing: object = None
 
     def __post_init__(self) -> None:
-        self._model = _packed(self.arm)
+        model = _packed(self.arm)
         self._K = _gains(self.gains, self.arm.n)
         self._eps = _smoothing(self.arm, self.coulomb_smoothing)
+        n = self.arm.n
+        self._memory = np.zeros(_memory_size(n))
+        base = _model_size(n)
+        self._memory[:base] = model
+        self._header = self._memory[base : base + _MEMORY_HEADER]
+        start = base + _MEMORY_HEADER
+        block = [self._memory[start + k * n : start + (k + 1) * n] for k in range(_TABLE)]
+        block[_GAINS][:] = self._K
+        if self._eps is not None:
+            block[_EPS][:] = self._eps
+        table = self._memory[start + _TABLE * n : start + _MEMORY_BLOCKS * n]
+        table[:] = sign_law_table(self.arm).ravel()
+        self._header[_HELD] = 1.0 if self.held_torque else 0.0
+        self._header[_LARGEST_GAIN] = self._K.max()
+        self._decay = block[_DECAY]
+        self.residual = block[_RESIDUAL]
+        self._rate0, self._tau0 = block[_RATE0], block[_TAU0]
         self.reset()
 
     @property
@@ -353,15 +468,15 @@ class MomentumObserver:
 
     def reset(self) -> None:
         """Forget the past: the next step starts the observer (r = 0 there)."""
-        n = self.arm.n
-        self._scratch = (np.empty(workspace_size(n)), np.empty((n, n)), np.empty((n, n)), np.empty(n))
-        self._memory = (np.zeros(2), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
-        self._table = sign_law_table(self.arm)
-        self._eps_array = np.zeros(n) if self._eps is None else self._eps
-        self.residual = np.zeros(n)
+        self._header[_LAST_TIME] = self._header[_COUNT] = self._header[_REFERENCE_STEP] = 0.0
+        self._decay[:] = 1.0  # exp(-K 0), the reference step 0 (as observe starts)
+        self.residual[:] = 0.0
 
     def step(self, t: float, q: object, qd: object, tau: object) -> np.ndarray:
         """Take one sample and return the residual r (n,), the estimate of tau_ext.
+
+        One compiled call when t is a float and q, qd, tau are C-contiguous float64 arrays (n,) (the checks of
+        length and finiteness are compiled in); other inputs (lists, integers, other dtypes) are converted first.
 
         Parameters
         ----------
@@ -380,18 +495,45 @@ class MomentumObserver:
         armdyn.ModelError
             When a value is not n finite numbers, or t is not after the last sample.
         """
+        try:
+            status = observer_step(self._memory, t, q, qd, tau)
+        except TypeError:  # not the signature's types: convert, then the same call
+            return self._converted_step(t, q, qd, tau)
+        if status:
+            self._refuse(status, t, q, qd, tau)
+        return self.residual
+
+    def _converted_step(self, t: object, q: object, qd: object, tau: object) -> np.ndarray:
         n = self.arm.n
+        try:
+            time = float(t)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise ModelError(f"t must be a number (s), got {t!r}") from None
         values = []
         for name, value in (("q", q), ("qd", qd), ("tau", tau)):
-            array = value if isinstance(value, np.ndarray) and value.dtype == np.float64 else np.asarray(value, float)
-            if array.shape != (n,) or not np.isfinite(array).all():
+            try:
+                array = np.ascontiguousarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ModelError(f"{name} must be {n} finite numbers, got {value!r}") from None
+            if array.shape != (n,):
                 raise ModelError(f"{name} must be {n} finite numbers, got {value!r}")
+            if not array.flags.writeable:  # the signature's arrays are writable ones
+                array = array.copy()
             values.append(array)
-        status = _step(self._model, self._table, self._eps_array, self._scratch, self._K, self.held_torque,
-                       self._memory, float(t), values[0], values[1], values[2], self.residual)  # fmt: skip
+        status = observer_step(self._memory, time, values[0], values[1], values[2])
         if status:
-            raise ModelError(f"t must increase: {t} is not after {self._memory[0][0]}")
+            self._refuse(status, time, q, qd, tau)
         return self.residual
+
+    def _refuse(self, status: int, t: object, q: object, qd: object, tau: object) -> None:
+        """The ModelError of a step kernel's status."""
+        if status == NOT_AFTER:
+            raise ModelError(f"t must increase: {t} is not after {self._header[_LAST_TIME]}")
+        for base in (WRONG_LENGTH, NOT_FINITE):
+            if base <= status < base + 3:
+                name, value = (("q", q), ("qd", qd), ("tau", tau))[status - base]
+                raise ModelError(f"{name} must be {self.arm.n} finite numbers, got {value!r}")
+        raise ModelError(f"the observer's memory is damaged (status {status}); make a new MomentumObserver")
 
     def hold(self, tau: object) -> None:
         """Set the torque held from the last sample on (``held_torque``): a controller knows the residual at a
@@ -408,10 +550,9 @@ class MomentumObserver:
             Without a sample yet, or when ``tau`` is not n finite numbers.
         """
         array = np.asarray(tau, dtype=float)
-        last, _, rate0, tau0, _, _ = self._memory
-        if last[1] == 0.0:
+        if self._header[_COUNT] == 0.0:
             raise ModelError("hold needs a sample first (step)")
         if array.shape != (self.arm.n,) or not np.all(np.isfinite(array)):
             raise ModelError(f"tau must be {self.arm.n} finite numbers, got {tau!r}")
-        rate0 += array - tau0
-        tau0[:] = array
+        self._rate0 += array - self._tau0
+        self._tau0[:] = array
