@@ -449,7 +449,7 @@ def run_rk4(
     """
     models, coulombs, switches, disturbance, eps, stops = plant
     contacts, observer, watched = watch
-    observing, observer_model, observer_coulomb, observer_eps, observer_gains, observer_memory = observer
+    observing, observer_gains, observer_memory = observer[0], observer[4], observer[5]
     residuals, external_torques = watched
     kind, model, model_coulomb, gain, hold, shares_plant = controller
     trajectory_kind, params, q0 = trajectory
@@ -487,8 +487,7 @@ def run_rk4(
         for i in range(n):
             applied[i] = tau_held[i] - disturbance[i] + external[i]
         if observing:
-            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, q, qd, tau_held, momentum,
-                              known)  # fmt: skip
+            observer_terms(observer, observer_work, q, qd, tau_held, momentum, known)
             observer_sample(observer_memory, observer_gains, dt, momentum, known)
             residuals[k] = observer_memory[0]
         if fresh:  # the controller has just computed this state's M and N on the plant itself
@@ -508,8 +507,7 @@ def run_rk4(
         rk4_stage_state(qd, k1v, 0.5, dt, vs)
         singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k2v))
         if observing:
-            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, qs, vs, tau_held, momentum,
-                              known)  # fmt: skip
+            observer_terms(observer, observer_work, qs, vs, tau_held, momentum, known)
             observer_stage(observer_memory, 2.0, dt, known)
         for i in range(n):
             k2q[i] = vs[i]
@@ -517,8 +515,7 @@ def run_rk4(
         rk4_stage_state(qd, k2v, 0.5, dt, vs)
         singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k3v))
         if observing:
-            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, qs, vs, tau_held, momentum,
-                              known)  # fmt: skip
+            observer_terms(observer, observer_work, qs, vs, tau_held, momentum, known)
             observer_stage(observer_memory, 2.0, dt, known)
         for i in range(n):
             k3q[i] = vs[i]
@@ -526,8 +523,7 @@ def run_rk4(
         rk4_stage_state(qd, k3v, 1.0, dt, vs)
         singular = max(singular, _accelerations(plant_model, coulomb, eps, stops, work, qs, vs, applied, Mp, net, k4v))
         if observing:
-            momentum_and_rate(observer_model, observer_coulomb, observer_eps, observer_work, qs, vs, tau_held, momentum,
-                              known)  # fmt: skip
+            observer_terms(observer, observer_work, qs, vs, tau_held, momentum, known)
             observer_stage(observer_memory, 1.0, dt, known)
         for i in range(n):
             k4q[i] = vs[i]
@@ -543,6 +539,17 @@ def run_rk4(
             break
     x[:n] = q
     x[n:] = qd
+
+
+@njit(**NUMBA_OPTIONS)
+def observer_terms(
+    observer: tuple, work: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, p: np.ndarray,
+    known: np.ndarray,
+) -> None:  # fmt: skip
+    """p and the known terms tau - beta of the observer's model at one state (observers.momentum.momentum_and_rate):
+    one compiled function that the loop's four stages call, not four inlined copies (a shorter compile)."""
+    _, model, coulomb, eps, _, _ = observer
+    momentum_and_rate(model, coulomb, eps, work, q, qd, tau, p, known)
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
