@@ -400,15 +400,24 @@ def _loop_computed_torque(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, U: n
 
 
 @njit(**NUMBA_OPTIONS)
+def _free_stops(n: int) -> np.ndarray:
+    """Joint stops at infinity (none), as simulation.stop_torque reads them."""
+    stops = np.zeros((n, 4))
+    stops[:, 0], stops[:, 1] = -np.inf, np.inf
+    return stops
+
+
+@njit(**NUMBA_OPTIONS)
 def _loop_cholesky(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray, out: np.ndarray) -> None:
     """qdd = M^-1 (tau - N) by CRBA, RNEA and the simulation's Cholesky solve (simulation._solve)."""
     n = Q.shape[1]
     work, M, N = np.empty(workspace_size(n)), np.empty((n, n)), np.empty(n)
-    no_coulomb, no_smoothing = np.zeros((n, 2)), np.zeros(n)  # the model's own Coulomb friction is in N
+    no_coulomb, no_smoothing = np.zeros((n, 4)), np.zeros(n)  # the model's own Coulomb friction is in N
+    free = _free_stops(n)
     for s in range(Q.shape[0]):
         crba_core(model, work, Q[s], M)
         rnea_core(model, work, Q[s], QD[s], QD[s], QD[s], NONLINEAR, N)
-        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s], 0.0)
+        _solve(M, N, TAU[s], no_coulomb, no_smoothing, free, Q[s], QD[s], out[s], 0.0)
 
 
 @njit(**NUMBA_OPTIONS)
@@ -416,10 +425,11 @@ def _loop_fused(model: np.ndarray, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarra
     """qdd = M^-1 (tau - N), M and N by crba.mass_matrix_and_bias, then simulation._solve."""
     n = Q.shape[1]
     work, M, N = np.empty(workspace_size(n)), np.empty((n, n)), np.empty(n)
-    no_coulomb, no_smoothing = np.zeros((n, 2)), np.zeros(n)
+    no_coulomb, no_smoothing = np.zeros((n, 4)), np.zeros(n)
+    free = _free_stops(n)
     for s in range(Q.shape[0]):
         mass_matrix_and_bias(model, work, Q[s], QD[s], M, N)
-        _solve(M, N, TAU[s], no_coulomb, no_smoothing, QD[s], out[s], 0.0)
+        _solve(M, N, TAU[s], no_coulomb, no_smoothing, free, Q[s], QD[s], out[s], 0.0)
 
 
 @njit(**NUMBA_OPTIONS)

@@ -305,6 +305,9 @@ def test_contacts_in_simulate_run_compiled_and_equal_the_python_loop() -> None:
     assert np.abs(compiled.external_torque[compiled.t >= 0.25]).max() > 0.1  # the clamp holds
 
 
-def test_contacts_of_another_arm_are_refused() -> None:
+def test_contacts_of_another_arm_or_with_many_runs_are_refused() -> None:
+    arm = _arm("puma560")
     with pytest.raises(ModelError, match="acts on an arm of 2 joints, not the simulated arm's 6"):
-        ad.simulate(_arm("puma560"), t_final=0.01, disturbance=Push(ad.models.two_link_planar(), 1, POINT, FORCE, 0.0))
+        ad.simulate(arm, t_final=0.01, disturbance=Push(ad.models.two_link_planar(), 1, POINT, FORCE, 0.0))
+    with pytest.raises(ad.ArgumentError, match=r"contacts \(Push, Impulse, Clamp\) apply to one run"):
+        ad.simulate(arm, ComputedTorque(100, 20), t_final=0.01, runs=2, disturbance=Push(arm, 3, POINT, FORCE, 0.0))

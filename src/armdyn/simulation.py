@@ -978,6 +978,9 @@ def simulate(
         raise ArgumentError("step applies to an arm with drives (a Robot's RK4 step is dt)")
     if any(value is not None for value in per_run.values()):  # many runs are asked for by name, never guessed
         _refuse_options(arm, single_run_options)
+        if contacts_table(arm, disturbance) is not None:
+            raise ArgumentError("contacts (Push, Impulse, Clamp) apply to one run; many runs take a constant "
+                                "disturbance, one (n,) row per run or one for all")  # fmt: skip
         return _simulate_runs(arm, controller, trajectory, t_final, dt, runs, q0, qd0, plants, models, gains,
                               disturbance, keep, after, threads)  # fmt: skip
     n = arm.n
