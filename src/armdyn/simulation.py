@@ -1562,6 +1562,7 @@ def _adaptive(arms, events, controller, trajectory, q0, qd0, disturbance, steps,
         return np.concatenate([qd, qdd_of(t, q, qd, tau - _tau_d(disturbance, t, q, qd)), desired[0] - q]), tau
 
     def compiled_rate(t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        x = np.ascontiguousarray(x)  # one layout, one compiled continuous_rate (solve_ivp and x[k] give others)
         singular = continuous_rate(t, x, setup[0], setup[1], setup[2], buffers[0], buffers[1])
         if singular >= 0:
             empty = np.empty((0, n))
@@ -1876,7 +1877,10 @@ def run_many(
         p, m = plant_of[r], model_of[r]
         eps = _auto_smoothing(plant_rows[p], plant_coulombs[p], q0s[r], qd0s[r], dt)
         plant = (plant_rows[p : p + 1], plant_coulombs[p : p + 1], np.empty(0), disturbances[r], eps, free)
-        watch = (np.zeros((0, ROW_SIZE)), (False, plant_rows[p], plant_coulombs[p], eps, eps, np.zeros((4, n))),
+        # no literal constants in run_rk4's arguments: the types are then simulate's, and one compiled run_rk4
+        # serves both (a literal 0 or False would compile it a second time)
+        no_observer, first_step = n < 0, np.int64(0)
+        watch = (np.zeros((0, ROW_SIZE)), (no_observer, plant_rows[p], plant_coulombs[p], eps, eps, np.zeros((4, n))),
                  (np.empty((0, n)), np.empty((0, n))))  # fmt: skip
         law = (kind, model_rows[m], model_coulombs[m], gains[r], hold, shares[r])
         state = (np.concatenate((q0s[r], qd0s[r])), np.zeros(n), np.zeros(n), outcomes[r])
@@ -1886,7 +1890,9 @@ def run_many(
         summary[:, :] = 0.0
         for first in range(0, rows, chunk):
             count = min(chunk, rows - first)
-            run_rk4(plant, law, (path_kind, params[r], q0s[r]), (first * dt, dt, 0, count), state, record, watch)
+            run_rk4(
+                plant, law, (path_kind, params[r], q0s[r]), (first * dt, dt, first_step, count), state, record, watch
+            )
             done = count if outcomes[r, 0] < 0 else int(outcomes[r, 0])
             for k in range(done):
                 row = first + k
