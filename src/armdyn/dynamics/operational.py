@@ -127,7 +127,7 @@ def lambda_one(
     Y = buffer[6 * n + m * n : 6 * n + 2 * m * n].reshape(n, m)
     M = buffer[6 * n + 2 * m * n : 6 * n + 2 * m * n + n * n].reshape(n, n)
     B = buffer[6 * n + 2 * m * n + n * n :].reshape(m, m)
-    axes = WORLD
+    axes = np.int64(WORLD)  # not a literal 0: the kernels then reuse jacobian_one as the public calls compiled it
     status = jacobian_one(model, q, target, axes, full)
     if status == OK:
         status = crba_one(model, q, M)
@@ -174,7 +174,7 @@ def operational_one(
     Y = buffer[at : at + n * m].reshape(n, m)
     coriolis, gravity = buffer[at + n * m : at + n * m + n], buffer[at + n * m + n : at + n * m + 2 * n]
     force, bias = buffer[at + n * m + 2 * n : at + n * m + 3 * n], buffer[at + n * m + 3 * n :]
-    axes = WORLD
+    axes = np.int64(WORLD)  # not a literal 0: the kernels then reuse jacobian_one as the public calls compiled it
     status = jacobian_one(model, q, target, axes, full)
     if status == OK:
         status = crba_one(model, q, M)
@@ -266,7 +266,7 @@ def task_core(
     Y, B = buffer[at : at + n * m].reshape(n, m), buffer[at + n * m : at + n * m + m * m].reshape(m, m)
     at += n * m + m * m
     pivots, x, y = buffer[at : at + n], buffer[at + n : at + 2 * n], buffer[at + 2 * n : at + 3 * n]
-    axes = WORLD
+    axes = np.int64(WORLD)  # not a literal 0: the kernels then reuse jacobian_one as the public calls compiled it
     status = jacobian_one(model, q, target, axes, full)
     if status != OK:
         return status
