@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -273,3 +274,27 @@ def _shown(value: object, width: int = 60) -> str:
     """A value's repr for a message, shortened to ``width`` characters."""
     text = repr(value)
     return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def without_read_only(value: object) -> Any:
+    """``value`` with every read-only array in it (at any depth of tuples) copied.
+
+    Numba compiles a kernel once more for each argument that is read-only where it was writable before (a
+    broadcast q0, a frozen table, a result's arrays); the kernels never write these arguments, so a copy
+    changes nothing but the compile.
+
+    Parameters
+    ----------
+    value : object
+        An array, a tuple (of tuples) of arrays and other values, or anything else.
+
+    Returns
+    -------
+    object
+        The same structure, its read-only arrays copied, everything else as given.
+    """
+    if isinstance(value, tuple):
+        return tuple(without_read_only(item) for item in value)
+    if isinstance(value, np.ndarray) and not value.flags.writeable:
+        return np.array(value)
+    return value

@@ -62,7 +62,7 @@ from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.dynamics.status import OK
 from armdyn.errors import ArgumentError, ModelError, SimulationError
 from armdyn.files import atomic_write
-from armdyn.inputs import LARGEST_STATE
+from armdyn.inputs import LARGEST_STATE, without_read_only
 from armdyn.observers.contact import ROW_SIZE, contact_torques, contacts_table
 from armdyn.observers.momentum import MomentumObserver, momentum_and_rate
 from armdyn.robot import Robot
@@ -1234,7 +1234,7 @@ def _compiled_setup(arm, arms, events, spec, period, trajectory, q0, disturbance
 
 def _compiled_rk4(arm, arms, events, trajectory, q0, qd0, steps, dt, progress, setup, watch):
     n = arm.n
-    plant, controller, desired_path, watch = writable((*setup, watch))
+    plant, controller, desired_path, watch = without_read_only((*setup, watch))
     arrays = {name: np.empty((steps + 1, n)) for name in ("q", "qd", "qdd", "tau", "q_d")}
     times = np.empty(steps + 1)
     state, tau_held, e_int, outcome = np.concatenate([q0, qd0]), np.zeros(n), np.zeros(n), np.array([-1, 0, -1])
@@ -1313,17 +1313,6 @@ def _watched_after(result: Result, contacts: _ContactSum | None, observer: Momen
         eps = given if given is not None else result.info.get("coulomb_smoothing")
         result.residual = observe(observer.arm, result.t, result.q, result.qd, result.tau, observer.rates, held, eps)
         result.info["observer"] = "on the samples after the run"
-
-
-def writable(value: object) -> Any:
-    """``value`` with every read-only array in it (at any depth of tuples) copied: Numba compiles a kernel once
-    more for each argument that is read-only where it was writable before (a broadcast q0, a frozen table),
-    and the loops never write these arguments, so a copy changes nothing but the compile."""
-    if isinstance(value, tuple):
-        return tuple(writable(item) for item in value)
-    if isinstance(value, np.ndarray) and not value.flags.writeable:
-        return np.array(value)
-    return value
 
 
 CHUNK_SECONDS = 0.1
@@ -2028,7 +2017,7 @@ def launch_many(
         largest = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
         numba.set_num_threads(inputs.integer(threads, "threads", 1, largest))
     try:
-        plants, models, law, path, starts = writable((plants, models, law, path, starts))
+        plants, models, law, path, starts = without_read_only((plants, models, law, path, starts))
         run_many(plants, models, law, path, starts, (dt, rows, chunk, every, after), (summaries, outcome, *samples))
     finally:
         numba.set_num_threads(previous)

@@ -50,7 +50,7 @@ from armdyn.dynamics.rnea import BATCH_CHUNKS
 from armdyn.dynamics.spatial import NUMBA_OPTIONS, VECTOR, one_state, scratch, states_status
 from armdyn.dynamics.status import NOT_FINITE, OK, WRONG_LENGTH, WRONG_SHAPE
 from armdyn.errors import ModelError
-from armdyn.inputs import LARGEST_STATE
+from armdyn.inputs import LARGEST_STATE, without_read_only
 from armdyn.model import ArmModel
 
 
@@ -402,11 +402,9 @@ def observe(
         raise ModelError(f"t must increase: sample {int(np.argmax(dt <= 0)) + 1} is not after the one before")
     K = _gains(gains, n)
     eps = _smoothing(arm, coulomb_smoothing)
-    q_, qd_, tau_ = arrays
+    q_, qd_, tau_, times = without_read_only((*arrays, np.ascontiguousarray(times)))  # one compile for any log
     table, smoothing = sign_law_table(arm), np.zeros(n) if eps is None else eps
-    return _observe_log(
-        _packed(arm), table, smoothing, np.ascontiguousarray(times), q_, qd_, tau_, K, bool(held_torque)
-    )
+    return _observe_log(_packed(arm), table, smoothing, times, q_, qd_, tau_, K, bool(held_torque))
 
 
 @dataclass
