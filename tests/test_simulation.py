@@ -287,3 +287,23 @@ def test_one_scenario_through_every_route_gives_one_answer() -> None:
     # held torque over each 1 ms step (RK4) against continuous control (rk45): close, not equal
     assert_allclose(rk45.q, compiled.q, atol=2e-4)
     assert np.abs(compiled.error[-100:]).max() < 2e-3 and np.abs(python.error[-100:]).max() < 2e-3
+
+
+def test_one_run_many_runs_and_read_only_inputs_share_one_compiled_loop() -> None:
+    """Each variant of the loop's argument types is another compile of tens of seconds in a fresh process: a single
+    run, many runs, read-only starts and the observer with contacts must all take the one compiled run_rk4."""
+    from armdyn import simulation
+    from armdyn.control import ComputedTorque
+    from armdyn.observers.contact import Push
+    from armdyn.observers.momentum import MomentumObserver
+
+    arm = ad.models.two_link_planar()
+    frozen = np.array([0.1, -0.2])
+    frozen.flags.writeable = False
+    law, path = ComputedTorque(100, 20), Sinusoid([0.1, 0.1], 0.5)
+    ad.simulate(arm, law, path, t_final=0.01)
+    push = Push(arm, 1, [0.1, 0.0, 0.0], [0.0, 1.0, 0.0], 0.0)
+    ad.simulate(arm, law, path, t_final=0.01, q0=frozen, disturbance=push, observer=MomentumObserver(arm, 50.0))
+    ad.simulate(arm, law, path, t_final=0.01, runs=2, q0=np.broadcast_to(frozen, (2, 2)))
+    assert len(simulation.run_rk4.signatures) == 1
+    assert len(simulation.run_many.signatures) == 1
