@@ -120,6 +120,37 @@ def test_a_study_on_a_dask_cluster_that_loses_a_worker_gives_the_local_result() 
     pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
 
 
+def _kernel_compiles() -> tuple[int, int]:
+    """On a worker: (signatures loaded from the cache, signatures compiled) over every armdyn kernel it holds."""
+    import sys
+
+    from numba.core.dispatcher import Dispatcher
+
+    kernels = [value for name, module in list(sys.modules.items()) if name.startswith("armdyn")
+               for value in vars(module).values() if isinstance(value, Dispatcher)]  # fmt: skip
+    return (sum(sum(k.stats.cache_hits.values()) for k in kernels),
+            sum(sum(k.stats.cache_misses.values()) for k in kernels))  # fmt: skip
+
+
+@pytest.mark.slow
+def test_dask_workers_load_the_parents_compiled_kernels_and_compile_nothing() -> None:
+    """A study run here fills the kernel cache; the same study on two fresh worker processes then compiles
+    nothing there: the warm-up compiles no function (Numba's compile events) and, after the blocks, every
+    armdyn kernel a worker holds was loaded from the cache (the dispatchers' cache statistics)."""
+    distributed = pytest.importorskip("distributed")
+    study = rr_study(block=25, t_final=0.2, after=0.1)
+    local = study.run(100, seed=4)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        remote = study.run(100, seed=4, scheduler=cluster.scheduler_address)
+        with distributed.Client(cluster) as client:
+            counts = client.run(_kernel_compiles)
+    pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
+    assert len(remote.info["compiled_on_workers"]) == 2 and set(remote.info["compiled_on_workers"].values()) == {0}
+    assert len(counts) == 2
+    for loaded, compiled in counts.values():
+        assert loaded > 0 and compiled == 0
+
+
 @pytest.mark.slow
 def test_the_local_cluster_scheduler_and_an_unreachable_one() -> None:
     pytest.importorskip("distributed")

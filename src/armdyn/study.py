@@ -43,7 +43,7 @@ import re
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -1031,14 +1031,25 @@ def _worker_threads(threads: int) -> None:
     numba.set_num_threads(max(1, min(threads, started)))
 
 
-def _warm(threads: int) -> str:
-    """On a worker: set Numba's thread count and load (or compile) the study's kernels once."""
-    from armdyn import models
-    from armdyn.simulation import simulate
+def _warm(setup: Setup, threads: int | None = None) -> list[str]:
+    """Load (or compile) the kernels of the study's blocks once: a block of one run of ``setup`` (the blocks'
+    own argument types, so the kernels the blocks call and no others), on a worker after setting its Numba
+    thread count (``threads``; None: this process, its threads as they are). The functions Numba compiled
+    instead of loading from its cache (armdyn.dynamics.cache.compiles): none when the cache held them."""
+    from armdyn.dynamics.cache import compiles
 
-    _worker_threads(threads)
-    simulate(models.two_link_planar(), control.PDGravity(1.0, 1.0), None, t_final=0.002, runs=1)
-    return "warm"
+    if threads is not None:
+        _worker_threads(threads)
+    with compiles() as compiled:
+        run_block(replace(setup, runs=1, block=1), 0, threads)
+    return compiled
+
+
+def _shares_cache(scheduler: str) -> bool:
+    """True when the scheduler's workers run on this machine (a local cluster, a loopback address), where they
+    find this process's compiled-code cache."""
+    host = "localhost" if scheduler == "local-cluster" else scheduler.split("://", 1)[1].rsplit(":", 1)[0]
+    return host in ("localhost", "::1", "[::1]") or host.startswith("127.")
 
 
 def _remote_block(setup: Setup, index: int) -> DataFrame:
@@ -1077,15 +1088,16 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
     cluster = None
     if scheduler == "local-cluster":
         workers = inputs.integer(workers, "workers", 1, 4 * (os.cpu_count() or 1), " (4 per core)")
+    elif not (isinstance(scheduler, str) and re.fullmatch(r"(tcp|tls)://[\w.\-]+:\d+", scheduler)):
+        raise ModelError(f"scheduler must be None, 'local', 'local-cluster' or an address tcp://host:port, got "
+                         f"{scheduler!r}")  # fmt: skip
+    if scheduler == "local-cluster":
         # no NUMBA_NUM_THREADS here: the Nanny sets its env after the worker imported Numba (see _worker_threads)
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
                                env={"OMP_NUM_THREADS": "1"})  # fmt: skip
         address = cluster.scheduler_address
-    elif isinstance(scheduler, str) and re.fullmatch(r"(tcp|tls)://[\w.\-]+:\d+", scheduler):
-        address = scheduler
     else:
-        raise ModelError(f"scheduler must be None, 'local', 'local-cluster' or an address tcp://host:port, got "
-                         f"{scheduler!r}")  # fmt: skip
+        address = scheduler
     try:
         client = Client(address, timeout=f"{timeout}s")
     except (OSError, TimeoutError) as error:
@@ -1095,7 +1107,9 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
                          "was lost: the blocks already written stay in out") from None  # fmt: skip
     try:
         link = client.dashboard_link
-        remaining, idle, attempt = list(todo), 0, 0
+        remaining, idle, attempt, compiled = list(todo), 0, 0, {}
+        if remaining and _shares_cache(scheduler):  # compiled once here, then loaded by every worker from the cache
+            _warm(setup)
         while remaining:
             if idle >= DASK_ROUNDS:
                 raise ModelError(f"the Dask workers were lost {idle} times in a row before blocks "
@@ -1103,7 +1117,9 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
             attempt += 1
             try:
                 client.wait_for_workers(1, timeout=timeout)
-                client.run(_warm, 1)  # every worker loads its compiled kernels before work arrives
+                # every worker loads the blocks' compiled kernels before work arrives (compiles them when the
+                # cache it sees lacks them: a remote worker's first study)
+                compiled = client.run(_warm, replace(setup, runs=1, block=1), 1)
                 shared = client.scatter(setup, broadcast=True)
             except Exception as error:  # workers lost while starting: the next round
                 if isinstance(error, TimeoutError) and not client.scheduler_info()["workers"]:
@@ -1125,7 +1141,8 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
                 remaining.remove(futures[future])
                 arrivals += 1
             idle = 0 if arrivals else idle + 1
-        return {"dashboard": link, "workers": len(client.scheduler_info()["workers"]), "rounds": attempt}
+        return {"dashboard": link, "workers": len(client.scheduler_info()["workers"]), "rounds": attempt,
+                "compiled_on_workers": {worker: len(names) for worker, names in compiled.items()}}  # fmt: skip
     finally:
         client.close()
         if cluster is not None:

@@ -22,10 +22,12 @@ import os
 import shutil
 import tempfile
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from types import FunctionType
 
-from numba.core import config
+from numba.core import config, event
 
 from armdyn.dynamics.numba_compat import GuardedLocator, install_locator
 
@@ -127,6 +129,31 @@ class KernelCacheLocator(GuardedLocator):
                 locator.in_memory = True
                 warn_in_memory(f"{locator.get_cache_path()} cannot be written ({error})")
         return locator
+
+
+class _CompileListener(event.Listener):
+    """Numba's "numba:compile" events, which a dispatcher sends only when it compiles (a signature it
+    loads from the cache sends none): the compiled functions' qualified names."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+
+    def on_start(self, event: event.Event) -> None:
+        function = getattr(event.data.get("dispatcher"), "py_func", None)
+        self.names.append(f"{getattr(function, '__module__', '?')}.{getattr(function, '__qualname__', '?')}")
+
+    def on_end(self, event: event.Event) -> None:
+        pass
+
+
+@contextmanager
+def compiles() -> Iterator[list[str]]:
+    """The functions Numba compiles (not loads from its cache) in this process while the block runs: a list,
+    filled as they compile, of their qualified names (armdyn's kernels, and Numba's own helpers they need).
+    Empty when every kernel called was loaded from the cache (or already in memory)."""
+    listener = _CompileListener()
+    with event.install_listener("numba:compile", listener):
+        yield listener.names
 
 
 def install() -> None:
