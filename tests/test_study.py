@@ -132,6 +132,17 @@ def _kernel_compiles() -> tuple[int, int]:
             sum(sum(k.stats.cache_misses.values()) for k in kernels))  # fmt: skip
 
 
+@pytest.mark.parametrize(
+    ("scheduler", "shares"),
+    [("local-cluster", True), ("tcp://127.0.0.1:8786", True), ("tcp://localhost:8786", True),
+     ("tls://10.0.0.5:8786", False), ("tcp://cluster.example.org:8786", False)],
+)  # fmt: skip
+def test_only_workers_on_this_machine_are_taken_to_share_its_kernel_cache(scheduler: str, shares: bool) -> None:
+    from armdyn.study import _shares_cache
+
+    assert _shares_cache(scheduler) is shares
+
+
 @pytest.mark.slow
 def test_dask_workers_load_the_parents_compiled_kernels_and_compile_nothing() -> None:
     """A study run here fills the kernel cache; the same study on two fresh worker processes then compiles

@@ -10,7 +10,9 @@ Each block is one compiled call of the many-runs path of ``simulate`` (``runs=``
 in this process by default; with
 ``scheduler="local-cluster"`` on a ``dask.distributed.LocalCluster``, or with an address on an
 existing cluster (each worker one task thread, its Numba thread count set within the pool Numba started
-with, its compiled-code cache warmed before work is sent; a block lost with its worker is recomputed, to
+with, its kernels loaded before work is sent: a one-run block of the study, the blocks' own argument types,
+run first in this process when the workers share its machine and cache, so that they load what it compiled
+and compile nothing themselves, ``info["compiled_on_workers"]``); a block lost with its worker is recomputed, to
 the same bits, and when every worker is lost the set-up is scattered again to those that come back).
 
 With ``out=`` the folder is a store that a crash cannot corrupt: study.json holds the study's fingerprint
@@ -492,7 +494,8 @@ class StudyResult:
         The requirement.
     info : dict
         runs, seed, block, scheduler, blocks computed here (the others were read from ``out``),
-        the dashboard link of a cluster.
+        the dashboard link of a cluster, and ``compiled_on_workers``: each worker's count of the functions
+        Numba compiled (not loaded from its cache) while it warmed up, 0 when it found the kernels cached.
     """
 
     table: DataFrame
@@ -1075,7 +1078,8 @@ def _lost(error: BaseException) -> bool:
 def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeout: float, key: str,
              arrived: Callable[[int, DataFrame], None]) -> dict:  # fmt: skip
     """The blocks ``todo`` on a Dask cluster: one task per block, each worker one task thread with one Numba
-    thread, its kernels warmed first. A block lost with its worker is retried by Dask; when every worker is
+    thread, its kernels warmed first (``_warm``: here too when the workers share this machine's kernel cache,
+    so that they load rather than compile them). A block lost with its worker is retried by Dask; when every worker is
     lost (and the scattered set-up with them), the set-up is scattered again to the workers that come back and
     the blocks not yet arrived are sent again, up to DASK_ROUNDS rounds in a row without a block, then a
     ModelError (the blocks that arrived stay in out)."""

@@ -359,7 +359,8 @@ def load_urdf(
     A joint whose motion moves no mass or inertia in any configuration (its subtree is
     massless, or only a point mass on its own axis or a thin rod along it, or its motion repeats
     that of the joints before it) makes M(q) singular for every q, and forward dynamics
-    undefined. Such joints are found by factoring M(q) (LDL^T, parents first) at 4 random
+    undefined. Such joints are found by factoring M(q) (the Lagrange-Euler M of
+    armdyn.dynamics.lagrange, in NumPy: loading compiles no kernel; LDL^T, parents first) at 4 random
     configurations within the joint limits (a range wider than a turn, or 2 m, is sampled
     on a turn, or 2 m, inside it): joint j counts when its pivot is zero at every one
     (below 1e-9 M_jj, or M_jj below 1e-13 of M's largest diagonal entry). A file whose
