@@ -12,7 +12,8 @@ user's cache folder (``$XDG_CACHE_HOME/armdyn`` or ``~/.cache/armdyn``); with Nu
 NUMBA_CACHE_DIR set, that folder. When none can be written (a read-only install and a
 read-only home), the kernels are compiled in memory, for this process only, with one
 RuntimeWarning; a damaged cache file is removed and its kernel compiled again, with a
-RuntimeWarning (numba_compat.GuardedCache).
+RuntimeWarning (numba_compat.GuardedCache). ``compiles()`` names the functions Numba compiles (rather
+than loads from the cache) while a block of code runs: how a Dask worker shows it found its kernels cached.
 """
 
 from __future__ import annotations
