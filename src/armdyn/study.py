@@ -462,11 +462,13 @@ def run_block(setup: Setup, index: int, threads: int | None = None) -> DataFrame
                                   friction)  # fmt: skip
     kind, gains, hold, belief, belief_coulomb = setup.law
     zeros = np.zeros(count, dtype=np.int64)
+    # writeable copies whatever the count and wherever the set-up came from (a one-run broadcast is already
+    # contiguous and would pass read-only, as could an array a worker received: another signature, compiled again)
     summaries, outcome, _ = launch_many(
         (packed, coulomb, np.arange(count, dtype=np.int64), np.zeros((count, n))),
-        (belief[None], belief_coulomb[None], zeros, np.zeros(count, dtype=np.bool_)),
-        (kind, np.ascontiguousarray(np.broadcast_to(gains, (count, 4, n))), hold),
-        (setup.path[0], np.ascontiguousarray(np.broadcast_to(setup.path[1], (count, *setup.path[1].shape)))),
+        (belief[None].copy(), belief_coulomb[None].copy(), zeros, np.zeros(count, dtype=np.bool_)),
+        (kind, np.broadcast_to(gains, (count, 4, n)).copy(), hold),
+        (setup.path[0], np.broadcast_to(setup.path[1], (count, *setup.path[1].shape)).copy()),
         (setup.q0 + draws["start"], np.zeros((count, n))),
         (setup.dt, setup.rows, 0, setup.after_row),
         threads,
