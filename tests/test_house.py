@@ -4,6 +4,7 @@ Robot never changes after construction, and the kernel cache cannot go stale."""
 from __future__ import annotations
 
 import ast
+import json
 import pickle
 import re
 import shutil
@@ -221,6 +222,32 @@ def test_stale_kernel_folders_are_removed(tmp_path: Path) -> None:
     (tmp_path / "other").mkdir()
     cache.remove_stale(current)
     assert current.exists() and (tmp_path / "other").exists() and not stale.exists()
+
+
+IMPORT_PROBE = """
+import json, sys
+import numba
+def scipy_modules():
+    return sorted(name for name in sys.modules if name == "scipy" or name.startswith("scipy."))
+by_numba = scipy_modules()
+import armdyn
+heavy = ("sympy", "matplotlib", "dask", "distributed", "pandas", "xarray", "cvxpy", "pyarrow", "mujoco", "pinocchio")
+imported = [name for name in heavy if name in sys.modules]
+by_armdyn = sorted(set(scipy_modules()) - set(by_numba))
+arm = armdyn.models.puma560()
+arm.inverse_dynamics([0.1] * 6, [0.0] * 6, [0.0] * 6)
+called = [name for name in heavy if name in sys.modules]
+print(json.dumps({"imported": imported, "scipy": by_armdyn, "called": called}))
+"""
+
+
+def test_import_armdyn_and_the_first_call_load_no_heavy_package() -> None:
+    """``import armdyn`` and a first inverse dynamics import none of SymPy, matplotlib, Dask, pandas, xarray,
+    CVXPY, pyarrow, MuJoCo, Pinocchio, and no SciPy module beyond those Numba imports itself."""
+    done = subprocess.run([sys.executable, "-c", IMPORT_PROBE], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result == {"imported": [], "scipy": [], "called": []}
 
 
 def test_armdyn_kernels_are_cached_in_the_hashed_folder() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import re
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ import pytest
 import armdyn as ad
 from armdyn import control
 from armdyn import trajectories as tr
+from armdyn.dynamics.cache import compiles
 from armdyn.errors import ModelError
 from armdyn.study import Normal, Requirement, Study, Uniform, clopper_pearson, run_block, runs_needed
 
@@ -118,6 +120,67 @@ def test_a_study_on_a_dask_cluster_that_loses_a_worker_gives_the_local_result() 
         remote = study.run(200, seed=5, scheduler=cluster.scheduler_address, progress=kill_one)
     assert killed and remote.info["scheduler"].startswith("tcp://")
     pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
+
+
+def _kernel_compiles() -> tuple[int, int]:
+    """On a worker: (signatures loaded from the cache, signatures compiled) over every armdyn kernel it holds."""
+    import sys
+
+    from numba.core.dispatcher import Dispatcher
+
+    kernels = [value for name, module in list(sys.modules.items()) if name.startswith("armdyn")
+               for value in vars(module).values() if isinstance(value, Dispatcher)]  # fmt: skip
+    return (sum(sum(k.stats.cache_hits.values()) for k in kernels),
+            sum(sum(k.stats.cache_misses.values()) for k in kernels))  # fmt: skip
+
+
+def test_a_one_run_block_calls_the_kernel_a_full_block_compiled() -> None:
+    """A block of one run (a study's last, or the workers' warm-up) passes the same argument types as a full
+    block: nothing is compiled again (a one-run broadcast once passed read-only, another signature)."""
+    setup = rr_study(block=20, t_final=0.05, after=0.02).setup(40, seed=1)
+    from armdyn.simulation import run_many
+
+    full = run_block(setup, 0)
+    signatures = list(run_many.signatures)
+    with compiles() as compiled:
+        one = run_block(replace(setup, runs=1, block=1), 0)
+    assert compiled == [] and run_many.signatures == signatures  # neither compiled nor loaded from the cache
+    assert one["run"].tolist() == [0] and one["finished"].all() and len(full) == 20
+    assert one["payload"].iloc[0] == full["payload"].iloc[0]  # the block's stream: the first draw is the same
+
+
+@pytest.mark.parametrize(
+    ("scheduler", "shares"),
+    [("local-cluster", True), ("tcp://127.0.0.1:8786", True), ("tcp://localhost:8786", True),
+     ("tls://10.0.0.5:8786", False), ("tcp://cluster.example.org:8786", False)],
+)  # fmt: skip
+def test_only_workers_on_this_machine_are_taken_to_share_its_kernel_cache(scheduler: str, shares: bool) -> None:
+    from armdyn.study import _shares_cache
+
+    assert _shares_cache(scheduler) is shares
+
+
+@pytest.mark.slow
+def test_dask_workers_load_the_parents_compiled_kernels_and_compile_nothing() -> None:
+    """A study run here fills the kernel cache; the same study on two fresh worker processes then compiles
+    nothing, there or here: the warm-up compiles no function (Numba's compile events) and, after the blocks, every
+    armdyn kernel a worker holds was loaded from the cache (the dispatchers' cache statistics)."""
+    distributed = pytest.importorskip("distributed")
+    study = rr_study(block=25, t_final=0.2, after=0.1)
+    local = study.run(100, seed=4)
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
+        compiles() as here,
+    ):
+        remote = study.run(100, seed=4, scheduler=cluster.scheduler_address)
+        with distributed.Client(cluster) as client:
+            counts = client.run(_kernel_compiles)
+    pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
+    assert len(remote.info["compiled_on_workers"]) == 2 and set(remote.info["compiled_on_workers"].values()) == {0}
+    assert here == []  # nor here: the warm-up's one-run block has the types of the blocks run before
+    assert len(counts) == 2
+    for loaded, compiled in counts.values():
+        assert loaded > 0 and compiled == 0
 
 
 @pytest.mark.slow

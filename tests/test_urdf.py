@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import os
 import re
 import subprocess
 import sys
@@ -763,6 +765,53 @@ def test_romeo_massless_fingers_refused_by_default_and_warned_with_strict_false(
     assert all(issubclass(w.category, UserWarning) for w in record)
     assert set(re.findall(r"'(\w+)'", message)) == fingers  # exactly the 24 joints, nothing more
     assert arm.n == 55
+
+
+LOAD_PROBE = """
+import json, sys
+from numba.core import event
+from numba.core.dispatcher import Dispatcher
+compiled = []
+class Listener(event.Listener):
+    def on_start(self, e):
+        compiled.append(e.data["dispatcher"].py_func.__qualname__)
+    def on_end(self, e):
+        pass
+event.register("numba:compile", Listener())
+import armdyn
+arms = [armdyn.load_urdf(path) for path in sys.argv[1:]]
+kernels = [value for name, module in list(sys.modules.items()) if name.startswith("armdyn")
+           for value in vars(module).values() if isinstance(value, Dispatcher)]
+print(json.dumps({"compiled": compiled, "kernels": len(kernels), "n": [arm.n for arm in arms],
+                  "loaded": sum(len(kernel.overloads) for kernel in kernels)}))
+"""
+
+
+def test_loading_an_arm_compiles_and_loads_no_kernel(tmp_path: Path) -> None:
+    """A fresh interpreter with an empty kernel cache loads the UR5 and the Panda: Numba compiles nothing and
+    no armdyn kernel holds a compiled signature (none was loaded from the cache either), and the cache stays
+    empty; the massless-joint check works in NumPy."""
+    paths = [str(URDFS["ur5"]), str(URDFS["panda"])]
+    environment = {key: value for key, value in os.environ.items() if not key.startswith("NUMBA_CACHE")}
+    environment |= {"NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    done = subprocess.run([sys.executable, "-c", LOAD_PROBE, *paths], capture_output=True, text=True,
+                          env=environment, timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["n"] == [6, 9] and result["kernels"] > 20
+    assert result["compiled"] == [] and result["loaded"] == 0
+    assert not [path for path in (tmp_path / "cache").rglob("*") if path.suffix in (".nbi", ".nbc")]
+
+
+@pytest.mark.parametrize("text", [text for text, _ in SINGULAR_ARMS.values()], ids=list(SINGULAR_ARMS))
+def test_the_massless_check_factors_the_inertia_matrix_the_kernels_compute(tmp_path: Path, text: str) -> None:
+    """The check's M (Lagrange-Euler, NumPy) is the compiled kernels' M (the composite-rigid-body algorithm)."""
+    from armdyn.dynamics import lagrange
+
+    with pytest.warns(UserWarning, match="move no mass"):
+        arm = load_urdf(_write(tmp_path, text), strict=False)
+    q = np.random.default_rng(5).uniform(-2, 2, (4, arm.n))
+    assert_allclose(lagrange.inertia_matrix(arm, q), arm.inertia_matrix(q), rtol=0, atol=1e-13)
 
 
 def test_strict_governs_both_the_triangle_inequality_and_massless_joints(tmp_path: Path) -> None:

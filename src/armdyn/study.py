@@ -10,7 +10,9 @@ Each block is one compiled call of the many-runs path of ``simulate`` (``runs=``
 in this process by default; with
 ``scheduler="local-cluster"`` on a ``dask.distributed.LocalCluster``, or with an address on an
 existing cluster (each worker one task thread, its Numba thread count set within the pool Numba started
-with, its compiled-code cache warmed before work is sent; a block lost with its worker is recomputed, to
+with, its kernels loaded before work is sent: a one-run block of the study, the blocks' own argument types,
+run first in this process when the workers share its machine and cache, so that they load what it compiled
+and compile nothing themselves, ``info["compiled_on_workers"]``); a block lost with its worker is recomputed, to
 the same bits, and when every worker is lost the set-up is scattered again to those that come back).
 
 With ``out=`` the folder is a store that a crash cannot corrupt: study.json holds the study's fingerprint
@@ -43,7 +45,7 @@ import re
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -460,11 +462,13 @@ def run_block(setup: Setup, index: int, threads: int | None = None) -> DataFrame
                                   friction)  # fmt: skip
     kind, gains, hold, belief, belief_coulomb = setup.law
     zeros = np.zeros(count, dtype=np.int64)
+    # writeable copies whatever the count and wherever the set-up came from (a one-run broadcast is already
+    # contiguous and would pass read-only, as could an array a worker received: another signature, compiled again)
     summaries, outcome, _ = launch_many(
         (packed, coulomb, np.arange(count, dtype=np.int64), np.zeros((count, n))),
-        (belief[None], belief_coulomb[None], zeros, np.zeros(count, dtype=np.bool_)),
-        (kind, np.ascontiguousarray(np.broadcast_to(gains, (count, 4, n))), hold),
-        (setup.path[0], np.ascontiguousarray(np.broadcast_to(setup.path[1], (count, *setup.path[1].shape)))),
+        (belief[None].copy(), belief_coulomb[None].copy(), zeros, np.zeros(count, dtype=np.bool_)),
+        (kind, np.broadcast_to(gains, (count, 4, n)).copy(), hold),
+        (setup.path[0], np.broadcast_to(setup.path[1], (count, *setup.path[1].shape)).copy()),
         (setup.q0 + draws["start"], np.zeros((count, n))),
         (setup.dt, setup.rows, 0, setup.after_row),
         threads,
@@ -492,7 +496,8 @@ class StudyResult:
         The requirement.
     info : dict
         runs, seed, block, scheduler, blocks computed here (the others were read from ``out``),
-        the dashboard link of a cluster.
+        the dashboard link of a cluster, and ``compiled_on_workers``: each worker's count of the functions
+        Numba compiled (not loaded from its cache) while it warmed up, 0 when it found the kernels cached.
     """
 
     table: DataFrame
@@ -1031,14 +1036,25 @@ def _worker_threads(threads: int) -> None:
     numba.set_num_threads(max(1, min(threads, started)))
 
 
-def _warm(threads: int) -> str:
-    """On a worker: set Numba's thread count and load (or compile) the study's kernels once."""
-    from armdyn import models
-    from armdyn.simulation import simulate
+def _warm(setup: Setup, threads: int | None = None) -> list[str]:
+    """Load (or compile) the kernels of the study's blocks once: a block of one run of ``setup`` (the blocks'
+    own argument types, so the kernels the blocks call and no others), on a worker after setting its Numba
+    thread count (``threads``; None: this process, its threads as they are). The functions Numba compiled
+    instead of loading from its cache (armdyn.dynamics.cache.compiles): none when the cache held them."""
+    from armdyn.dynamics.cache import compiles
 
-    _worker_threads(threads)
-    simulate(models.two_link_planar(), control.PDGravity(1.0, 1.0), None, t_final=0.002, runs=1)
-    return "warm"
+    if threads is not None:
+        _worker_threads(threads)
+    with compiles() as compiled:
+        run_block(replace(setup, runs=1, block=1), 0, threads)
+    return compiled
+
+
+def _shares_cache(scheduler: str) -> bool:
+    """True when the scheduler's workers run on this machine (a local cluster, a loopback address), where they
+    find this process's compiled-code cache."""
+    host = "localhost" if scheduler == "local-cluster" else scheduler.split("://", 1)[1].rsplit(":", 1)[0]
+    return host in ("localhost", "::1", "[::1]") or host.startswith("127.")
 
 
 def _remote_block(setup: Setup, index: int) -> DataFrame:
@@ -1064,7 +1080,8 @@ def _lost(error: BaseException) -> bool:
 def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeout: float, key: str,
              arrived: Callable[[int, DataFrame], None]) -> dict:  # fmt: skip
     """The blocks ``todo`` on a Dask cluster: one task per block, each worker one task thread with one Numba
-    thread, its kernels warmed first. A block lost with its worker is retried by Dask; when every worker is
+    thread, its kernels warmed first (``_warm``: here too when the workers share this machine's kernel cache,
+    so that they load rather than compile them). A block lost with its worker is retried by Dask; when every worker is
     lost (and the scattered set-up with them), the set-up is scattered again to the workers that come back and
     the blocks not yet arrived are sent again, up to DASK_ROUNDS rounds in a row without a block, then a
     ModelError (the blocks that arrived stay in out)."""
@@ -1077,15 +1094,16 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
     cluster = None
     if scheduler == "local-cluster":
         workers = inputs.integer(workers, "workers", 1, 4 * (os.cpu_count() or 1), " (4 per core)")
+    elif not (isinstance(scheduler, str) and re.fullmatch(r"(tcp|tls)://[\w.\-]+:\d+", scheduler)):
+        raise ModelError(f"scheduler must be None, 'local', 'local-cluster' or an address tcp://host:port, got "
+                         f"{scheduler!r}")  # fmt: skip
+    if scheduler == "local-cluster":
         # no NUMBA_NUM_THREADS here: the Nanny sets its env after the worker imported Numba (see _worker_threads)
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
                                env={"OMP_NUM_THREADS": "1"})  # fmt: skip
         address = cluster.scheduler_address
-    elif isinstance(scheduler, str) and re.fullmatch(r"(tcp|tls)://[\w.\-]+:\d+", scheduler):
-        address = scheduler
     else:
-        raise ModelError(f"scheduler must be None, 'local', 'local-cluster' or an address tcp://host:port, got "
-                         f"{scheduler!r}")  # fmt: skip
+        address = scheduler
     try:
         client = Client(address, timeout=f"{timeout}s")
     except (OSError, TimeoutError) as error:
@@ -1095,7 +1113,9 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
                          "was lost: the blocks already written stay in out") from None  # fmt: skip
     try:
         link = client.dashboard_link
-        remaining, idle, attempt = list(todo), 0, 0
+        remaining, idle, attempt, compiled = list(todo), 0, 0, {}
+        if remaining and _shares_cache(scheduler):  # compiled once here, then loaded by every worker from the cache
+            _warm(setup)
         while remaining:
             if idle >= DASK_ROUNDS:
                 raise ModelError(f"the Dask workers were lost {idle} times in a row before blocks "
@@ -1103,7 +1123,9 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
             attempt += 1
             try:
                 client.wait_for_workers(1, timeout=timeout)
-                client.run(_warm, 1)  # every worker loads its compiled kernels before work arrives
+                # every worker loads the blocks' compiled kernels before work arrives (compiles them when the
+                # cache it sees lacks them: a remote worker's first study)
+                compiled = client.run(_warm, replace(setup, runs=1, block=1), 1)
                 shared = client.scatter(setup, broadcast=True)
             except Exception as error:  # workers lost while starting: the next round
                 if isinstance(error, TimeoutError) and not client.scheduler_info()["workers"]:
@@ -1125,7 +1147,8 @@ def _on_dask(setup: Setup, todo: list[int], scheduler: str, workers: int, timeou
                 remaining.remove(futures[future])
                 arrivals += 1
             idle = 0 if arrivals else idle + 1
-        return {"dashboard": link, "workers": len(client.scheduler_info()["workers"]), "rounds": attempt}
+        return {"dashboard": link, "workers": len(client.scheduler_info()["workers"]), "rounds": attempt,
+                "compiled_on_workers": {worker: len(names) for worker, names in compiled.items()}}  # fmt: skip
     finally:
         client.close()
         if cluster is not None:

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armdyn import inputs
+from armdyn.dynamics import lagrange
 from armdyn.errors import ModelError
 from armdyn.io.urdf_out import ARMDYN_NAMESPACE
 from armdyn.model.arm import Link
@@ -358,7 +359,8 @@ def load_urdf(
     A joint whose motion moves no mass or inertia in any configuration (its subtree is
     massless, or only a point mass on its own axis or a thin rod along it, or its motion repeats
     that of the joints before it) makes M(q) singular for every q, and forward dynamics
-    undefined. Such joints are found by factoring M(q) (LDL^T, parents first) at 4 random
+    undefined. Such joints are found by factoring M(q) (the Lagrange-Euler M of
+    armdyn.dynamics.lagrange, in NumPy: loading compiles no kernel; LDL^T, parents first) at 4 random
     configurations within the joint limits (a range wider than a turn, or 2 m, is sampled
     on a turn, or 2 m, inside it): joint j counts when its pivot is zero at every one
     (below 1e-9 M_jj, or M_jj below 1e-13 of M's largest diagonal entry). A file whose
@@ -531,7 +533,10 @@ def _massless_joints(arm: Robot) -> list[str]:
     joint whose pivot vanishes at every sample is named. Exact zeros survive rounding only
     approximately, hence the relative thresholds ``_PIVOT_RELATIVE`` and ``_DIAGONAL_RELATIVE``.
     This covers what a rule on the subtree's mass alone would miss (a point mass on the
-    joint's own axis, repeated axes) and uses M as the dynamics compute it.
+    joint's own axis, repeated axes). M is the Lagrange-Euler one in NumPy
+    (armdyn.dynamics.lagrange.inertia_matrix, Lewis, Dawson and Abdallah 2004, eq. 3.2.30,
+    with the motors' reflected inertia), the reference the compiled kernels are tested
+    against: loading an arm compiles and loads no kernel.
     """
     lower, upper = arm.qlim
     # A range wider than 2 span (unlimited, or 1e16 as some files write) is sampled on 2 span inside it, nearest
@@ -541,11 +546,7 @@ def _massless_joints(arm: Robot) -> list[str]:
     middle = np.clip(0.0, np.where(wide, lower + span, 0.0), np.where(wide, upper - span, 0.0))
     lower, upper = np.where(wide, middle - span, lower), np.where(wide, middle + span, upper)
     q = np.random.default_rng(_SEED).uniform(lower, upper, (_SAMPLES, arm.n))
-    # M's columns M e_j as inverse dynamics at rest without gravity (no velocity, friction or gravity terms): the
-    # inverse-dynamics kernel is the one a user calls first, so loading an arm compiles (on an empty Numba cache)
-    # or loads no kernel of its own; one state at a time, the one-state kernel compiling much faster than the batch
-    still, rest = arm.with_gravity([0.0, 0.0, 0.0]), np.zeros(arm.n)
-    work = np.stack([np.column_stack([still.inverse_dynamics(x, rest, e) for e in np.eye(arm.n)]) for x in q])
+    work = lagrange.inertia_matrix(arm, q)  # NumPy (3.2.30): loading an arm compiles no kernel
     diagonal = np.diagonal(work, axis1=1, axis2=2).copy()
     largest = diagonal.max(axis=1)
     zero = np.zeros((_SAMPLES, arm.n), dtype=bool)

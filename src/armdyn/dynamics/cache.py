@@ -12,7 +12,8 @@ user's cache folder (``$XDG_CACHE_HOME/armdyn`` or ``~/.cache/armdyn``); with Nu
 NUMBA_CACHE_DIR set, that folder. When none can be written (a read-only install and a
 read-only home), the kernels are compiled in memory, for this process only, with one
 RuntimeWarning; a damaged cache file is removed and its kernel compiled again, with a
-RuntimeWarning (numba_compat.GuardedCache).
+RuntimeWarning (numba_compat.GuardedCache). ``compiles()`` names the functions Numba compiles (rather
+than loads from the cache) while a block of code runs: how a Dask worker shows it found its kernels cached.
 """
 
 from __future__ import annotations
@@ -22,10 +23,12 @@ import os
 import shutil
 import tempfile
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from types import FunctionType
 
-from numba.core import config
+from numba.core import config, event
 
 from armdyn.dynamics.numba_compat import GuardedLocator, install_locator
 
@@ -127,6 +130,31 @@ class KernelCacheLocator(GuardedLocator):
                 locator.in_memory = True
                 warn_in_memory(f"{locator.get_cache_path()} cannot be written ({error})")
         return locator
+
+
+class _CompileListener(event.Listener):
+    """Numba's "numba:compile" events, which a dispatcher sends only when it compiles (a signature it
+    loads from the cache sends none): the compiled functions' qualified names."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+
+    def on_start(self, event: event.Event) -> None:
+        function = getattr(event.data.get("dispatcher"), "py_func", None)
+        self.names.append(f"{getattr(function, '__module__', '?')}.{getattr(function, '__qualname__', '?')}")
+
+    def on_end(self, event: event.Event) -> None:
+        pass
+
+
+@contextmanager
+def compiles() -> Iterator[list[str]]:
+    """The functions Numba compiles (not loads from its cache) in this process while the block runs: a list,
+    filled as they compile, of their qualified names (armdyn's kernels, and Numba's own helpers they need).
+    Empty when every kernel called was loaded from the cache (or already in memory)."""
+    listener = _CompileListener()
+    with event.install_listener("numba:compile", listener):
+        yield listener.names
 
 
 def install() -> None:
