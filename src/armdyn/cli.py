@@ -64,7 +64,7 @@ INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-
 
 COMPILING = "compiling kernels (first run only)..."
 COMPILING_LINE = (
-    "armdyn: compiling its kernels (the first run after installing or changing armdyn: about 3 to 5 minutes on "
+    "armdyn: compiling its kernels (the first run after installing or changing armdyn: about 2 to 4 minutes on "
     "2 cores, all at once for `armdyn demo`, less for one command); they are cached for later runs"
 )
 
