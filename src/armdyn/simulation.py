@@ -64,7 +64,7 @@ from armdyn.errors import ArgumentError, ModelError, SimulationError
 from armdyn.files import atomic_write
 from armdyn.inputs import LARGEST_STATE, without_read_only
 from armdyn.observers.contact import ROW_SIZE, contact_torques, contacts_table
-from armdyn.observers.momentum import MomentumObserver, momentum_and_rate
+from armdyn.observers.momentum import MomentumObserver, momentum_and_rate, observe
 from armdyn.robot import Robot
 from armdyn.trajectories import desired
 
@@ -1303,8 +1303,6 @@ class _ContactSum:
 def _watched_after(result: Result, contacts: _ContactSum | None, observer: MomentumObserver | None,
                    held: bool) -> None:  # fmt: skip
     """The contacts' torque and the observer's residual of a run not in the compiled loop, from its samples."""
-    from armdyn.observers.momentum import observe
-
     if contacts is not None:
         samples = zip(result.t, result.q, result.qd, strict=True)
         result.external_torque = np.array([contacts.external_torque(t, q, qd) for t, q, qd in samples])

@@ -520,26 +520,36 @@ def contacts_table(arm: ArmModel, disturbance: object) -> np.ndarray | None:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _contact_force(row: np.ndarray, t: float, x: np.ndarray, v: np.ndarray, force: np.ndarray) -> None:
+def _contact_force(row: np.ndarray, t: float, x: tuple, v: tuple) -> tuple[float, float, float]:
     """F (world) of one contact at time t, the point at x moving at v: the push's s(t) F, or the clamp's
     -K (x - anchor) - D v (its anchor taken at the first call from ``start`` on); zeros when inactive."""
-    force[0] = force[1] = force[2] = 0.0
     elapsed = t - row[ROW_START]
-    if elapsed < 0.0:
-        return
+    if elapsed < 0.0 or (row[ROW_KIND] == PUSH_KIND and elapsed >= row[ROW_DURATION]):
+        return 0.0, 0.0, 0.0
     if row[ROW_KIND] == PUSH_KIND:
-        if elapsed >= row[ROW_DURATION]:
-            return
         scale = 1.0 if row[ROW_RISE] == 0.0 else min(1.0, elapsed / row[ROW_RISE])
-        for a in range(3):
-            force[a] = scale * row[ROW_FORCE + a]
-        return
+        return scale * row[ROW_FORCE], scale * row[ROW_FORCE + 1], scale * row[ROW_FORCE + 2]
     if row[ROW_ANCHORED] == 0.0:
-        for a in range(3):
-            row[ROW_ANCHOR + a] = x[a]
+        row[ROW_ANCHOR], row[ROW_ANCHOR + 1], row[ROW_ANCHOR + 2] = x
         row[ROW_ANCHORED] = 1.0
-    for a in range(3):
-        force[a] = -row[ROW_STIFFNESS] * (x[a] - row[ROW_ANCHOR + a]) - row[ROW_DAMPING] * v[a]
+    stiffness, damping = row[ROW_STIFFNESS], row[ROW_DAMPING]
+    return (
+        -stiffness * (x[0] - row[ROW_ANCHOR]) - damping * v[0],
+        -stiffness * (x[1] - row[ROW_ANCHOR + 1]) - damping * v[1],
+        -stiffness * (x[2] - row[ROW_ANCHOR + 2]) - damping * v[2],
+    )
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def _point_column(model: np.ndarray, work: np.ndarray, j: int, x: tuple) -> tuple[float, float, float]:
+    """Joint j's column of the point's linear Jacobian: z_j x (x - o_j) (revolute) or z_j (prismatic), with
+    the body's world pose at work[24 j + 12:] (Lewis, Dawson and Abdallah 2004, Appendix A)."""
+    o = 24 * j + 12
+    zx, zy, zz = work[o + 2], work[o + 5], work[o + 8]
+    if model[HEADER + STRIDE * j + KIND] != 0.0:
+        return zx, zy, zz
+    rx, ry, rz = x[0] - work[o + 9], x[1] - work[o + 10], x[2] - work[o + 11]
+    return zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx
 
 
 @njit(**NUMBA_OPTIONS)
@@ -550,10 +560,10 @@ def contact_torques(
     """tau_ext = sum over the contacts of J_p(q)^T F(t, q, qd): simulate's compiled contacts.
 
     With the world pose (R_j, o_j) of every body, a point x on link i and the joint axes z_j = R_j e_3 of
-    i's ancestors: tau_j = z_j . ((x - o_j) x F) for a revolute joint, z_j . F for a prismatic one, and
-    the point's velocity v = sum of z_j x (x - o_j) qd_j (revolute) or z_j qd_j (prismatic) (Lewis,
-    Dawson and Abdallah 2004, Appendix A: the geometric Jacobian's columns). ``contacts`` rows as
-    ``contacts_table`` writes them (a clamp's anchor is written into its row); ``work`` holds 24 n values.
+    i's ancestors, J_p's column j is z_j x (x - o_j) for a revolute joint and z_j for a prismatic one
+    (Lewis, Dawson and Abdallah 2004, Appendix A): tau_j = column_j . F, and the point's velocity is the
+    sum of column_j qd_j. ``contacts`` rows as ``contacts_table`` writes them (a clamp's anchor is written
+    into its row); ``work`` holds 24 n values.
     """
     n = int(model[N_JOINTS])
     for j in range(n):
@@ -564,48 +574,37 @@ def contact_torques(
         parent = int(model[HEADER + STRIDE * j + PARENT])
         joint_transform(model, j, q[j], work, 24 * j)
         world_pose(model, work, 24 * j, 24 * parent + 12, 24 * j + 12, parent >= 0)
-    x, v, lever, force = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for c in range(contacts.shape[0]):
         row = contacts[c]
         link = int(row[ROW_LINK])
         b, pose = HEADER + STRIDE * link, 24 * link + 12
-        for a in range(3):  # the point in the body frame, then in the world
-            lever[a] = model[b + LINK_POSITION + a]
-            for k in range(3):
-                lever[a] += model[b + LINK_ROTATION + 3 * a + k] * row[ROW_POINT + k]
-        for a in range(3):
-            x[a] = work[pose + 9 + a]
-            for k in range(3):
-                x[a] += work[pose + 3 * a + k] * lever[k]
-        v[0] = v[1] = v[2] = 0.0
+        lever = (  # the point in the body frame
+            model[b + LINK_POSITION] + model[b + LINK_ROTATION] * row[ROW_POINT]
+            + model[b + LINK_ROTATION + 1] * row[ROW_POINT + 1] + model[b + LINK_ROTATION + 2] * row[ROW_POINT + 2],
+            model[b + LINK_POSITION + 1] + model[b + LINK_ROTATION + 3] * row[ROW_POINT]
+            + model[b + LINK_ROTATION + 4] * row[ROW_POINT + 1] + model[b + LINK_ROTATION + 5] * row[ROW_POINT + 2],
+            model[b + LINK_POSITION + 2] + model[b + LINK_ROTATION + 6] * row[ROW_POINT]
+            + model[b + LINK_ROTATION + 7] * row[ROW_POINT + 1] + model[b + LINK_ROTATION + 8] * row[ROW_POINT + 2],
+        )  # fmt: skip
+        x = (  # and in the world
+            work[pose + 9] + work[pose] * lever[0] + work[pose + 1] * lever[1] + work[pose + 2] * lever[2],
+            work[pose + 10] + work[pose + 3] * lever[0] + work[pose + 4] * lever[1] + work[pose + 5] * lever[2],
+            work[pose + 11] + work[pose + 6] * lever[0] + work[pose + 7] * lever[1] + work[pose + 8] * lever[2],
+        )
+        vx = vy = vz = 0.0
         if row[ROW_KIND] == CLAMP_KIND:
             j = link
             while j >= 0:
-                o = 24 * j + 12
-                zx, zy, zz = work[o + 2], work[o + 5], work[o + 8]
-                if model[HEADER + STRIDE * j + KIND] == 0.0:
-                    rx, ry, rz = x[0] - work[o + 9], x[1] - work[o + 10], x[2] - work[o + 11]
-                    v[0] += (zy * rz - zz * ry) * qd[j]
-                    v[1] += (zz * rx - zx * rz) * qd[j]
-                    v[2] += (zx * ry - zy * rx) * qd[j]
-                else:
-                    v[0] += zx * qd[j]
-                    v[1] += zy * qd[j]
-                    v[2] += zz * qd[j]
+                cx, cy, cz = _point_column(model, work, j, x)
+                vx, vy, vz = vx + cx * qd[j], vy + cy * qd[j], vz + cz * qd[j]
                 j = int(model[HEADER + STRIDE * j + PARENT])
-        _contact_force(row, t, x, v, force)
-        if force[0] == 0.0 and force[1] == 0.0 and force[2] == 0.0:
+        fx, fy, fz = _contact_force(row, t, x, (vx, vy, vz))
+        if fx == 0.0 and fy == 0.0 and fz == 0.0:
             continue
         j = link
         while j >= 0:
-            o = 24 * j + 12
-            zx, zy, zz = work[o + 2], work[o + 5], work[o + 8]
-            if model[HEADER + STRIDE * j + KIND] == 0.0:
-                rx, ry, rz = x[0] - work[o + 9], x[1] - work[o + 10], x[2] - work[o + 11]
-                mx, my, mz = ry * force[2] - rz * force[1], rz * force[0] - rx * force[2], rx * force[1] - ry * force[0]
-                out[j] += zx * mx + zy * my + zz * mz
-            else:
-                out[j] += zx * force[0] + zy * force[1] + zz * force[2]
+            cx, cy, cz = _point_column(model, work, j, x)
+            out[j] += cx * fx + cy * fy + cz * fz
             j = int(model[HEADER + STRIDE * j + PARENT])
 
 
