@@ -54,6 +54,29 @@ def test_a_batch_is_its_states_and_out_is_written() -> None:
     assert np.allclose(forward[2][0, 1], np.linalg.inv(arm.inertia_matrix(Q[0, 1])))
 
 
+def test_one_state_out_goes_to_the_kernel_and_refuses_shared_memory() -> None:
+    arm = ad.models.puma560()
+    q, qd, tau = np.random.default_rng(5).uniform(-1, 1, (3, 6))
+    fresh = arm.forward_dynamics_derivatives(q, qd, tau)
+    out = [np.full((6, 6), np.nan) for _ in range(3)]
+    written = arm.forward_dynamics_derivatives(q, qd, tau, out=out)
+    assert all(w is o for w, o in zip(written, out, strict=True))
+    for got, want in zip(out, fresh, strict=True):
+        np.testing.assert_array_equal(got, want)
+    pair = (np.full((6, 6), np.nan), np.full((6, 6), np.nan))
+    arm.inverse_dynamics_derivatives(q, qd, tau, out=pair)
+    for got, want in zip(pair, arm.inverse_dynamics_derivatives(q, qd, tau), strict=True):
+        np.testing.assert_array_equal(got, want)
+    block = np.zeros((3, 6, 6))
+    with pytest.raises(ModelError, match="share memory"):
+        arm.forward_dynamics_derivatives(q, qd, tau, out=(block[0], block[1], block[0]))
+    states = np.zeros((7, 6))  # q is the first row, the output the next six: one span, apart
+    apart = arm.inverse_dynamics_derivatives(states[0], qd, tau, out=(np.zeros((6, 6)), states[1:]))
+    np.testing.assert_array_equal(apart[0], arm.inverse_dynamics_derivatives(np.zeros(6), qd, tau)[0])
+    with pytest.raises(ModelError, match="shares memory with a state"):
+        arm.inverse_dynamics_derivatives(states[1], qd, tau, out=(np.zeros((6, 6)), states[1:]))
+
+
 def test_forward_dynamics_derivatives_equal_central_differences_of_aba() -> None:
     arm = ad.models.stanford()
     rng = np.random.default_rng(2)

@@ -820,15 +820,15 @@ def inverse_dynamics_derivatives(
     model = _model(arm)
     n = arm.n
     eps = smoothing_per_joint(arm, coulomb_smoothing)
-    if out is None:  # one plain state: straight to the kernel
-        d_q, d_qd = np.empty((n, n)), np.empty((n, n))
+    if out is None or (type(out) in (tuple, list) and len(out) == 2):  # one plain state: straight to the kernel
+        d_q, d_qd = (np.empty((n, n)), np.empty((n, n))) if out is None else out
         try:
             if rnea_derivatives_one(model, q, qd, qdd, eps, d_q, d_qd, _NO_MATRIX) == 0:
                 return d_q, d_qd
         except _NOT_ONE_STATE:
             if (thawed := inputs.thawed(q, qd, qdd)) is not None:
                 q, qd, qdd = thawed
-                return inverse_dynamics_derivatives(arm, q, qd, qdd, coulomb_smoothing=coulomb_smoothing)
+                return inverse_dynamics_derivatives(arm, q, qd, qdd, out=out, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "qdd"), (q, qd, qdd), n, _where(arm))
     results = inputs.results(out, [(*batch, n, n)] * 2, ("d tau/dq", "d tau/dqd"), flat)
     if flat[0].shape[0]:
@@ -872,15 +872,15 @@ def forward_dynamics_derivatives(
     model = _model(arm)
     n = arm.n
     eps = smoothing_per_joint(arm, coulomb_smoothing)
-    if out is None:
-        d_q, d_qd, d_tau = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    if out is None or (type(out) in (tuple, list) and len(out) == 3):  # one plain state: straight to the kernel
+        d_q, d_qd, d_tau = (np.empty((n, n)), np.empty((n, n)), np.empty((n, n))) if out is None else out
         try:
             if forward_dynamics_derivatives_one(model, q, qd, tau, eps, d_q, d_qd, d_tau) == 0:
                 return d_q, d_qd, d_tau
         except _NOT_ONE_STATE:
             if (thawed := inputs.thawed(q, qd, tau)) is not None:
                 q, qd, tau = thawed
-                return forward_dynamics_derivatives(arm, q, qd, tau, coulomb_smoothing=coulomb_smoothing)
+                return forward_dynamics_derivatives(arm, q, qd, tau, out=out, coulomb_smoothing=coulomb_smoothing)
     batch, flat = inputs.batch_states(("q", "qd", "tau"), (q, qd, tau), n, _where(arm))
     results = inputs.results(out, [(*batch, n, n)] * 3, ("d qdd/dq", "d qdd/dqd", "d qdd/dtau"), flat)
     singular = np.full(flat[0].shape[0], -1)

@@ -96,7 +96,7 @@ from armdyn.dynamics.spatial import (
     world_motion_subspace,
     world_pose,
 )
-from armdyn.dynamics.status import OK, SINGULAR, WRONG_SHAPE
+from armdyn.dynamics.status import OK, SHARED, SINGULAR, WRONG_SHAPE
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
@@ -342,6 +342,31 @@ def shapes_status(model: np.ndarray, eps: np.ndarray, dq: np.ndarray, dqd: np.nd
     return OK
 
 
+@njit(inline="always", **NUMBA_OPTIONS)
+def spans_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the memory spans of two contiguous arrays overlap (an empty array overlaps nothing)."""
+    if a.size == 0 or b.size == 0:
+        return False
+    start_a, start_b = a.ctypes.data, b.ctypes.data
+    return start_a < start_b + b.nbytes and start_b < start_a + a.nbytes
+
+
+@njit(inline="always", **NUMBA_OPTIONS)
+def outputs_status(q: np.ndarray, qd: np.ndarray, third_state: np.ndarray, dq: np.ndarray, dqd: np.ndarray,
+                   third: np.ndarray) -> int:  # fmt: skip
+    """SHARED when an output's span overlaps another output's or a state's, else OK: the kernels read the
+    states while they write, so results given by the caller (``out=``) must stand apart."""
+    outputs = (dq, dqd, third)
+    for k in range(3):
+        for state in (q, qd, third_state):
+            if spans_overlap(outputs[k], state):
+                return SHARED
+        for j in range(k):
+            if spans_overlap(outputs[k], outputs[j]):
+                return SHARED
+    return OK
+
+
 @one_state(types.int64(MODEL, VECTOR, VECTOR, VECTOR, VECTOR, MATRIX, MATRIX, MATRIX))
 def rnea_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, eps: np.ndarray,
                          dq: np.ndarray, dqd: np.ndarray, M: np.ndarray) -> int:  # fmt: skip
@@ -350,6 +375,8 @@ def rnea_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: 
     status = states_status(model, q, qd, qdd, 3)
     if status == OK:
         status = shapes_status(model, eps, dq, dqd, M, True)
+    if status == OK:
+        status = outputs_status(q, qd, qdd, dq, dqd, M)
     if status == OK:
         n = int(model[N_JOINTS])
         rnea_derivatives_core(model, scratch(DERIVATIVE_JOINT * n + DERIVATIVE_FIXED), q, qd, qdd, eps, dq, dqd, M)
@@ -377,6 +404,8 @@ def forward_dynamics_derivatives_one(model: np.ndarray, q: np.ndarray, qd: np.nd
     status = states_status(model, q, qd, tau, 3)
     if status == OK:
         status = shapes_status(model, eps, dq, dqd, dtau, False)
+    if status == OK:
+        status = outputs_status(q, qd, tau, dq, dqd, dtau)
     if status == OK:
         work = scratch(derivatives_workspace(int(model[N_JOINTS])))
         if forward_dynamics_derivatives_core(model, work, q, qd, tau, eps, dq, dqd, dtau) >= 0:

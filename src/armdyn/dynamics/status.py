@@ -27,5 +27,8 @@ BAD_ROWS = 8
 """Task rows that are not 1 to n indices among 0-5 (operational.py)."""
 NOT_SQUARE = 9
 """A square task quantity asked of an output with m != n (operational.py)."""
+SHARED = 10
+"""A result's memory lies within the span of another result or of a state it is computed from (the
+caller's general path checks exactly and names them)."""
 SINGULAR = 50
 """M(q) is singular (forward dynamics and its derivatives)."""
