@@ -25,6 +25,7 @@ results_targets.md.
 from __future__ import annotations
 
 import os
+import re
 import statistics
 import sys
 import time
@@ -43,7 +44,7 @@ from bench_task import PANDA, PANDA_LOCKED, ROBOTS, pinocchio_model
 from harness import Candidate, Report, Table, arguments, check, describe, ratio, samples, us
 
 from armdyn import simulation
-from armdyn.control import ComputedTorque
+from armdyn.control import PID, ComputedTorque
 from armdyn.dynamics import kernels
 from armdyn.trajectories import Sinusoid
 
@@ -239,33 +240,74 @@ def stepper() -> list[list[str]]:
     ]  # fmt: skip
 
 
+def mujoco_servos(path: Path, kp: np.ndarray, kv: np.ndarray) -> object:
+    """The UR5 in MuJoCo (bench_ensemble.mujoco_ur5's settings) with a position servo on every joint:
+    force kp (ctrl - q) - kv qd, the law of armdyn's PID(kp, kv, 0) to a constant target."""
+    import mujoco
+
+    text = re.sub(r"<(visual|collision)>.*?</\1>", "", path.read_text(), flags=re.S)
+    spec = mujoco.MjSpec.from_string(text)
+    for k, joint in enumerate(spec.joints):
+        actuator = spec.add_actuator(name=f"servo_{joint.name}", target=joint.name)
+        actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        actuator.gainprm[0], actuator.biasprm[1], actuator.biasprm[2] = kp[k], -kp[k], -kv[k]
+        actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    model = spec.compile()
+    model.jnt_actfrclimited[:] = 0  # MuJoCo's URDF import clamps at the effort limits; armdyn's PID does not
+    model.opt.timestep, model.opt.integrator = 1e-3, mujoco.mjtIntegrator.mjINT_RK4
+    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_LIMIT
+    return model
+
+
 def rollouts() -> list[list[str]]:
-    """Part 3b: RUNS runs of the UR5 (zero torque, random starts) against mujoco.rollout on 2 threads."""
+    """Part 3b: RUNS runs of the UR5 against mujoco.rollout on 2 threads: from random starts under zero
+    torque, and PD to a random target from rest."""
     import mujoco
     from bench_ensemble import mujoco_ur5
     from mujoco import rollout
 
     path = ROBOTS / "ur_description" / "urdf" / "ur5_robot.urdf"
-    arm, model = ad.load_urdf(path), mujoco_ur5(path)
+    arm = ad.load_urdf(path)
     rng = np.random.default_rng(1)
     q0, qd0 = rng.uniform(-np.pi, np.pi, (RUNS, 6)), rng.uniform(-1, 1, (RUNS, 6))
-    size = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-    states = np.zeros((RUNS, size))
-    states[:, 1 : 1 + model.nq], states[:, 1 + model.nq : 1 + model.nq + model.nv] = q0, qd0
-    datas = [mujoco.MjData(model) for _ in range(THREADS)]
-    t_final = STEPS * 1e-3
-    ours = ad.simulate(arm, None, None, t_final=t_final, q0=q0, qd0=qd0, threads=THREADS)
-    finals, _ = rollout.rollout(model, datas, states, nstep=STEPS)
-    difference = float(np.abs(finals[:, -1, 1 : 1 + model.nq] - ours.summaries[:, 4]).max())
-    times = samples(
-        Candidate(lambda: ad.simulate(arm, None, None, t_final=t_final, q0=q0, qd0=qd0, threads=THREADS), 1, 5),
-        Candidate(lambda: rollout.rollout(model, datas, states, nstep=STEPS), 1, 5),
-    )
-    return [
-        [f"UR5, {RUNS} runs of {t_final:g} s at 1 ms, zero torque: mujoco.rollout / simulate(runs) (p10 / median)",
-         " / ".join(pair_ratio(times[0], times[1], invert=True)), ">= 5x"],
-        ["  largest difference of the final joint angles (rad)", f"{difference:.1e}", "<= 1e-9"],
-    ]  # fmt: skip
+    target = rng.uniform(-1.0, 1.0, (RUNS, 6))
+    t_final, bandwidth = STEPS * 1e-3, 20.0
+    inertia = np.diag(arm.inertia_matrix(np.zeros(arm.n)))  # gains that give each joint the same bandwidth
+    kp, kv = bandwidth**2 * inertia, 2.0 * bandwidth * inertia
+    rows = []
+    for case, model, law in (
+        ("zero torque, random starts", mujoco_ur5(path), None),
+        (f"PD to a random target from rest ({bandwidth:g} rad/s)", mujoco_servos(path, kp, kv), PID(kp, kv, 0.0)),
+    ):  # fmt: skip
+        size = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        states = np.zeros((RUNS, size))
+        start, velocity = (q0, qd0) if law is None else (np.zeros((RUNS, 6)), np.zeros((RUNS, 6)))
+        states[:, 1 : 1 + model.nq], states[:, 1 + model.nq : 1 + model.nq + model.nv] = start, velocity
+        controls = None if law is None else np.repeat(target[:, None, :], STEPS, axis=1)
+        paths = None if law is None else [Sinusoid(0.0, 1.0, 0.0, goal) for goal in target]
+        datas = [mujoco.MjData(model) for _ in range(THREADS)]
+
+        def ours(
+            law: object = law, paths: object = paths, start: np.ndarray = start, velocity: np.ndarray = velocity
+        ) -> object:
+            return ad.simulate(arm, law, paths, t_final=t_final, q0=start, qd0=velocity, runs=RUNS, threads=THREADS)
+
+        def theirs(
+            model: object = model, datas: list = datas, states: np.ndarray = states, controls: object = controls
+        ) -> object:
+            return rollout.rollout(model, datas, states, controls, nstep=STEPS)
+
+        finals, _ = theirs()
+        difference = float(np.abs(finals[:, -1, 1 : 1 + model.nq] - ours().summaries[:, 4]).max())
+        times = samples(Candidate(ours, 1, 5), Candidate(theirs, 1, 5))
+        note = "the same law" if law is None else "armdyn holds the law over each step, MuJoCo evaluates it per stage"
+        rows += [
+            [f"UR5, {RUNS} runs of {t_final:g} s at 1 ms, {case}: mujoco.rollout / simulate(runs) (p10 / median)",
+             " / ".join(pair_ratio(times[0], times[1], invert=True)), ">= 5x"],
+            [f"  largest difference of the final joint angles (rad; {note})", f"{difference:.1e}",
+             "<= 1e-9" if law is None else "-"],
+        ]  # fmt: skip
+    return rows
 
 
 def main() -> None:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import armdyn as ad
-from armdyn import control
+from armdyn import control, simulation
 from armdyn import trajectories as tr
 from armdyn.errors import ModelError
 from armdyn.simulation import SUMMARY_NAMES, plant_variants, run_summaries, simulate
@@ -115,6 +115,54 @@ def test_a_run_that_diverges_is_marked_and_the_others_finish() -> None:
     path = tr.Sinusoid(0.5, 1.0)
     result = simulate(arm, law, path, t_final=1.0, dt=1e-2, q0=[[0.0, 0.0], [0.5, 0.5]], gains=gains)
     assert result.finished.tolist() == [True, False] and result.outcome[1, 1] == 2
+
+
+@pytest.mark.parametrize(
+    "law", [None, control.PDGravity(80.0, 15.0), control.ComputedTorque(100.0, 20.0), control.PID(100.0, 20.0, 5.0)]
+)
+def test_many_runs_of_one_plant_advance_in_blocks_equal_to_the_run_by_run_loop(
+    puma: ad.Robot, law: object, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """From BLOCKED_RUNS runs of one plant the runs advance together (run_blocks, a last block partial); each
+    run's law, start, gains, trajectory and disturbance its own; the PUMA's Coulomb friction smoothed per run.
+    They equal run_many's run-by-run loop to rounding (the articulated-body pass and a Cholesky solve), and a
+    run that diverges stops at the same row."""
+    runs = simulation.BLOCKED_RUNS + 5
+    rng = np.random.default_rng(8)
+    q0 = puma.configuration("qn") + rng.uniform(-0.1, 0.1, (runs, 6))
+    gains = np.stack([np.stack([np.full(6, 60.0 + k), np.full(6, 15.0), np.zeros(6)]) for k in range(runs)])
+    gains[3, 0] = 1e9  # far beyond RK4's stability at 1 ms: this run diverges
+    paths = [tr.Sinusoid(0.1, 0.5 + 0.01 * k, 0.0, q0[k]) for k in range(runs)]
+    options = {"t_final": 0.4, "q0": q0, "qd0": rng.uniform(-0.2, 0.2, (runs, 6)), "keep": 7,
+               "disturbance": rng.uniform(-1, 1, (runs, 6))}  # fmt: skip
+    if law is not None:
+        options |= {"gains": gains}
+    calls = []
+    blocked = simulation.run_blocks
+
+    def counted(*args: object) -> None:
+        calls.append(len(args))
+        blocked(*args)
+
+    monkeypatch.setattr(simulation, "run_blocks", counted)
+    together = simulate(puma, law, paths if law is not None else None, **options)
+    assert calls, "the runs did not advance in blocks"
+    monkeypatch.setattr(simulation, "BLOCKED_RUNS", runs + 1)
+    one_by_one = simulate(puma, law, paths if law is not None else None, **options)
+    assert len(calls) == 1
+    np.testing.assert_array_equal(together.outcome, one_by_one.outcome)
+    if law is not None:
+        assert together.outcome[3, 1] == 2 and together.finished.sum() == runs - 1
+    else:
+        assert together.finished.all()
+    kept = together.finished  # the diverged run's last values are huge: its rounding differs in absolute terms
+    scale = np.abs(one_by_one.samples["tau"][kept]).max() + 1.0
+    for name in ("q", "qd", "q_d"):
+        got, want = together.samples[name][kept], one_by_one.samples[name][kept]
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-10, err_msg=name)
+    tau, reference = together.samples["tau"][kept], one_by_one.samples["tau"][kept]
+    np.testing.assert_allclose(tau, reference, rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(together.summaries[kept], one_by_one.summaries[kept], rtol=1e-9, atol=1e-10 * scale)
 
 
 def test_plant_variants_equal_robots_built_one_by_one(puma: ad.Robot) -> None:

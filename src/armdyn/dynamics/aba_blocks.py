@@ -75,7 +75,7 @@ ABA_BLOCK_ROWS = 76
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _slot(x: np.ndarray, j: int) -> np.ndarray:
+def block_slot(x: np.ndarray, j: int) -> np.ndarray:
     """Joint j's slot in a block's buffer (j = n: the base's), a view."""
     return x[j * ABA_BLOCK_ROWS * BLOCK : (j + 1) * ABA_BLOCK_ROWS * BLOCK]
 
@@ -343,7 +343,7 @@ def _acceleration_joint(x: np.ndarray, xp: np.ndarray) -> None:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _base_slot(model: np.ndarray, x: np.ndarray) -> None:
+def base_slot(model: np.ndarray, x: np.ndarray) -> None:
     """The base's slot: pose the identity, velocity zero, acceleration [0; -g] (gravity as an
     acceleration of the base, Featherstone 5.3). Its other rows only collect what the root
     joints carry to their parent in pass 2, and are never read."""
@@ -358,7 +358,7 @@ def _base_slot(model: np.ndarray, x: np.ndarray) -> None:
 
 
 @njit(inline="always", **NUMBA_OPTIONS)
-def _aba_block(model: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, first: int,
+def aba_block(model: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, first: int,
                size: int, qdd: np.ndarray, singular: np.ndarray) -> None:  # fmt: skip
     """The three passes for the states first .. first + size - 1 of the batch, in the buffer x. The
     rows of a last, partial block's missing states repeat its first state, so that they stay finite."""
@@ -372,15 +372,15 @@ def _aba_block(model: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray, 
             x[o + TAU_ * BLOCK + s] = tau[e, i]
     for i in range(n):
         parent = int(model[HEADER + STRIDE * i + PARENT])
-        _motion_joint(model, i, _slot(x, i), _slot(x, parent if parent >= 0 else n))
-        _inertia_joint(model, i, _slot(x, i))
+        _motion_joint(model, i, block_slot(x, i), block_slot(x, parent if parent >= 0 else n))
+        _inertia_joint(model, i, block_slot(x, i))
     for i in range(n - 1, -1, -1):
         parent = int(model[HEADER + STRIDE * i + PARENT])
-        _pivot_joint(model, i, _slot(x, i))
-        _carry_joint(_slot(x, i), _slot(x, parent if parent >= 0 else n))
+        _pivot_joint(model, i, block_slot(x, i))
+        _carry_joint(block_slot(x, i), block_slot(x, parent if parent >= 0 else n))
     for i in range(n):
         parent = int(model[HEADER + STRIDE * i + PARENT])
-        _acceleration_joint(_slot(x, i), _slot(x, parent if parent >= 0 else n))
+        _acceleration_joint(block_slot(x, i), block_slot(x, parent if parent >= 0 else n))
     for s in range(size):
         joint = -1
         for i in range(n):
@@ -404,7 +404,7 @@ def aba_blocks(
     chunks = min(blocks, BATCH_CHUNKS)
     for chunk in prange(chunks):
         x = np.empty((n + 1) * ABA_BLOCK_ROWS * BLOCK)
-        _base_slot(model, _slot(x, n))
+        base_slot(model, block_slot(x, n))
         for block in range(chunk * blocks // chunks, (chunk + 1) * blocks // chunks):
             first = block * BLOCK
-            _aba_block(model, x, q, qd, tau, first, min(BLOCK, count - first), qdd, singular)
+            aba_block(model, x, q, qd, tau, first, min(BLOCK, count - first), qdd, singular)
