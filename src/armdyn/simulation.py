@@ -2030,7 +2030,7 @@ def _run_block(
             summaries[first + s, RMS_ERROR, i] = math.sqrt(summaries[first + s, RMS_ERROR, i] / rows)
 
 
-@njit(inline="always", **NUMBA_OPTIONS)
+@njit(**NUMBA_OPTIONS)  # called, not inlined: the loop's two call sites share one compiled pass
 def _block_rates(
     plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray,
     applied: np.ndarray, stage_tau: np.ndarray, qdd: np.ndarray, singular: np.ndarray, size: int,
