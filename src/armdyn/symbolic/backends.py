@@ -328,8 +328,8 @@ def accelerations(dynamics: Dynamics, q: Sequence[Any], qd: Sequence[Any], tau: 
     ops : Operations
         The backend's functions.
     eps : sequence, callable or None
-        The smoothing velocities per joint, or a function of M's diagonal giving them, or None for N's own
-        (exact) Coulomb law.
+        The smoothing velocities per joint, or a function of M's diagonal giving them, or None for the exact
+        Coulomb law (N's own, or added here when N has none).
 
     Returns
     -------
@@ -344,10 +344,11 @@ def accelerations(dynamics: Dynamics, q: Sequence[Any], qd: Sequence[Any], tau: 
     if callable(eps):
         eps = eps([H[i][i] for i in range(n)])
     rhs = [tau[i] - N[i] for i in range(n)]
-    if eps is not None:
+    if not dynamics.exact:
         for i, levels in enumerate(dynamics.coulomb):
             if levels != (0.0, 0.0):
-                rhs[i] = rhs[i] - smooth_coulomb_law(qd[i], levels, eps[i], ops)
+                law = exact_coulomb(qd[i], levels, ops) if eps is None else smooth_coulomb_law(qd[i], levels, eps[i], ops)
+                rhs[i] = rhs[i] - law
     return ltdl_solve(H, rhs, dynamics.parents)[0], eps
 
 
