@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import armdyn as ad
-from armdyn.dynamics.friction import coulomb_vector, smooth_coulomb_vector, sign_law_table
+from armdyn.dynamics.friction import coulomb_vector, sign_law_table, smooth_coulomb_vector
 from armdyn.errors import MissingDependencyError, ModelError
 from armdyn.simulation import _smoothing
 from armdyn.symbolic import generate_code
@@ -47,8 +47,7 @@ ARMS |= {
     "panda7": lambda: _urdf(URDFS["panda"], locked=LOCKED),
     "xarm7": lambda: _urdf(ROBOTS / "xarm_description" / "urdf" / "xarm7.urdf"),
 }
-SLOW = {"panda7", "xarm7"}  # their JAX functions run node by node outside jit: some seconds
-CASES = [pytest.param(name, marks=pytest.mark.slow) if name in SLOW else name for name in ARMS]
+CASES = list(ARMS)
 
 
 @functools.cache
@@ -69,7 +68,11 @@ def close(got: object, expected: object, tolerance: float = 1e-12) -> bool:
 
 def states(arm: ad.Robot, count: int = 3, speed: float = 1.5) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     rng = np.random.default_rng(arm.n)
-    return rng.uniform(-1.5, 1.5, (count, arm.n)), rng.uniform(-speed, speed, (count, arm.n)), rng.normal(size=(count, arm.n))
+    return (
+        rng.uniform(-1.5, 1.5, (count, arm.n)),
+        rng.uniform(-speed, speed, (count, arm.n)),
+        rng.normal(size=(count, arm.n)),
+    )
 
 
 def call(backend: str, function: Any, *states: np.ndarray) -> np.ndarray:
@@ -168,34 +171,25 @@ def test_casadi_and_jax_derivatives_equal_the_analytic_ones(name: str) -> None:
 
 
 @pytest.mark.parametrize("backend", ["casadi", "jax"])
-def test_the_steps_jacobian_is_the_chain_of_the_analytic_derivatives(backend: str) -> None:
-    """d x_next / d x through the four stages, each stage's [0 I; dqdd/dq dqdd/dqd] and d qdd/d tau from
-    forward_dynamics_derivatives under the same smoothing (a fixed eps: its slope included)."""
+def test_the_steps_jacobian_is_armdyns_rk4_derivatives_chain(backend: str) -> None:
+    """d x_next / dx and d x_next / d tau of the step (CasADi's or JAX's differentiation) equal
+    armdyn.statespace.rk4_step's chain of analytic derivatives through the four stages, the Coulomb law
+    smoothed by the same eps (its slope included)."""
     arm, dt, eps = arm_of("puma560"), 0.01, 0.05
     n = arm.n
     q, qd, tau = (s[0] for s in states(arm, speed=0.1))
-    generated = generate_code(arm, ["step"], backend=backend, coulomb_smoothing=eps)
     x = np.r_[q, qd]
+    generated = generate_code(arm, ["step"], backend=backend, coulomb_smoothing=eps)
     if backend == "casadi":
         J_x, J_tau, _ = _casadi_jacobians_step(generated.step, n)(x, tau, dt)
+        x_next = np.array(generated.step(x, tau, dt)).ravel()
     else:
         J_x, J_tau = (np.asarray(J) for J in jax.jacfwd(generated.step, argnums=(0, 1))(x, tau, dt))
-    rate = smoothed_rate(arm, tau, np.full(n, eps))
-    dk_x: list[np.ndarray] = []
-    dk_tau: list[np.ndarray] = []
-    stage, inner_x, inner_tau = x, np.eye(2 * n), np.zeros((2 * n, n))
-    for weight in (0.5, 0.5, 1.0, None):  # the next stage's x + weight dt k
-        f_q, f_qd, f_tau = arm.forward_dynamics_derivatives(stage[:n], stage[n:], tau, coulomb_smoothing=eps)
-        A = np.block([[np.zeros((n, n)), np.eye(n)], [f_q, f_qd]])
-        dk_x.append(A @ inner_x)
-        dk_tau.append(A @ inner_tau + np.vstack([np.zeros((n, n)), f_tau]))
-        if weight is not None:
-            stage = x + weight * dt * rate(stage)
-            inner_x, inner_tau = np.eye(2 * n) + weight * dt * dk_x[-1], weight * dt * dk_tau[-1]
-    expected_x = np.eye(2 * n) + dt * (dk_x[0] + 2 * dk_x[1] + 2 * dk_x[2] + dk_x[3]) / 6
-    expected_tau = dt * (dk_tau[0] + 2 * dk_tau[1] + 2 * dk_tau[2] + dk_tau[3]) / 6
-    assert close(J_x, expected_x, 1e-10)
-    assert close(J_tau, expected_tau, 1e-10)
+        x_next = np.asarray(generated.step(x, tau, dt))
+    expected, A_d, B_d = ad.statespace.rk4_step(arm, q, qd, tau, dt, coulomb_smoothing=eps)
+    assert close(x_next, expected)
+    assert close(J_x, A_d, 1e-10)
+    assert close(J_tau, B_d, 1e-10)
 
 
 def _casadi_jacobians_step(step: Any, n: int) -> Callable[..., list[np.ndarray]]:
@@ -215,9 +209,17 @@ def test_jax_jit_vmap_and_grad() -> None:
     assert close(batched, arm.inverse_dynamics(q, qd, qdd))
     assert close(jax.jit(generated.M)(q[:8]), arm.inertia_matrix(q[:8]))  # leading axes without vmap
     weights = rng.normal(size=arm.n)
-    gradient = jax.grad(lambda q0: generated.tau(q0, qd[0], qdd[0]) @ weights)(q[0])
+    gradient = jax.jit(jax.grad(lambda q0: generated.tau(q0, qd[0], qdd[0]) @ weights))(q[0])
     assert close(gradient, weights @ arm.inverse_dynamics_derivatives(q[0], qd[0], qdd[0])[0], 1e-10)
-    steps = jax.jit(jax.vmap(generated.step, in_axes=(0, 0, None)))(np.hstack([q[:4], qd[:4]]), qdd[:4], 0.01)
+
+
+@pytest.mark.slow
+def test_jax_jit_and_vmap_of_the_step() -> None:
+    arm = arm_of("puma560")
+    generated = code("puma560", "jax")
+    rng = np.random.default_rng(5)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 4, arm.n))
+    steps = jax.jit(jax.vmap(generated.step, in_axes=(0, 0, None)))(np.hstack([q, qd]), qdd, 0.01)
     for k in range(4):
         assert close(steps[k], generated.step(np.r_[q[k], qd[k]], qdd[k], 0.01))
 

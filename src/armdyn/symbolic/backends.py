@@ -37,14 +37,17 @@ from typing import Any
 import numpy as np
 
 from armdyn import inputs
-from armdyn.dynamics.regressor import BaseParameters
+from armdyn.dynamics.friction import refuse_nonlinear_friction
+from armdyn.dynamics.regressor import BaseParameters, base_parameters
 from armdyn.errors import MissingDependencyError, ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic.newton_euler import (
+    ARGUMENTS,
+    FUNCTIONS,
+    GeneratedCode,
     GeneratedFunction,
     Graph,
     Trace,
-    Value,
     bodies,
     composite_inertia_matrix,
     generate,
@@ -238,7 +241,7 @@ def ltdl_solve(H: list[list[Any]], b: list[Any], parents: Sequence[int]) -> tupl
     return x, [H[i][i] for i in range(n)]
 
 
-def rk4_step(rate: Callable[[Any], Any], x: Any, dt: Any) -> Any:
+def runge_kutta_step(rate: Callable[[Any], Any], x: Any, dt: Any) -> Any:
     """One step of the classical fourth-order Runge-Kutta method of xd = rate(x) (simulate's RK4).
 
     Parameters
@@ -347,7 +350,9 @@ def accelerations(dynamics: Dynamics, q: Sequence[Any], qd: Sequence[Any], tau: 
     if not dynamics.exact:
         for i, levels in enumerate(dynamics.coulomb):
             if levels != (0.0, 0.0):
-                law = exact_coulomb(qd[i], levels, ops) if eps is None else smooth_coulomb_law(qd[i], levels, eps[i], ops)
+                law = (
+                    exact_coulomb(qd[i], levels, ops) if eps is None else smooth_coulomb_law(qd[i], levels, eps[i], ops)
+                )
                 rhs[i] = rhs[i] - law
     return ltdl_solve(H, rhs, dynamics.parents)[0], eps
 
@@ -495,7 +500,7 @@ class CasadiCode:
                 eps.append(used)  # the first stage's eps serves the whole step
                 return casadi.vertcat(state[n:], *qdd)
 
-            self.expressions["step"] = ([x, tau, dt], ["x", "tau", "dt"], rk4_step(rate, x, dt), "x_next")
+            self.expressions["step"] = ([x, tau, dt], ["x", "tau", "dt"], runge_kutta_step(rate, x, dt), "x_next")
         self.functions: dict[str, Any] = {name: self._function(name, name) for name in names}
 
     def _function(self, name: str, label: str) -> Any:
@@ -659,7 +664,9 @@ def _jax_function(jnp: Any, function: GeneratedFunction, ops: Operations, n: int
         return _stacked(jnp, evaluate(function, values, ops), batch, function.shape)
 
     traced.__name__ = traced.__qualname__ = function.name
-    traced.__doc__ = f"{function.name}({', '.join(arguments)}) of armdyn's generated code, for jax arrays (n,) or (..., n)."
+    traced.__doc__ = (
+        f"{function.name}({', '.join(arguments)}) of armdyn's generated code, for jax arrays (n,) or (..., n)."
+    )
     return traced
 
 
@@ -695,7 +702,7 @@ def _jax_step(jnp: Any, dynamics: Dynamics, ops: Operations, smoothing: str | fl
             return jnp.concatenate([jnp.broadcast_to(state[..., n:], (*shape, n)), _stacked(jnp, qdd, shape, (n,))],
                                    axis=-1)  # fmt: skip
 
-        return rk4_step(rate, x, h[..., None])
+        return runge_kutta_step(rate, x, h[..., None])
 
     step.__doc__ = "step(x, tau, dt): one RK4 step of x = [q; qd] under tau, for jax arrays (2n,) or (..., 2n)."
     return step
@@ -737,3 +744,68 @@ def backend_code(arm: Robot, backend: str, names: Sequence[str], base: BaseParam
         return JaxCode(arm, names, base, smoothing)
     raise ModelError(f"backend must be one of {BACKENDS}, got {backend!r}")
 
+
+def generate_code(arm: Robot, functions: Sequence[str] = FUNCTIONS, backend: str = "python",
+                  coulomb_smoothing: float | str = "auto") -> GeneratedCode | CasadiCode | JaxCode:  # fmt: skip
+    """Generated code for the robot equation of a numeric arm, by a customized Newton-Euler recursion
+    (Khalil and Kleinfinger 1987; the module docstring): tau, M, G and N as straight-line code whose
+    cost grows linearly with the joints (M: with their number of pairs).
+
+    Parameters
+    ----------
+    arm : Robot
+        An arm with numeric parameters (``Robot.packed`` not None).
+    functions : sequence of str, optional
+        Which of "tau", "M", "G", "N", "Vm" (the Christoffel-consistent Coriolis matrix) and "Wb" (the
+        base regressor: W_b(q, qd, qdd) phi_b = tau, with the regrouped base parameters phi_b, friction and
+        motor inertia included, in ``GeneratedCode.base``) to generate (default tau, M, G and N); with the
+        "casadi" and "jax" backends also "qdd" (forward dynamics, qdd(q, qd, tau)) and "step" (one RK4 step
+        of the state x = [q; qd], step(x, tau, dt)).
+    backend : str, optional
+        "python" (default: source for Python, C and Numba), "casadi" (``casadi.Function`` s of SX, with
+        CasADi's derivatives and C code generator) or "jax" (pure ``jax.numpy`` functions in float64);
+        see armdyn.symbolic.backends.
+    coulomb_smoothing : float or "auto", optional
+        "step" only: eps of the smoothed Coulomb law, as ``simulate``'s (default "auto": its rule
+        max(1e-3, max|Tc| dt / M_ii), at the step's start); 0 is the exact law.
+
+    Returns
+    -------
+    GeneratedCode, CasadiCode or JaxCode
+        GeneratedCode (python): its ``python()``, ``c()``, ``operation_counts()`` and ``compile()``;
+        CasadiCode and JaxCode: the functions as attributes (``.tau``, ``.M`` ...) and in ``.functions``.
+
+    Raises
+    ------
+    armdyn.ModelError
+        When a function name or the backend is unknown, "qdd" or "step" is asked of the python backend,
+        ``coulomb_smoothing`` is not "auto" or a number >= 0, or tau, N, "qdd" or "step" is asked of an arm
+        with Stribeck or sigmoid friction (the message names the link).
+    armdyn.ArgumentError
+        When ``arm`` is not a Robot or has symbolic parameters (use derive for closed forms in symbols).
+    armdyn.MissingDependencyError
+        When the backend's package is not installed (``pip install 'armdyn[casadi]'`` or ``'armdyn[jax]'``).
+    """
+
+    inputs.arm_argument(arm, Robot, numeric=True, why=" (use derive for closed forms in symbols)")
+    packed = arm.packed
+    assert packed is not None  # a numeric arm is packed
+    try:
+        names = [functions] if isinstance(functions, str) else list(functions)
+    except TypeError:
+        names = None
+    if not isinstance(backend, str) or backend not in BACKENDS:
+        raise ModelError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    known = tuple(ARGUMENTS) + (tuple(DYNAMICS_ARGUMENTS) if backend != "python" else ())
+    if names is None or not names or any(not isinstance(f, str) or f not in known for f in names):
+        dynamics = " ('qdd' and 'step' with backend 'casadi' or 'jax')" if backend == "python" else ""
+        raise ModelError(f"functions must be some of {known}{dynamics} (one or more names), got {functions!r}")
+    if "tau" in names or "N" in names:
+        refuse_nonlinear_friction(arm, "generated code of tau and N")
+    if "qdd" in names or "step" in names:
+        refuse_nonlinear_friction(arm, "generated code of the forward dynamics")
+    base = base_parameters(arm, at_rest=True) if "Wb" in names else None
+    if backend != "python":
+        return backend_code(arm, backend, list(dict.fromkeys(names)), base, coulomb_smoothing)
+    columns = () if base is None else [int(c) for c in base.columns]
+    return GeneratedCode(arm, {name: generate(packed, name, columns) for name in names}, base)
