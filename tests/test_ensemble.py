@@ -8,6 +8,7 @@ import pytest
 import armdyn as ad
 from armdyn import control, simulation
 from armdyn import trajectories as tr
+from armdyn.dynamics.packed import HEADER, POSITION
 from armdyn.errors import ModelError
 from armdyn.simulation import SUMMARY_NAMES, plant_variants, run_summaries, simulate
 
@@ -163,6 +164,33 @@ def test_many_runs_of_one_plant_advance_in_blocks_equal_to_the_run_by_run_loop(
     tau, reference = together.samples["tau"][kept], one_by_one.samples["tau"][kept]
     np.testing.assert_allclose(tau, reference, rtol=0, atol=1e-10 * scale)
     np.testing.assert_allclose(together.summaries[kept], one_by_one.summaries[kept], rtol=1e-9, atol=1e-10 * scale)
+
+
+def test_runs_with_payloads_and_scaled_masses_advance_in_blocks(
+    puma: ad.Robot, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Plants that differ in masses, inertias and friction (a payload, plant_variants) share a block: each run's
+    own in the block pass; a plant with other kinematics sends the runs run by run."""
+    runs = simulation.BLOCKED_RUNS + 3
+    rng = np.random.default_rng(9)
+    payloads = {"payload_mass": rng.uniform(0, 2, runs), "payload_com": rng.uniform(-0.05, 0.05, (runs, 3))}
+    scales = {"mass_scale": rng.uniform(0.8, 1.2, (runs, 6)), "friction_scale": rng.uniform(0.5, 1.5, (runs, 6))}
+    plants = plant_variants(puma, runs, **payloads, **scales)
+    assert simulation.blocks_apply(plants.packed, np.arange(runs))
+    q0 = puma.configuration("qn") + rng.uniform(-0.1, 0.1, (runs, 6))
+    options = {"t_final": 0.3, "q0": q0, "plants": plants, "keep": 5}
+    law, path = control.ComputedTorque(100.0, 20.0), tr.Sinusoid(0.1, 0.5, 0.0, puma.configuration("qn"))
+    together = simulate(puma, law, path, **options)
+    monkeypatch.setattr(simulation, "BLOCKED_RUNS", runs + 1)
+    one_by_one = simulate(puma, law, path, **options)
+    assert together.finished.all() and one_by_one.finished.all()
+    for name in ("q", "qd"):
+        np.testing.assert_allclose(together.samples[name], one_by_one.samples[name], rtol=0, atol=1e-10, err_msg=name)
+    np.testing.assert_allclose(together.summaries, one_by_one.summaries, rtol=1e-9, atol=1e-9)
+    other = plants.packed.copy()
+    other[1, HEADER + POSITION] += 0.01  # another arm's kinematics: not one block
+    assert not simulation.blocks_apply(other, np.arange(runs))
+    assert not simulation.blocks_apply(plants.packed[:3], np.arange(3))
 
 
 def test_plant_variants_equal_robots_built_one_by_one(puma: ad.Robot) -> None:

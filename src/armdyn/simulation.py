@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from armdyn import control, inputs, memory, trajectories
 from armdyn.control import COMPUTED_TORQUE, control_law
 from armdyn.dynamics import api
-from armdyn.dynamics.aba_blocks import ABA_BLOCK_ROWS, aba_block, base_slot, block_slot
+from armdyn.dynamics.aba_blocks import ABA_BLOCK_ROWS, LANE_FIELDS, aba_block, base_slot, block_slot, lane_parameters
 from armdyn.dynamics.crba import mass_matrix_and_bias
 from armdyn.dynamics.drives import closed_loop, hold_limits
 from armdyn.dynamics.friction import sign_law_table, smooth_coulomb, smooth_coulomb_vector, stribeck_vector
@@ -1916,17 +1916,32 @@ def run_many(
 
 
 BLOCKED_RUNS = 2 * BLOCK
-"""Runs of one plant from which simulate(runs=N) advances them together, BLOCK at a time (run_blocks)."""
+"""Runs from which simulate(runs=N) advances them together, BLOCK at a time (run_blocks), when their plants are
+one arm but for its masses, inertias and friction (a payload, plant_variants)."""
+
+
+def blocks_apply(packed: np.ndarray, plant_of: np.ndarray) -> bool:
+    """Whether run_blocks takes the runs: BLOCKED_RUNS or more, their plants (rows of ``packed``) equal but in
+    the per-state fields of the block pass (aba_blocks.LANE_FIELDS: masses, first moments, inertias, viscous
+    friction; the Coulomb and Stribeck laws are the loop's, per run)."""
+    if plant_of.shape[0] < BLOCKED_RUNS:
+        return False
+    used = packed[np.unique(plant_of)]
+    shared = np.ones(packed.shape[1], dtype=bool)
+    for j in range(int(packed[0, N_JOINTS])):
+        shared[HEADER + STRIDE * j + np.array(LANE_FIELDS)] = False
+    return bool(np.all(used[:, shared] == used[:1, shared]))
 
 
 @njit(parallel=True, **NUMBA_OPTIONS)
 def run_blocks(
     plants: tuple, models: tuple, control: tuple, path: tuple, starts: tuple, timing: tuple, outputs: tuple
 ) -> None:
-    """run_many's runs, all of one plant (plant_of[0]), advanced together BLOCK runs at a time: each RK4
-    stage is one articulated-body pass over the block's states (aba_blocks.aba_block, the state index
-    innermost so that the arithmetic runs in SIMD lanes), blocks in parallel. Each run's law, trajectory,
-    start, disturbance and Coulomb smoothing are its own, as in run_many; the same arguments and outputs.
+    """run_many's runs advanced together BLOCK runs at a time: each RK4 stage is one articulated-body pass over
+    the block's states (aba_blocks.aba_block, the state index innermost so that the arithmetic runs in SIMD
+    lanes), blocks in parallel. The runs' plants are one arm but for the per-state fields of the pass
+    (blocks_apply); each run's plant, law, trajectory, start, disturbance and Coulomb law are its own, as in
+    run_many; the same arguments and outputs.
 
     The plant's accelerations are the articulated-body algorithm's (Featherstone 2008, 7.3) with a polynomial
     sine and cosine, where run_many solves M qdd = tau - N by Cholesky: the two agree to rounding, and the runs
@@ -1953,9 +1968,14 @@ def _run_block(
     dt, rows, chunk, every, after = timing
     summaries, outcomes, kept_q, kept_qd, kept_tau, kept_qd_d = outputs
     n = q0s.shape[1]
-    plant, coulomb = plant_rows[plant_of[0]], plant_coulombs[plant_of[0]]
+    plant = plant_rows[plant_of[first]]  # the kinematics, shared; each run's masses and friction: lane_parameters
     x = np.empty((n + 1) * ABA_BLOCK_ROWS * BLOCK)
     base_slot(plant, block_slot(x, n))
+    coulombs = np.empty((BLOCK, n, 4))
+    for s in range(BLOCK):  # a last block's absent runs repeat its first (aba_block reads its states for them)
+        p = plant_of[first + (s if s < size else 0)]
+        lane_parameters(plant_rows[p], x, s)
+        coulombs[s] = plant_coulombs[p]
     lanes = np.zeros((11, BLOCK, n))  # rows of absent runs (a last, partial block) stay zero, never read
     q, qd, qs, vs, acc, sum_q, sum_v = lanes[0], lanes[1], lanes[2], lanes[3], lanes[4], lanes[5], lanes[6]
     tau_held, applied, stage_tau, e_int = lanes[7], lanes[8], lanes[9], lanes[10]
@@ -1965,7 +1985,7 @@ def _run_block(
     for s in range(size):
         r = first + s
         q[s], qd[s] = q0s[r], qd0s[r]
-        eps[s] = _auto_smoothing(plant, coulomb, q0s[r], qd0s[r], dt)
+        eps[s] = _auto_smoothing(plant_rows[plant_of[r]], coulombs[s], q0s[r], qd0s[r], dt)
         summaries[r, :, :] = 0.0
     for k in range(rows):
         t = (k // chunk * chunk) * dt + (k % chunk) * dt  # run_many's time: its chunk's start, then the step
@@ -1986,7 +2006,7 @@ def _run_block(
                 applied[s, i] = tau_held[s, i] - disturbances[r, i]
         if running == 0:
             break
-        _block_rates(plant, coulomb, eps, x, q, qd, applied, stage_tau, acc, singular, size)
+        _block_rates(plant, coulombs, eps, x, q, qd, applied, stage_tau, acc, singular, size)
         for s in range(size):
             r = first + s
             if outcomes[r, 0] >= 0:
@@ -2009,7 +2029,7 @@ def _run_block(
                     step_q = qd[s, i] if c == 0 else vs[s, i]
                     qs[s, i] = q[s, i] + scale * dt * step_q
                     vs[s, i] = qd[s, i] + scale * dt * acc[s, i]
-            _block_rates(plant, coulomb, eps, x, qs, vs, applied, stage_tau, acc, singular, size)
+            _block_rates(plant, coulombs, eps, x, qs, vs, applied, stage_tau, acc, singular, size)
             for s in range(size):
                 stopped[s] = max(stopped[s], singular[s])
         for s in range(size):
@@ -2032,14 +2052,15 @@ def _run_block(
 
 @njit(**NUMBA_OPTIONS)  # called, not inlined: the loop's two call sites share one compiled pass
 def _block_rates(
-    plant: np.ndarray, coulomb: np.ndarray, eps: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray,
+    plant: np.ndarray, coulombs: np.ndarray, eps: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray,
     applied: np.ndarray, stage_tau: np.ndarray, qdd: np.ndarray, singular: np.ndarray, size: int,
 ) -> None:  # fmt: skip
-    """qdd = FD(q, qd, tau - Fd_smooth(qd)) for the block's runs: their smoothed Coulomb law in the torque, the
-    plant's own Coulomb and Stribeck terms being taken out (packed_plants); no joint stops (run_many has none)."""
+    """qdd = FD(q, qd, tau - Fd_smooth(qd)) for the block's runs: each run's smoothed Coulomb law (``coulombs``
+    (BLOCK, n, 4)) in the torque, the plants' own Coulomb and Stribeck terms being taken out (packed_plants); no
+    joint stops (run_many has none)."""
     for s in range(size):
         for i in range(q.shape[1]):
-            stage_tau[s, i] = applied[s, i] - smooth_coulomb(coulomb, eps[s], i, qd[s, i])
+            stage_tau[s, i] = applied[s, i] - smooth_coulomb(coulombs[s], eps[s], i, qd[s, i])
     aba_block(plant, x, q, qd, stage_tau, 0, size, qdd, singular)
 
 
@@ -2159,8 +2180,7 @@ def launch_many(
         numba.set_num_threads(inputs.integer(threads, "threads", 1, largest))
     try:
         plants, models, law, path, starts = without_read_only((plants, models, law, path, starts))
-        one_plant = runs >= BLOCKED_RUNS and bool(np.all(plants[2] == plants[2][0]))
-        runner = run_blocks if one_plant else run_many
+        runner = run_blocks if blocks_apply(plants[0], plants[2]) else run_many
         runner(plants, models, law, path, starts, (dt, rows, chunk, every, after), (summaries, outcome, *samples))
     finally:
         numba.set_num_threads(previous)

@@ -60,11 +60,16 @@ from armdyn.dynamics.rnea_blocks import BLOCK  # one block size for both batch k
 from armdyn.dynamics.spatial import NUMBA_OPTIONS, sin_cos
 
 # A slot's rows: world pose R (9) and p (3), v, S, c (6 each), I^A (21, upper triangle row by row),
-# p^A, U (6 each), D, u, a (6), the state's q, qd, tau, the result qdd, the pivot flag.
-R_, P_, V_, S_, C_, IA_, PA_, U_, D_, VALUE_, A_, Q_, QD_, TAU_, QDD_, FLAG_ = (
-    0, 9, 12, 18, 24, 30, 51, 57, 63, 64, 65, 71, 72, 73, 74, 75,
+# p^A, U (6 each), D, u, a (6), the state's q, qd, tau, the result qdd, the pivot flag; then the body's
+# mass, first moment (3) and inertia (6) and the joint's viscous friction, per state, so that the states
+# of a block may be arms that differ in those (a payload, scaled masses or friction: run_blocks).
+R_, P_, V_, S_, C_, IA_, PA_, U_, D_, VALUE_, A_, Q_, QD_, TAU_, QDD_, FLAG_, BODY_, VISCOUS_ = (
+    0, 9, 12, 18, 24, 30, 51, 57, 63, 64, 65, 71, 72, 73, 74, 75, 76, 86,
 )  # fmt: skip
-ABA_BLOCK_ROWS = 76
+ABA_BLOCK_ROWS = 87
+LANE_FIELDS = (MASS, FIRST_MOMENT, FIRST_MOMENT + 1, FIRST_MOMENT + 2, INERTIA, INERTIA + 1, INERTIA + 2,
+               INERTIA + 3, INERTIA + 4, INERTIA + 5, VISCOUS)  # fmt: skip
+"""The offsets in a joint's packed row of the per-state rows BODY_ .. VISCOUS_."""
 
 # The per-joint steps below are compiled as functions of their own, not inlined: inlined, both
 # slots are offsets into one buffer, and LLVM, unable to group their accesses for its overlap
@@ -155,12 +160,11 @@ def _motion_joint(model: np.ndarray, i: int, x: np.ndarray, xp: np.ndarray) -> N
 def _inertia_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
     """Pass 1, inertias, for joint i (its slot x, pose and v set): I^A = the body's inertia in the
     world, p^A = v x* I v."""
-    b = HEADER + STRIDE * i
-    mass = model[b + MASS]
-    bhx, bhy, bhz = model[b + FIRST_MOMENT], model[b + FIRST_MOMENT + 1], model[b + FIRST_MOMENT + 2]
-    k = b + INERTIA
-    b0, b1, b2, b3, b4, b5 = model[k], model[k + 1], model[k + 2], model[k + 3], model[k + 4], model[k + 5]
     for s in range(BLOCK):
+        mass, bhx = x[BODY_ * BLOCK + s], x[(BODY_ + 1) * BLOCK + s]
+        bhy, bhz = x[(BODY_ + 2) * BLOCK + s], x[(BODY_ + 3) * BLOCK + s]
+        b0, b1, b2 = x[(BODY_ + 4) * BLOCK + s], x[(BODY_ + 5) * BLOCK + s], x[(BODY_ + 6) * BLOCK + s]
+        b3, b4, b5 = x[(BODY_ + 7) * BLOCK + s], x[(BODY_ + 8) * BLOCK + s], x[(BODY_ + 9) * BLOCK + s]
         r00, r01, r02 = x[R_ * BLOCK + s], x[(R_ + 1) * BLOCK + s], x[(R_ + 2) * BLOCK + s]
         r10, r11, r12 = x[(R_ + 3) * BLOCK + s], x[(R_ + 4) * BLOCK + s], x[(R_ + 5) * BLOCK + s]
         r20, r21, r22 = x[(R_ + 6) * BLOCK + s], x[(R_ + 7) * BLOCK + s], x[(R_ + 8) * BLOCK + s]
@@ -227,7 +231,7 @@ def _pivot_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
     """Pass 2 for joint i, its own part: U = I^A S, D = S^T U + armature, u = tau - F - S^T p^A,
     and the pivot flag (1 where D is not above the model's PIVOT_FLOOR, NaN included)."""
     b = HEADER + STRIDE * i
-    armature, viscous, floor = model[b + ARMATURE], model[b + VISCOUS], model[PIVOT_FLOOR]
+    armature, floor = model[b + ARMATURE], model[PIVOT_FLOOR]
     positive, negative = model[b + COULOMB_POS], model[b + COULOMB_NEG]
     nonlinear = model[b + STRIBECK_FORCE] != 0.0 or model[b + SIGMOID_AMPLITUDE] != 0.0
     for s in range(BLOCK):
@@ -259,7 +263,7 @@ def _pivot_joint(model: np.ndarray, i: int, x: np.ndarray) -> None:
         x[(U_ + 4) * BLOCK + s] = u4
         x[(U_ + 5) * BLOCK + s] = u5
         x[D_ * BLOCK + s] = D
-        x[VALUE_ * BLOCK + s] = x[TAU_ * BLOCK + s] - (viscous * rate + coulomb) - spa
+        x[VALUE_ * BLOCK + s] = x[TAU_ * BLOCK + s] - (x[VISCOUS_ * BLOCK + s] * rate + coulomb) - spa
         x[FLAG_ * BLOCK + s] = 0.0 if floor < D else 1.0
     if nonlinear:  # the Stribeck and sigmoid friction, a loop of its own (the one above stays as it vectorizes)
         for s in range(BLOCK):
@@ -391,6 +395,15 @@ def aba_block(model: np.ndarray, x: np.ndarray, q: np.ndarray, qd: np.ndarray, t
         singular[first + s] = joint
 
 
+@njit(inline="always", **NUMBA_OPTIONS)
+def lane_parameters(model: np.ndarray, x: np.ndarray, lane: int) -> None:
+    """Every joint's per-state rows (LANE_FIELDS) of state ``lane`` of the block in x, from a packed model."""
+    for i in range(int(model[N_JOINTS])):
+        b, o = HEADER + STRIDE * i, i * ABA_BLOCK_ROWS * BLOCK
+        for k in range(len(LANE_FIELDS)):
+            x[o + (BODY_ + k) * BLOCK + lane] = model[b + LANE_FIELDS[k]]
+
+
 @njit(parallel=True, **NUMBA_OPTIONS)
 def aba_blocks(
     model: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, qdd: np.ndarray, singular: np.ndarray
@@ -405,6 +418,8 @@ def aba_blocks(
     for chunk in prange(chunks):
         x = np.empty((n + 1) * ABA_BLOCK_ROWS * BLOCK)
         base_slot(model, block_slot(x, n))
+        for lane in range(BLOCK):
+            lane_parameters(model, x, lane)
         for block in range(chunk * blocks // chunks, (chunk + 1) * blocks // chunks):
             first = block * BLOCK
             aba_block(model, x, q, qd, tau, first, min(BLOCK, count - first), qdd, singular)
