@@ -33,11 +33,12 @@ from numba import njit, prange
 from numpy.typing import ArrayLike
 
 from armdyn import control, inputs, memory, trajectories
-from armdyn.control import COMPUTED_TORQUE, control_law
+from armdyn.control import COMPUTED_TORQUE, PD_GRAVITY, control_law
+from armdyn.control.joint import LIMIT
 from armdyn.dynamics import api
 from armdyn.dynamics.aba_blocks import ABA_BLOCK_ROWS, LANE_FIELDS, aba_block, base_slot, block_slot, lane_parameters
 from armdyn.dynamics.crba import mass_matrix_and_bias
-from armdyn.dynamics.drives import closed_loop, hold_limits
+from armdyn.dynamics.drives import KI, KP, KV, closed_loop, hold_limits
 from armdyn.dynamics.friction import sign_law_table, smooth_coulomb, smooth_coulomb_vector, stribeck_vector
 from armdyn.dynamics.linalg import cholesky, cholesky_solve_vector
 from armdyn.dynamics.packed import (
@@ -59,7 +60,8 @@ from armdyn.dynamics.packed import (
     VISCOUS,
     workspace_size,
 )
-from armdyn.dynamics.rnea_blocks import BLOCK
+from armdyn.dynamics.rnea import GRAVITY_ONLY, INVERSE_DYNAMICS
+from armdyn.dynamics.rnea_blocks import BLOCK, rnea_block
 from armdyn.dynamics.spatial import NUMBA_OPTIONS
 from armdyn.dynamics.status import OK
 from armdyn.errors import ArgumentError, ModelError, SimulationError
@@ -1982,6 +1984,12 @@ def _run_block(
     eps, goals = np.empty((BLOCK, n)), np.empty((BLOCK, 3, n))
     singular = np.full(BLOCK, -1)
     work, u, M_, Nv = np.empty(workspace_size(n)), np.empty(n), np.empty((n, n)), np.empty(n)
+    shared_model = model_of[first]
+    for s in range(size):
+        if model_of[first + s] != shared_model:
+            shared_model = -1
+    blocked_law = shared_model >= 0 and kind in (COMPUTED_TORQUE, PD_GRAVITY)
+    law_lanes, law_store, law_x = np.zeros((2, BLOCK, n)), np.empty((n, 30, BLOCK)), np.zeros(45 * BLOCK)
     for s in range(size):
         r = first + s
         q[s], qd[s] = q0s[r], qd0s[r]
@@ -1999,13 +2007,18 @@ def _run_block(
             if kind > 0 and k % hold == 0:
                 for i in range(n):
                     e_int[s, i] += (goals[s, 0, i] - q[s, i]) * dt * hold
-                m = model_of[r]
-                control_law(kind, model_rows[m], model_coulombs[m], eps[s], work, q[s], qd[s], goals[s], e_int[s],
-                            gains[r], u, M_, Nv, tau_held[s])  # fmt: skip
-            for i in range(n):
-                applied[s, i] = tau_held[s, i] - disturbances[r, i]
+                if not blocked_law:
+                    m = model_of[r]
+                    control_law(kind, model_rows[m], model_coulombs[m], eps[s], work, q[s], qd[s], goals[s],
+                                e_int[s], gains[r], u, M_, Nv, tau_held[s])  # fmt: skip
         if running == 0:
             break
+        if blocked_law and k % hold == 0:
+            _block_law(kind, model_rows[shared_model], model_coulombs[shared_model], eps, gains[first : first + size],
+                       q, qd, goals, e_int, law_lanes, law_store, law_x, tau_held, size)  # fmt: skip
+        for s in range(size):
+            for i in range(n):
+                applied[s, i] = tau_held[s, i] - disturbances[first + s, i]
         _block_rates(plant, coulombs, eps, x, q, qd, applied, stage_tau, acc, singular, size)
         for s in range(size):
             r = first + s
@@ -2048,6 +2061,41 @@ def _run_block(
     for s in range(size):
         for i in range(n):
             summaries[first + s, RMS_ERROR, i] = math.sqrt(summaries[first + s, RMS_ERROR, i] / rows)
+
+
+@njit(**NUMBA_OPTIONS)
+def _block_law(
+    kind: int, model: np.ndarray, model_coulomb: np.ndarray, eps: np.ndarray, gains: np.ndarray, q: np.ndarray,
+    qd: np.ndarray, goals: np.ndarray, e_int: np.ndarray, lanes: np.ndarray, store: np.ndarray, x: np.ndarray,
+    tau: np.ndarray, size: int,
+) -> None:  # fmt: skip
+    """The computed-torque or PD-plus-gravity law (control.joint) of a block's runs on one model, by one RNEA
+    pass over their states (rnea_blocks.rnea_block): M u + N = RNEA(q, qd, u), the model's Coulomb law
+    compensated with each run's smoothing, or G(q) = RNEA(q, 0, 0) without friction; then each run's
+    saturation. ``lanes`` (2, BLOCK, n) holds u and the RNEA result."""
+    u, law = lanes[0], lanes[1]
+    n = q.shape[1]
+    if kind == COMPUTED_TORQUE:
+        for s in range(size):
+            for i in range(n):
+                u[s, i] = (
+                    goals[s, 2, i] + gains[s, KV, i] * (goals[s, 1, i] - qd[s, i])
+                    + gains[s, KP, i] * (goals[s, 0, i] - q[s, i]) + gains[s, KI, i] * e_int[s, i]
+                )  # fmt: skip
+        rnea_block(model, q, qd, u, INVERSE_DYNAMICS, 0, size, store, x, law)
+        for s in range(size):
+            for i in range(n):
+                law[s, i] += smooth_coulomb(model_coulomb, eps[s], i, qd[s, i])
+    else:
+        rnea_block(model, q, qd, qd, GRAVITY_ONLY, 0, size, store, x, law)
+        for s in range(size):
+            for i in range(n):
+                law[s, i] += gains[s, KP, i] * (goals[s, 0, i] - q[s, i]) + gains[s, KV, i] * (
+                    goals[s, 1, i] - qd[s, i]
+                )
+    for s in range(size):
+        for i in range(n):
+            tau[s, i] = min(max(law[s, i], -gains[s, LIMIT, i]), gains[s, LIMIT, i])
 
 
 @njit(**NUMBA_OPTIONS)  # called, not inlined: the loop's two call sites share one compiled pass

@@ -135,64 +135,77 @@ def _force_to_parent_block(x: np.ndarray) -> None:
         ) = force_to_parent((r00, r01, r02, r10, r11, r12, r20, r21, r22), (px, py, pz), (nx, ny, nz), (fx, fy, fz))
 
 
-@njit(parallel=True, **NUMBA_OPTIONS)
-def rnea_blocks(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> None:
-    """RNEA (rnea.rnea_core) over a (B, n) batch, BLOCK states at a time, blocks in parallel.
+@njit(inline="always", **NUMBA_OPTIONS)
+def rnea_block(
+    model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, first: int, size: int,
+    store: np.ndarray, x: np.ndarray, tau: np.ndarray,
+) -> None:  # fmt: skip
+    """RNEA (rnea.rnea_core) for the states first .. first + size - 1 of the (B, n) arrays, the state index
+    innermost; scratch ``store`` (n, 30, BLOCK) and ``x`` (45 BLOCK, zeros before a first block).
 
     flags as in rnea: WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION.
     """
-    count, n = q.shape[0], int(model[N_JOINTS])
+    n = int(model[N_JOINTS])
     ascale = 1.0 if (flags & WITH_QDD) != 0 else 0.0
     gscale = 1.0 if (flags & WITH_GRAVITY) != 0 else 0.0
     vscale = 1.0 if (flags & WITH_VELOCITY) != 0 else 0.0
     friction = (flags & WITH_FRICTION) != 0
+    for i in range(n):
+        parent = int(model[HEADER + STRIDE * i + PARENT])
+        for s in range(size):
+            x[12 * BLOCK + s] = q[first + s, i]
+            x[13 * BLOCK + s] = qd[first + s, i]
+            x[14 * BLOCK + s] = qdd[first + s, i]
+        for row in range(12):
+            if parent >= 0:
+                for s in range(BLOCK):
+                    x[row * BLOCK + s] = store[parent, 12 + row, s]
+            else:
+                value = -gscale * model[GRAVITY + row - 9] if row >= 9 else 0.0
+                for s in range(BLOCK):
+                    x[row * BLOCK + s] = value
+        _forward_block(model, i, x, vscale, ascale)
+        for row in range(30):
+            for s in range(BLOCK):
+                store[i, row, s] = x[(15 + row) * BLOCK + s]
+    for i in range(n - 1, -1, -1):
+        b = HEADER + STRIDE * i
+        prism = model[b + KIND]
+        armature = ascale * model[b + ARMATURE]
+        nonlinear = friction and (model[b + STRIBECK_FORCE] != 0.0 or model[b + SIGMOID_AMPLITUDE] != 0.0)
+        for s in range(size):
+            value = prism * store[i, 29, s] + (1.0 - prism) * store[i, 26, s] + armature * qdd[first + s, i]
+            if friction:
+                value += model[b + VISCOUS] * qd[first + s, i]
+                value += coulomb(model, i, qd[first + s, i])
+            tau[first + s, i] = value
+        if nonlinear:  # the Stribeck and sigmoid friction, a loop of its own (the one above stays as it is)
+            for s in range(size):
+                tau[first + s, i] += nonlinear_friction(model, i, qd[first + s, i])
+        parent = int(model[b + PARENT])
+        if parent >= 0:
+            for row in range(12):
+                for s in range(BLOCK):
+                    x[row * BLOCK + s] = store[i, row, s]
+            for row in range(6):
+                for s in range(BLOCK):
+                    x[(12 + row) * BLOCK + s] = store[i, 24 + row, s]
+            _force_to_parent_block(x)
+            for row in range(6):
+                for s in range(BLOCK):
+                    store[parent, 24 + row, s] += x[(18 + row) * BLOCK + s]
+
+
+@njit(parallel=True, **NUMBA_OPTIONS)
+def rnea_blocks(model: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, flags: int, tau: np.ndarray) -> None:
+    """RNEA (rnea.rnea_core) over a (B, n) batch, BLOCK states at a time (rnea_block), blocks in parallel.
+
+    flags as in rnea: WITH_QDD, WITH_GRAVITY, WITH_VELOCITY, WITH_FRICTION.
+    """
+    count, n = q.shape[0], int(model[N_JOINTS])
     blocks = (count + BLOCK - 1) // BLOCK
     for block in prange(blocks):
         first = block * BLOCK
-        size = min(BLOCK, count - first)
         store = np.empty((n, 30, BLOCK))  # per joint: R, p, v, a, f
         x = np.zeros(45 * BLOCK)
-        for i in range(n):
-            parent = int(model[HEADER + STRIDE * i + PARENT])
-            for s in range(size):
-                x[12 * BLOCK + s] = q[first + s, i]
-                x[13 * BLOCK + s] = qd[first + s, i]
-                x[14 * BLOCK + s] = qdd[first + s, i]
-            for row in range(12):
-                if parent >= 0:
-                    for s in range(BLOCK):
-                        x[row * BLOCK + s] = store[parent, 12 + row, s]
-                else:
-                    value = -gscale * model[GRAVITY + row - 9] if row >= 9 else 0.0
-                    for s in range(BLOCK):
-                        x[row * BLOCK + s] = value
-            _forward_block(model, i, x, vscale, ascale)
-            for row in range(30):
-                for s in range(BLOCK):
-                    store[i, row, s] = x[(15 + row) * BLOCK + s]
-        for i in range(n - 1, -1, -1):
-            b = HEADER + STRIDE * i
-            prism = model[b + KIND]
-            armature = ascale * model[b + ARMATURE]
-            nonlinear = friction and (model[b + STRIBECK_FORCE] != 0.0 or model[b + SIGMOID_AMPLITUDE] != 0.0)
-            for s in range(size):
-                value = prism * store[i, 29, s] + (1.0 - prism) * store[i, 26, s] + armature * qdd[first + s, i]
-                if friction:
-                    value += model[b + VISCOUS] * qd[first + s, i]
-                    value += coulomb(model, i, qd[first + s, i])
-                tau[first + s, i] = value
-            if nonlinear:  # the Stribeck and sigmoid friction, a loop of its own (the one above stays as it is)
-                for s in range(size):
-                    tau[first + s, i] += nonlinear_friction(model, i, qd[first + s, i])
-            parent = int(model[b + PARENT])
-            if parent >= 0:
-                for row in range(12):
-                    for s in range(BLOCK):
-                        x[row * BLOCK + s] = store[i, row, s]
-                for row in range(6):
-                    for s in range(BLOCK):
-                        x[(12 + row) * BLOCK + s] = store[i, 24 + row, s]
-                _force_to_parent_block(x)
-                for row in range(6):
-                    for s in range(BLOCK):
-                        store[parent, 24 + row, s] += x[(18 + row) * BLOCK + s]
+        rnea_block(model, q, qd, qdd, flags, first, min(BLOCK, count - first), store, x, tau)
