@@ -28,6 +28,7 @@ from tests.helpers import Item, documented_parameters, function_item, has_sectio
 # Modules walked in full besides those named in armdyn.__all__.
 MODULES = (
     "armdyn.symbolic",
+    "armdyn.symbolic.backends",
     "armdyn.kinematics",
     "armdyn.models",
     "armdyn.statespace",

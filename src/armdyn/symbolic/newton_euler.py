@@ -35,7 +35,6 @@ from typing import TypeAlias, cast
 import numpy as np
 
 from armdyn import inputs
-from armdyn.dynamics.friction import refuse_nonlinear_friction
 from armdyn.dynamics.packed import (
     ARMATURE,
     COULOMB_NEG,
@@ -55,7 +54,7 @@ from armdyn.dynamics.packed import (
     STRIDE,
     VISCOUS,
 )
-from armdyn.dynamics.regressor import BaseParameters, base_parameters
+from armdyn.dynamics.regressor import BaseParameters
 from armdyn.errors import ModelError
 from armdyn.robot import Robot
 from armdyn.symbolic.codegen import c_header, c_prefix, comment_text, header_guard
@@ -1067,46 +1066,3 @@ def checked_entry(function: GeneratedFunction, n: int) -> str:
 
 
 LARGEST = 1e15
-
-
-def generate_code(arm: Robot, functions: Sequence[str] = FUNCTIONS) -> GeneratedCode:
-    """Generated code for the robot equation of a numeric arm, by a customized Newton-Euler recursion
-    (Khalil and Kleinfinger 1987; the module docstring): tau, M, G and N as straight-line code whose
-    cost grows linearly with the joints (M: with their number of pairs).
-
-    Parameters
-    ----------
-    arm : Robot
-        An arm with numeric parameters (``Robot.packed`` not None).
-    functions : sequence of str, optional
-        Which of "tau", "M", "G", "N", "Vm" (the Christoffel-consistent Coriolis matrix) and "Wb" (the
-        base regressor: W_b(q, qd, qdd) phi_b = tau, with the regrouped base parameters phi_b, friction and
-        motor inertia included, in ``GeneratedCode.base``) to generate (default tau, M, G and N).
-
-    Returns
-    -------
-    GeneratedCode
-        Its ``python()``, ``c()``, ``operation_counts()`` and ``compile()``.
-
-    Raises
-    ------
-    armdyn.ModelError
-        When a function name is unknown, or tau or N is asked of an arm with Stribeck or sigmoid friction
-        (the message names the link).
-    armdyn.ArgumentError
-        When ``arm`` is not a Robot or has symbolic parameters (use derive for closed forms in symbols).
-    """
-    inputs.arm_argument(arm, Robot, numeric=True, why=" (use derive for closed forms in symbols)")
-    packed = arm.packed
-    assert packed is not None  # a numeric arm is packed
-    try:
-        names = [functions] if isinstance(functions, str) else list(functions)
-    except TypeError:
-        names = None
-    if names is None or not names or any(not isinstance(f, str) or f not in ARGUMENTS for f in names):
-        raise ModelError(f"functions must be some of {tuple(ARGUMENTS)} (one or more names), got {functions!r}")
-    if "tau" in names or "N" in names:
-        refuse_nonlinear_friction(arm, "generated code of tau and N")
-    base = base_parameters(arm, at_rest=True) if "Wb" in names else None
-    columns = () if base is None else [int(c) for c in base.columns]
-    return GeneratedCode(arm, {name: generate(packed, name, columns) for name in names}, base)
