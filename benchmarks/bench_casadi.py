@@ -116,7 +116,7 @@ def adam_functions(arm: Arm) -> dict[str, casadi.Function | str]:
     built: dict[str, casadi.Function | str] = {}
     try:
         adam = KinDynComputations(str(arm.urdf), list(arm.arm.joint_names), gravity=np.array([*GRAVITY, 0, 0, 0]))
-    except Exception as error:  # noqa: BLE001 -- recorded as the outcome
+    except Exception as error:  # recorded as the outcome
         return dict.fromkeys(("M", "bias", "qdd", "aba"), f"{type(error).__name__}: {error}")
     builders: dict[str, Callable[[], casadi.Function]] = {
         "M": lambda: casadi.Function("M", [q], [adam.mass_matrix(base, q)[6:, 6:]]),
@@ -125,13 +125,13 @@ def adam_functions(arm: Arm) -> dict[str, casadi.Function | str]:
             "qdd",
             [q, qd, tau],
             [casadi.solve(adam.mass_matrix(base, q)[6:, 6:], tau - adam.bias_force(base, q, rest, qd)[6:])],
-        ),  # fmt: skip
+        ),
         "aba": lambda: casadi.Function("aba", [q, qd, tau], [adam.aba(base, q, rest, qd, tau)[6:]]),
     }
     for name, build in builders.items():
         try:
             built[name] = build()
-        except Exception as error:  # noqa: BLE001 -- recorded as the outcome
+        except Exception as error:  # recorded as the outcome
             built[name] = f"{type(error).__name__}: {str(error).strip().splitlines()[-1]}"
     return built
 
@@ -262,9 +262,22 @@ def counts_table(arms_: list[Arm], rng: np.random.Generator) -> Table:
         if isinstance(aba, casadi.Function):
             gap = checked(arm, "qdd", aba, state)
             aba_note += f" (differs from the fixed-base qdd by {gap:.1e})" if gap > 1e-8 else ""
-        table.rows.append([entry.name, str(n), count(ours["M"]), count(theirs["M"]), ratio(ours["M"], theirs["M"]),
-                           count(ours["bias"]), count(theirs["bias"]), ratio(ours["bias"], theirs["bias"]),
-                           count(ours["qdd"]), count(theirs["qdd"]), ratio(ours["qdd"], theirs["qdd"]), aba_note])  # fmt: skip
+        table.rows.append(
+            [
+                entry.name,
+                str(n),
+                count(ours["M"]),
+                count(theirs["M"]),
+                ratio(ours["M"], theirs["M"]),
+                count(ours["bias"]),
+                count(theirs["bias"]),
+                ratio(ours["bias"], theirs["bias"]),
+                count(ours["qdd"]),
+                count(theirs["qdd"]),
+                ratio(ours["qdd"], theirs["qdd"]),
+                aba_note,
+            ]
+        )
     table.notes = [
         "The arms without friction (arm.without_friction(): adam models none), gravity (0, 0, -9.81) in both; "
         "adam's functions for a fixed base: its base transform the identity and its base velocity zero, as "
@@ -299,8 +312,18 @@ def ocp_table(module: object) -> Table:
         alone = statistics.median(run.motion.solve_seconds for run in solved)
         medians[name] = (total, alone)
         instructions = (armdyn_qdd(entry.arm) if name == "armdyn" else adam_qdd(entry)).n_instructions()
-        table.rows.append([name, f"{instructions:,}", str(first.iterations), first.status, f"{first.cost:.6f}",
-                           seconds(total), seconds(alone), f"{1e3 * alone / max(first.iterations, 1):.1f}"])  # fmt: skip
+        table.rows.append(
+            [
+                name,
+                f"{instructions:,}",
+                str(first.iterations),
+                first.status,
+                f"{first.cost:.6f}",
+                seconds(total),
+                seconds(alone),
+                f"{1e3 * alone / max(first.iterations, 1):.1f}",
+            ]
+        )
     table.notes = [
         f"adam over armdyn: end to end {medians['adam'][0] / medians['armdyn'][0]:.2f}x, the solve alone "
         f"{medians['adam'][1] / medians['armdyn'][1]:.2f}x (medians of {REPEATS} runs, interleaved).",
