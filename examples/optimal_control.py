@@ -77,14 +77,15 @@ def quintic_guess(start: np.ndarray, goal: np.ndarray, duration: float, interval
 
 def point_to_point(
     step: casadi.Function, start: np.ndarray, goal: np.ndarray, limit: np.ndarray, duration: float, intervals: int,
-    guess: tuple[np.ndarray, np.ndarray], options: dict | None = None,
+    guess: tuple[np.ndarray, np.ndarray], options: dict | None = None, joint_limits: np.ndarray | None = None,
 ) -> Motion:  # fmt: skip
     """Minimum effort from rest at ``start`` to rest at ``goal`` by multiple shooting with IPOPT.
 
     The variables are the knots' states X (2n, K + 1) and the torques U (n, K); the constraints
     X[:, k+1] = step(X[:, k], U[:, k], h) (the RK4 defects), the boundary states and |U| <= limit (as bounds); the
     cost is sum |U[:, k]|^2 h. ``guess`` gives the first states (K + 1, 2n) and torques (K, n); ``options`` are
-    nlpsol's, IPOPT by default. The build (the NLP, its derivatives, the solver) and the solve are timed apart."""
+    nlpsol's, IPOPT by default; ``joint_limits`` (2, n), lower and upper, bound q at every
+    knot. The build (the NLP, its derivatives, the solver) and the solve are timed apart."""
     started = time.perf_counter()
     n, h = start.size, duration / intervals
     X, U = casadi.MX.sym("X", 2 * n, intervals + 1), casadi.MX.sym("U", n, intervals)
@@ -94,6 +95,8 @@ def point_to_point(
     lower, upper = np.full((intervals + 1, 2 * n), -np.inf), np.full((intervals + 1, 2 * n), np.inf)
     lower[0] = upper[0] = np.concatenate([start, np.zeros(n)])
     lower[-1] = upper[-1] = np.concatenate([goal, np.zeros(n)])
+    if joint_limits is not None:
+        lower[1:-1, :n], upper[1:-1, :n] = joint_limits[0], joint_limits[1]
     torques = np.tile(limit, intervals)
     first = np.concatenate([guess[0].ravel(), np.clip(guess[1], -limit, limit).ravel()])
     built = time.perf_counter()
@@ -148,22 +151,24 @@ TORQUE_WEIGHT = 1e-2
 
 class MPC:
     """Model-predictive control of one arm about a pose: each call solves the ``horizon``-interval multiple-shooting
-    problem min sum_k (x_k - x_ref)' W (x_k - x_ref) + r |tau_k|^2 over knots and torques, the first knot fixed
-    to the measured state, from the last call's solution shifted by one interval (warm start), and returns the
-    first torque. The NLP and its solver are built once; the measured state enters as bounds on the first knot."""
+    problem min sum_k (x_k - x_ref)' W (x_k - x_ref) + r |tau_k - tau_ref|^2 over knots and torques (x_ref the pose
+    at rest, tau_ref the torque that holds the model there, its G(pose)), the first knot fixed to the measured
+    state, from the last call's solution shifted by one interval (warm start), and returns the first torque. The
+    NLP and its solver are built once; the measured state enters as bounds on the first knot."""
 
-    def __init__(self, step: casadi.Function, pose: np.ndarray, limit: np.ndarray, horizon: int, period: float):
+    def __init__(self, step: casadi.Function, pose: np.ndarray, hold_torque: np.ndarray, limit: np.ndarray,
+                 horizon: int, period: float) -> None:  # fmt: skip
         n = self.n = pose.size
         X, U = casadi.MX.sym("X", 2 * n, horizon + 1), casadi.MX.sym("U", n, horizon)
         self.reference = np.concatenate([pose, np.zeros(n)])
         error = X - self.reference
-        cost = casadi.sum2(casadi.sum1(STATE_WEIGHT * error**2)) + TORQUE_WEIGHT * casadi.sumsqr(U)
+        cost = casadi.sum2(casadi.sum1(STATE_WEIGHT * error**2)) + TORQUE_WEIGHT * casadi.sumsqr(U - hold_torque)
         ends = step.map(horizon)(X[:, :-1], U, period)
         problem = {"x": casadi.veccat(X, U), "f": cost, "g": casadi.vec(ends - X[:, 1:])}
         self.solver = casadi.nlpsol("mpc", "ipopt", problem, IPOPT)
         self.lower = np.concatenate([np.full(2 * n * (horizon + 1), -np.inf), np.tile(-limit, horizon)])
         self.upper = np.concatenate([np.full(2 * n * (horizon + 1), np.inf), np.tile(limit, horizon)])
-        self.guess = np.concatenate([np.tile(self.reference, horizon + 1), np.zeros(n * horizon)])
+        self.guess = np.concatenate([np.tile(self.reference, horizon + 1), np.tile(hold_torque, horizon)])
         self.horizon = horizon
         self.seconds: list[float] = []
 
@@ -200,9 +205,10 @@ def hold(duration: float = 1.0, horizon: int = HORIZON, refresh: bool = False, a
     n = arm.n
     plants = dynamics(arm), dynamics(arm.with_payload(PAYLOAD))
     model = arm.without_friction()
-    controllers = [MPC(dynamics(model), HOLD, TORQUE_LIMIT, horizon, CONTROL_PERIOD)]
-    if refresh:
-        controllers.append(MPC(dynamics(model.with_payload(PAYLOAD)), HOLD, TORQUE_LIMIT, horizon, CONTROL_PERIOD))
+    models = [model, model.with_payload(PAYLOAD)] if refresh else [model]
+    controllers = [
+        MPC(dynamics(m), HOLD, m.gravity_vector(HOLD), TORQUE_LIMIT, horizon, CONTROL_PERIOD) for m in models
+    ]
     steps = round(duration / CONTROL_PERIOD)
     x, states, torques, seconds = np.concatenate([HOLD, np.zeros(n)]), [], [], []
     states.append(x)
@@ -274,7 +280,7 @@ def main(quick: bool = False) -> None:
     intervals = 20 if quick else INTERVALS
     step = dynamics(ARM)
     motion = point_to_point(step, START, GOAL, TORQUE_LIMIT, DURATION, intervals,
-                            quintic_guess(START, GOAL, DURATION, intervals, ARM))  # fmt: skip
+                            quintic_guess(START, GOAL, DURATION, intervals, ARM), joint_limits=ARM.qlim)  # fmt: skip
     print(
         f"minimum effort, {intervals} intervals: {motion.status} after {motion.iterations} IPOPT iterations; "
         f"build {motion.build_seconds:.2f} s, solve {motion.solve_seconds:.2f} s; cost {motion.cost:.3f} N^2 m^2 s"
