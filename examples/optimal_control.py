@@ -39,7 +39,7 @@ from armdyn.simulation import PythonLoopWarning, Result
 
 ARM = ad.models.load("puma560")
 START = np.array([0.0, 0.7854, -3.1416, 0.0, 0.7854, 0.0])  # the nominal pose qn
-GOAL = np.array([1.5, 0.2, -2.2, 0.8, 1.2, 1.0])
+GOAL = np.array([1.2, 0.3, -2.6, 0.5, 0.3, 0.5])
 # the PUMA 560 model carries no torque limits: these are ours (N m), tight enough on joints 1-3 to bind
 TORQUE_LIMIT = np.array([45.0, 90.0, 40.0, 10.0, 10.0, 10.0])
 DURATION, INTERVALS = 1.2, 50

@@ -19,7 +19,7 @@ import armdyn as ad
 from armdyn.simulation import PythonLoopWarning
 
 ROOT = Path(__file__).resolve().parents[1]
-LIMIT = np.array([20.0, 90.0, 25.0, 10.0, 10.0, 10.0])  # N m: tighter than the example's, to bind without friction
+LIMIT = np.array([15.0, 90.0, 18.0, 10.0, 10.0, 10.0])  # N m: tighter than the example's, to bind without friction
 
 
 def module(path: Path, name: str) -> object:
