@@ -3,19 +3,21 @@ torque limits and minimum effort, tracked by computed torque, then an MPC holdin
 (Section 3.4's state equation; Diehl et al. 2006 for multiple shooting).
 
 Part 1, the motion: from START to GOAL, at rest at both ends, in T = 1.2 s, the torque held over each of
-50 intervals and every torque within TORQUE_LIMIT. The state x = [q; qd] follows xdot = [qd; M^-1 (tau - N)];
-one interval is one RK4 step of it, armdyn's generated ``step`` Function (Coulomb friction smoothed by tanh,
-as simulate smooths it). Multiple shooting: the states at the 51 knots and the 50 torques are all variables,
-the cost is sum |tau_k|^2 h, each interval must end on the next knot. IPOPT (inside the casadi wheel) solves it
-from the inverse dynamics of a quintic. Then ad.simulate tracks the optimal trajectory (a cubic Hermite spline
-through the knots' q and qd) under computed torque (kp = 400, kv = 40) on the arm itself.
+50 intervals, every torque within TORQUE_LIMIT (ours: the model has none) and the knots within the joint limits.
+The state x = [q; qd] follows xdot = [qd; M^-1 (tau - N)]; one interval is one RK4 step of it, armdyn's
+generated ``step`` Function (Coulomb friction smoothed by tanh, as simulate smooths it). Multiple shooting: the
+states at the 51 knots and the 50 torques are all variables, the cost is sum |tau_k|^2 h, each interval must end
+on the next knot. IPOPT (inside the casadi wheel) solves it from a quintic's states and inverse dynamics. Then
+ad.simulate tracks the optimum (a cubic Hermite spline through the knots' q and qd) under computed torque
+(kp = 400, kv = 40) on the arm itself.
 
 Part 2, the MPC: the arm holds HOLD while, at t = 0.2 s, it picks up a 2.5 kg payload at the flange. Every
-20 ms the controller solves a 15-interval problem (the same multiple shooting, the cost the state's distance
-from HOLD plus a small torque penalty, warm-started from the last solution shifted by one interval) on its
-model, the nominal arm without the payload, and applies the first torque for the 20 ms; the plant, simulated by
-the same RK4 step of the arm with the payload, sags until the error in the state pushes the MPC to compensate:
-a model that is wrong by the payload leaves a steady offset, printed at the end.
+20 ms the controller solves a 15-interval problem (the same multiple shooting; the cost the state's distance
+from HOLD and the torque's from the model's G(HOLD); warm-started from the last solution shifted by one interval
+and its multipliers) and applies the first torque for the 20 ms. The plant is the RK4 step of the arm with its
+friction, and with the payload from the pickup on. The MPC's model is the arm without friction: the nominal
+arm throughout (it sags to a steady offset), or refreshed with the payload at the pickup (as when the payload
+is known). The solve times (median, max) and the errors are printed.
 
 Run: .venv/bin/python examples/optimal_control.py [--quick]   (writes out/optimal_control.png and
 out/optimal_control_mpc.png; --quick solves coarser problems and writes nothing)
@@ -147,14 +149,17 @@ PAYLOAD, PICKUP = 2.5, 0.2  # kg at the flange, picked up at t = 0.2 s
 CONTROL_PERIOD, HORIZON = 0.02, 15  # s, intervals
 STATE_WEIGHT = np.concatenate([np.full(6, 1e4), np.full(6, 1e2)])  # on (q - HOLD) and qd
 TORQUE_WEIGHT = 1e-2
+# IPOPT from the last solution and its multipliers, its barrier parameter started small
+WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipopt.warm_start_bound_push": 1e-9,
+              "ipopt.warm_start_mult_bound_push": 1e-9}  # fmt: skip
 
 
 class MPC:
     """Model-predictive control of one arm about a pose: each call solves the ``horizon``-interval multiple-shooting
     problem min sum_k (x_k - x_ref)' W (x_k - x_ref) + r |tau_k - tau_ref|^2 over knots and torques (x_ref the pose
     at rest, tau_ref the torque that holds the model there, its G(pose)), the first knot fixed to the measured
-    state, from the last call's solution shifted by one interval (warm start), and returns the first torque. The
-    NLP and its solver are built once; the measured state enters as bounds on the first knot."""
+    state, from the last call's solution shifted by one interval and its multipliers (warm start), and returns the
+    first torque. The NLP and its solver are built once; the measured state enters as bounds on the first knot."""
 
     def __init__(self, step: casadi.Function, pose: np.ndarray, hold_torque: np.ndarray, limit: np.ndarray,
                  horizon: int, period: float) -> None:  # fmt: skip
@@ -165,11 +170,12 @@ class MPC:
         cost = casadi.sum2(casadi.sum1(STATE_WEIGHT * error**2)) + TORQUE_WEIGHT * casadi.sumsqr(U - hold_torque)
         ends = step.map(horizon)(X[:, :-1], U, period)
         problem = {"x": casadi.veccat(X, U), "f": cost, "g": casadi.vec(ends - X[:, 1:])}
-        self.solver = casadi.nlpsol("mpc", "ipopt", problem, IPOPT)
+        self.solver = casadi.nlpsol("mpc", "ipopt", problem, {**IPOPT, **WARM_START})
         self.lower = np.concatenate([np.full(2 * n * (horizon + 1), -np.inf), np.tile(-limit, horizon)])
         self.upper = np.concatenate([np.full(2 * n * (horizon + 1), np.inf), np.tile(limit, horizon)])
         self.guess = np.concatenate([np.tile(self.reference, horizon + 1), np.tile(hold_torque, horizon)])
         self.horizon = horizon
+        self.multipliers: dict[str, object] = {}
         self.seconds: list[float] = []
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
@@ -178,7 +184,9 @@ class MPC:
         lower, upper = self.lower.copy(), self.upper.copy()
         lower[: 2 * n] = upper[: 2 * n] = x
         started = time.perf_counter()
-        z = np.asarray(self.solver(x0=self.guess, lbx=lower, ubx=upper, lbg=0.0, ubg=0.0)["x"]).ravel()
+        solution = self.solver(x0=self.guess, lbx=lower, ubx=upper, lbg=0.0, ubg=0.0, **self.multipliers)
+        z = np.asarray(solution["x"]).ravel()
+        self.multipliers = {"lam_x0": solution["lam_x"], "lam_g0": solution["lam_g"]}
         self.seconds.append(time.perf_counter() - started)
         states, torques = z[: 2 * n * (horizon + 1)], z[2 * n * (horizon + 1) :]
         self.guess = np.concatenate([states[2 * n :], states[-2 * n :], torques[n:], torques[-n:]])  # shifted
