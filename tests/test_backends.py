@@ -24,6 +24,7 @@ from armdyn.dynamics.friction import coulomb_vector, sign_law_table, smooth_coul
 from armdyn.errors import MissingDependencyError, ModelError
 from armdyn.simulation import _smoothing
 from armdyn.symbolic import generate_code
+from armdyn.symbolic.backends import JIT_OPTIONS
 from tests.helpers import ROBOTS, URDFS
 
 casadi = pytest.importorskip("casadi")
@@ -209,6 +210,8 @@ def test_jax_jit_vmap_and_grad() -> None:
     batched = jax.jit(jax.vmap(generated.tau))(q, qd, qdd)
     assert batched.dtype == jnp.float64
     assert close(batched, arm.inverse_dynamics(q, qd, qdd))
+    unfused = jax.jit(jax.vmap(generated.tau), compiler_options=JIT_OPTIONS)(q, qd, qdd)
+    assert close(unfused, arm.inverse_dynamics(q, qd, qdd))
     assert close(jax.jit(generated.M)(q[:8]), arm.inertia_matrix(q[:8]))  # leading axes without vmap
     weights = rng.normal(size=arm.n)
     gradient = jax.jit(jax.grad(lambda q0: generated.tau(q0, qd[0], qdd[0]) @ weights))(q[0])
