@@ -20,6 +20,9 @@ Three parts:
    end to end (the functions built, the NLP and its solver built, the solve) and the solve alone, medians of
    REPEATS runs; IPOPT's iterations; the optima compared (the costs, the knots' states and the torques).
 3. armdyn's construction time for the Panda: generate_code (every function, CasADi backend) and the functions.
+4. JAX: the generated tau, M and qdd (backend="jax") jitted and vmapped over BATCH states of the 7-joint Panda on
+   the CPU, beside armdyn's compiled batch calls (Numba, the fast path) on the same states; the compile time
+   of each jitted function apart.
 
 Prints Markdown tables and writes the same to results_casadi.md (harness.py's Report); --quick writes nothing.
 """
@@ -53,8 +56,8 @@ GRAVITY = (0.0, 0.0, -9.81)
 RESULTS = Path(__file__).with_name("results_casadi.md")
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "optimal_control.py"
 SEED = 3
-REPEATS, INTERVALS = 3, 50
-QUICK = {"REPEATS": 1, "INTERVALS": 10}
+REPEATS, INTERVALS, BATCH = 3, 50, 100_000
+QUICK = {"REPEATS": 1, "INTERVALS": 10, "BATCH": 1000}
 # the UR5's problem: rest to rest in DURATION s, the torques within the URDF's effort limits
 UR5_START = np.array([0.0, -1.5, 1.2, -1.2, -1.5, 0.0])
 UR5_GOAL = np.array([1.4, -0.6, 0.3, -0.9, -1.0, 0.8])
@@ -355,6 +358,47 @@ def construction_table() -> Table:
     return table
 
 
+def jax_table() -> Table:
+    """Part 4: the JAX functions jitted and vmapped over BATCH states beside armdyn's batch calls."""
+    import jax
+
+    from armdyn.symbolic.backends import JIT_OPTIONS
+
+    arm = load(PANDA, LOCKED)
+    code = generate_code(arm, ["tau", "M", "qdd"], backend="jax")
+    rng = np.random.default_rng(SEED)
+    q, qd, qdd = rng.uniform(-1.0, 1.0, (3, BATCH, arm.n))
+    tau = arm.inverse_dynamics(q, qd, qdd)
+    headers = ["function", "JAX compile (s)", "JAX (ms)", "armdyn (ms)", "JAX / armdyn", "largest difference"]
+    table = Table(f"JAX on the CPU: {BATCH:,} states of the 7-joint Panda, jit(vmap(f)) beside armdyn's batch call",
+                  headers)  # fmt: skip
+    cases = (("tau", (q, qd, qdd), lambda: arm.inverse_dynamics(q, qd, qdd)),
+             ("M", (q,), lambda: arm.inertia_matrix(q)),
+             ("qdd", (q, qd, tau), lambda: arm.forward_dynamics(q, qd, tau)))  # fmt: skip
+    for name, states, ours in cases:
+        function = jax.jit(jax.vmap(getattr(code, name)), compiler_options=JIT_OPTIONS)
+        start = time.perf_counter()
+        theirs = np.asarray(function(*states).block_until_ready())
+        compile_time = time.perf_counter() - start
+        difference = float(np.abs(theirs - ours()).max())
+        jax_times, our_times = [], []
+        for _ in range(REPEATS + 2):
+            start = time.perf_counter()
+            function(*states).block_until_ready()
+            jax_times.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            ours()
+            our_times.append(time.perf_counter() - start)
+        jax_ms, our_ms = statistics.median(jax_times) * 1e3, statistics.median(our_times) * 1e3
+        table.rows.append([name, f"{compile_time:.1f}", f"{jax_ms:.1f}", f"{our_ms:.1f}", f"{jax_ms / our_ms:.1f}",
+                           f"{difference:.1e}"])  # fmt: skip
+    table.notes.append("jax.jit(..., compiler_options=armdyn.symbolic.backends.JIT_OPTIONS): XLA's loop fusion off "
+                       "(fused, its CPU code recomputes shared nodes of the large scalar graph); float64; medians, "
+                       "the calls interleaved. The JAX functions are for interoperability (jit, vmap, grad); "
+                       "armdyn's compiled batch calls stay the fast path.")  # fmt: skip
+    return table
+
+
 def main() -> None:
     args = arguments(__doc__).parse_args()
     report = Report.begin(args, "armdyn's CasADi functions beside adam's", RESULTS, globals(), QUICK)
@@ -365,6 +409,7 @@ def main() -> None:
         report.show(counts_table(arms(Path(folder)), np.random.default_rng(SEED)))
     report.show(ocp_table(module))
     report.show(construction_table())
+    report.show(jax_table())
     report.finish("the counts and times may mix two versions of armdyn.")
 
 

@@ -291,3 +291,33 @@ def test_a_missing_extra_names_it(backend: str, module: str, monkeypatch: pytest
     with pytest.raises(MissingDependencyError, match=rf"pip install 'armdyn\[{backend}\]'") as caught:
         generate_code(ad.models.two_link_planar(), ["tau"], backend=backend)
     assert caught.value.extra == backend
+
+
+@pytest.mark.parametrize("name", ["two_link_planar", pytest.param("puma560", marks=pytest.mark.slow)])
+def test_jax_differentiates_a_one_second_rollout_as_the_chain_of_rk4_derivatives(name: str) -> None:
+    """d x(1 s) / d x(0) of 100 steps of 10 ms by jax.jacfwd through lax.scan over the generated step equals the
+    product of armdyn.statespace.rk4_step's analytic step derivatives to 1e-9, and the gradient of a cost of
+    the final state with respect to every step's torque equals the chain's x(1 s)'s B_d terms."""
+    arm, dt, steps, eps = ad.models.load(name), 0.01, 100, 0.05
+    n = arm.n
+    step = generate_code(arm, ["step"], backend="jax", coulomb_smoothing=eps).step
+    rng = np.random.default_rng(12)
+    q0, qd0 = rng.uniform(-0.5, 0.5, (2, n))
+    taus = arm.gravity_vector(q0) + rng.uniform(-1, 1, (steps, n))
+
+    def rollout(x0: Any, torques: Any) -> Any:
+        final, _ = jax.lax.scan(lambda x, tau: (step(x, tau, dt), None), x0, torques)
+        return final
+
+    x0 = jnp.asarray(np.r_[q0, qd0])
+    J_x0 = np.asarray(jax.jit(jax.jacfwd(rollout), compiler_options=JIT_OPTIONS)(x0, jnp.asarray(taus)))
+    cost = jax.jit(jax.grad(lambda x, u: jnp.sum(rollout(x, u) ** 2), argnums=1), compiler_options=JIT_OPTIONS)
+    d_cost = np.asarray(cost(x0, jnp.asarray(taus)))
+    q, qd, chain, B = q0.copy(), qd0.copy(), np.eye(2 * n), []
+    for tau in taus:
+        x, A_d, B_d = ad.statespace.rk4_step(arm, q, qd, tau, dt, coulomb_smoothing=eps)
+        chain, q, qd = A_d @ chain, x[:n], x[n:]
+        B = [A_d @ b for b in B] + [B_d]  # d x_final / d tau_k, carried forward
+    assert close(J_x0, chain, 1e-9)
+    expected = np.stack([2.0 * np.r_[q, qd] @ b for b in B])
+    assert close(d_cost, expected, 1e-9)

@@ -91,7 +91,8 @@ class MissingDependencyError(ImportError):
     module : str
         The module that could not be imported (``"control"``, ``"dask.distributed"``).
     extra : str
-        The extra of armdyn that installs it (``"control"``, ``"cluster"``, ``"test"``, ``"bench"``, ``"docs"``).
+        The extra of armdyn that installs it (``"control"``, ``"cluster"``, ``"casadi"``, ``"jax"``, ``"test"``,
+        ``"bench"``, ``"docs"``).
     needed_by : str, optional
         What needs it, for the message (``"armdyn.control.lqr"``).
     """
