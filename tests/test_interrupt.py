@@ -96,7 +96,7 @@ def test_ctrl_c_stops_simulate_within_a_second_and_writes_the_run_so_far(tmp_pat
 def test_ctrl_c_stops_a_study_after_its_block_and_says_how_to_resume(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(Path(ad.__file__).parents[1])}
     folder = tmp_path / "study"
-    argv = [*ARMDYN, "study", "two_link_planar", "--runs", "400000", "--block", "2000", "--t-final", "0.2",
+    argv = [*ARMDYN, "study", "two_link_planar", "--runs", "4000000", "--block", "2000", "--t-final", "1.0",
             "--spec", "max-error-after-0.1s<1e-3", "--out", str(folder)]  # fmt: skip
     code, stderr, _ = _interrupted(argv, 8.0, env)
     assert code == 130, stderr
