@@ -425,7 +425,8 @@ def _read_visuals(arm: Robot, urdf: Path) -> tuple[dict[int, list[_Shape]], dict
         for number, visual in enumerate(link.findall("visual")):
             where = f"{urdf.name}: link '{name}' <visual> {number}"
             geometry = visual.find("geometry")
-            element = None if geometry is None or len(geometry) == 0 else geometry[0]
+            elements = [] if geometry is None else [child for child in geometry if isinstance(child.tag, str)]
+            element = elements[0] if elements else None  # comments skipped
             if element is None:
                 continue
             pose = frame @ _origin(visual, where)
@@ -441,13 +442,12 @@ def _read_visuals(arm: Robot, urdf: Path) -> tuple[dict[int, list[_Shape]], dict
                 key = (path, scale)
                 if key not in cache:
                     try:
-                        mesh = trimesh.load(str(path), force="mesh")
-                        mesh.merge_vertices()
+                        mesh = _load_mesh(trimesh, path)
                         cache[key] = (
                             (np.asarray(mesh.vertices) * np.array(scale)).astype(np.float32),
                             np.asarray(mesh.faces, dtype=np.uint32),
                         )
-                    except Exception as error:  # noqa: BLE001 - any loader failure is the file's: warn, draw a capsule
+                    except Exception as error:  # any loader failure is the file's: warn, draw a capsule
                         notes.append(f"{where}: mesh file '{path}' cannot be loaded ({error}); link drawn as a capsule")
                         failed.setdefault(owner, []).append(str(path))
                         continue
@@ -474,6 +474,22 @@ def _read_visuals(arm: Robot, urdf: Path) -> tuple[dict[int, list[_Shape]], dict
                 _Shape(kind, pose, primitive.vertices.astype(np.float32), primitive.faces.astype(np.uint32))
             )
     return shapes, failed, notes
+
+
+def _load_mesh(trimesh: Any, path: Path) -> Any:
+    """One mesh file as one trimesh.Trimesh, vertices merged. A COLLADA file whose materials break (a texture it
+    names is missing: pycollada then drops the geometry's instance) is read again without its material bindings,
+    which the viewer does not use."""
+    mesh = trimesh.load(str(path), force="mesh")
+    if len(mesh.faces) == 0 and path.suffix.lower() == ".dae":
+        from lxml import etree
+
+        tree = etree.parse(str(path))
+        for binding in list(tree.getroot().iter("{*}bind_material")):
+            binding.getparent().remove(binding)
+        mesh = trimesh.load(io.BytesIO(etree.tostring(tree)), file_type="dae", force="mesh")
+    mesh.merge_vertices()
+    return mesh
 
 
 def _segments(arm: Robot) -> dict[int, list[tuple[np.ndarray, np.ndarray]]]:
@@ -533,14 +549,14 @@ def _drawings(arm: Robot, urdf: Path | None) -> tuple[dict[int, _LinkDrawing], l
         drawing.files = [shape.file for shape in own if shape.file is not None]
         if own:
             drawing.kind = "mesh" if drawing.files else own[0].kind
-        if not own or index in failed:
-            if index >= 0 or (urdf is None and segments.get(-1)):
-                drawing.shapes += [_capsule(a, b, radius) for a, b in segments.get(index, [])]
-                drawing.kind = drawing.kind if own else "capsule"
+        wanted = index in failed or (not own and (index >= 0 or urdf is None))
+        if wanted and segments.get(index):
+            drawing.shapes += [_capsule(a, b, radius) for a, b in segments[index]]
+            drawing.kind = drawing.kind if own else "capsule"
     return drawings, notes
 
 
-# ----- the viewer ------------------------------------------------------------------------------------------------------
+# ----- the viewer -----------------------------------------------------------------------------------------------------
 def urdf_of(arm: Robot) -> Path | None:
     """The URDF file ``armdyn.load_urdf`` read ``arm`` from, or None for an arm made otherwise.
 
@@ -870,10 +886,8 @@ class Viewer:
         arm, shown = self.arm, self._shown
         if "lambda" in shown or "manipulability" in shown:
             data = {"manipulability": manipulability_ellipsoid(arm, q)}
-            try:
+            with contextlib.suppress(ModelError):  # a singular J_v: no Lambda, its ellipsoid hidden
                 data["lambda"] = lambda_ellipsoid(arm, q)
-            except ModelError:
-                pass
             for name in ("lambda", "manipulability"):
                 handle = self._overlay[name][0]
                 if name not in data:
