@@ -453,7 +453,9 @@ def _read_visuals(arm: Robot, urdf: Path) -> tuple[dict[int, list[_Shape]], dict
                         continue
                 vertices, faces = cache[key]
                 if len(faces) == 0:
-                    notes.append(f"{where}: mesh file '{path}' holds no triangles; link drawn as a capsule")
+                    notes.append(
+                        f"{where}: mesh file '{path}' cannot be loaded (it holds no triangles); link drawn as a capsule"
+                    )
                     failed.setdefault(owner, []).append(str(path))
                     continue
                 shapes.setdefault(owner, []).append(_Shape("mesh", pose, vertices, faces, str(path)))
@@ -836,10 +838,10 @@ class Viewer:
         self._frame_rows = np.clip(np.searchsorted(t, self._frame_times), 0, len(t) - 1)
         rows = self._frame_rows
         trace = self.arm.tool_pose(np.asarray(result.q, dtype=float)[rows])[:, :3, 3]
-        scene.add_spline_catmull_rom("/run/trace", trace, color=(20, 20, 20), line_width=2.0)
+        scene.add_spline_catmull_rom("/run/trace", trace, color=(20, 20, 20), thickness=0.004)
         if result.q_d is not None:
             desired = self.arm.tool_pose(np.asarray(result.q_d, dtype=float)[rows])[:, :3, 3]
-            scene.add_spline_catmull_rom("/run/desired", desired, color=(230, 60, 160), line_width=2.0)
+            scene.add_spline_catmull_rom("/run/desired", desired, color=(230, 60, 160), thickness=0.004)
         with gui.add_folder("Playback"):
             self._time = gui.add_slider(
                 "time (s)", min=float(t[0]), max=float(t[-1]), step=1.0 / FRAME_RATE, initial_value=float(t[0])
