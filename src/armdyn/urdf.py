@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import os
 import warnings
-import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +29,7 @@ from armdyn.io.urdf_out import ARMDYN_NAMESPACE
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
+from armdyn.model.sources import record_source
 from armdyn.robot import Robot
 
 if TYPE_CHECKING:
@@ -54,24 +54,6 @@ _VECTORS = (
 # <inertia> attributes: the URDF specification requires all six (a default of 1 kg m^2 for a missing
 # moment would be an invented inertia; Pinocchio refuses such a file too)
 _MOMENTS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-# The file each arm of load_urdf was read from (for the viewer's meshes), kept as long as the arm lives
-_SOURCES: weakref.WeakKeyDictionary[Robot, Path] = weakref.WeakKeyDictionary()
-
-
-def source_file(arm: Robot) -> Path | None:
-    """The URDF file ``load_urdf`` read ``arm`` from (None for an arm made otherwise, or changed since).
-
-    Parameters
-    ----------
-    arm : Robot
-        The arm.
-
-    Returns
-    -------
-    pathlib.Path or None
-        The file, resolved.
-    """
-    return _SOURCES.get(arm)
 
 
 # ----- what load_urdf reads of the file: <robot>, its <link> and <joint> elements ---------------------------------
@@ -526,7 +508,7 @@ def load_urdf(
                 "fixed), or pass strict=False to load the arm anyway with a warning"
             )
         warnings.warn(message + "; loaded as given", stacklevel=2)
-    _SOURCES[arm] = path.resolve()
+    record_source(arm, path)  # for the viewer's meshes
     return arm
 
 

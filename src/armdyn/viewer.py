@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "GRAVITY_SCALE",
+    "LAMBDA_MAX_CONDITION",
     "LAMBDA_SCALE",
     "LINK_COLOR",
     "MANIPULABILITY_SCALE",
@@ -68,6 +69,8 @@ OVERLAYS = ("inertia", "lambda", "manipulability", "com", "gravity")
 """The overlays a Viewer can show, each a checkbox of its panel."""
 LAMBDA_SCALE = 0.15
 """The radius (m) of the Lambda ellipsoid's longest axis: radius_i = LAMBDA_SCALE * lambda_i / max(lambda)."""
+LAMBDA_MAX_CONDITION = 1e12
+"""Above this condition number of J_v M^-1 J_v^T, Lambda is taken as not finite (its ellipsoid is hidden)."""
 MANIPULABILITY_SCALE = 0.2
 """Metres per (m/s per rad/s) of the manipulability ellipsoid: radius_i = MANIPULABILITY_SCALE * sigma_i."""
 GRAVITY_SCALE = 0.15
@@ -123,7 +126,7 @@ def lambda_ellipsoid(arm: Robot, q: np.ndarray) -> dict[str, np.ndarray]:
     """The tool's task-space inertia ellipsoid: Lambda of the tool position (Section 3.5), drawn at the tool.
 
     Lambda = (J_v M^-1 J_v^T)^-1 (Khatib 1987, eq. 12; ``armdyn.task_space.operational_inertia`` of
-    ``ToolPosition``), the 3x3 translational inertia felt at the tool. Axes: its eigenvectors; radii:
+    ``ToolPosition`` without damping), the 3x3 translational inertia felt at the tool. Axes: its eigenvectors; radii:
     ``LAMBDA_SCALE * lambda_i / max(lambda)``, so the longest axis is the direction in which the arm feels
     heaviest.
 
@@ -143,11 +146,19 @@ def lambda_ellipsoid(arm: Robot, q: np.ndarray) -> dict[str, np.ndarray]:
     Raises
     ------
     armdyn.ModelError
-        When J_v is singular or ill-conditioned at q (as ``operational_inertia``).
+        When J_v M^-1 J_v^T is singular (condition number above LAMBDA_MAX_CONDITION): a planar arm, or a
+        singular configuration.
     """
-    from armdyn.task_space import ToolPosition, operational_inertia
-
-    Lambda = operational_inertia(arm, ToolPosition(), q)
+    M, Jv = arm.inertia_matrix(q), arm.jacobian(q)[:3]
+    inverse = Jv @ np.linalg.solve(M, Jv.T)  # Lambda^-1 = J_v M^-1 J_v^T, the tool's mobility
+    inverse = 0.5 * (inverse + inverse.T)
+    if np.linalg.cond(inverse) > LAMBDA_MAX_CONDITION:
+        raise ModelError(
+            f"{arm.name}: J_v M^-1 J_v^T is singular at q = {np.asarray(q)} (condition number above "
+            f"{LAMBDA_MAX_CONDITION:.0e}): the tool cannot move in some direction, Lambda is not finite there"
+        )
+    Lambda = np.linalg.inv(inverse)
+    Lambda = 0.5 * (Lambda + Lambda.T)
     eigenvalues, axes = np.linalg.eigh(Lambda)
     return {
         "axes": _rotation(axes),
@@ -248,8 +259,8 @@ def scene_data(arm: Robot, q: np.ndarray) -> dict[str, Any]:
     q = np.asarray(q, dtype=float)
     try:
         lam: dict[str, np.ndarray] | None = lambda_ellipsoid(arm, q)
-    except ModelError:
-        lam = None  # a singular J_v: no finite Lambda
+    except (ModelError, np.linalg.LinAlgError):
+        lam = None  # a singular J_v (or M, of an arm loaded with strict=False): no finite Lambda
     return {
         "q": q,
         "lambda": lam,
@@ -572,7 +583,7 @@ def urdf_of(arm: Robot) -> Path | None:
     pathlib.Path or None
         The file.
     """
-    from armdyn.urdf import source_file
+    from armdyn.model.sources import source_file
 
     return source_file(arm)
 
@@ -680,8 +691,12 @@ class Viewer:
         self._lock = threading.RLock()
         self._stop = threading.Event()
         self._player: threading.Thread | None = None
-        self._build(chosen)
-        self.set_configuration(self._q)
+        try:
+            self._build(chosen)
+            self.set_configuration(self._q)
+        except BaseException:
+            self.close()
+            raise
 
     # ----- what the page shows --------------------------------------------------------------------------------------
     @property
@@ -888,7 +903,7 @@ class Viewer:
         arm, shown = self.arm, self._shown
         if "lambda" in shown or "manipulability" in shown:
             data = {"manipulability": manipulability_ellipsoid(arm, q)}
-            with contextlib.suppress(ModelError):  # a singular J_v: no Lambda, its ellipsoid hidden
+            with contextlib.suppress(ModelError, np.linalg.LinAlgError):  # singular: no Lambda, ellipsoid hidden
                 data["lambda"] = lambda_ellipsoid(arm, q)
             for name in ("lambda", "manipulability"):
                 handle = self._overlay[name][0]
