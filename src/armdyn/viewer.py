@@ -748,11 +748,11 @@ class Viewer:
         scene.set_up_direction("+z")
         reach = max(sum(float(np.linalg.norm(b - a)) for pieces in _segments(arm).values() for a, b in pieces), 0.3)
         base = np.asarray(arm.base, dtype=float)[:3, 3]
-        size = float(np.ceil(2.0 * reach))
+        size = float(np.ceil(1.5 * reach))
         scene.add_grid("/grid", width=size, height=size, cell_size=0.1, section_size=0.5, plane="xy", position=base)
-        look_at = base + np.array([0.0, 0.0, 0.35 * reach])
+        look_at = base + np.array([0.0, 0.0, 0.3 * reach])
         self._server.initial_camera.look_at = look_at
-        self._server.initial_camera.position = look_at + reach * np.array([1.1, 0.9, 0.45])
+        self._server.initial_camera.position = look_at + 0.9 * reach * np.array([1.0, 0.8, 0.5]) / np.sqrt(1.89)
         self._nodes: dict[int, Any] = {}
         self._meshes: dict[int, list[Any]] = {}
         for index, drawing in self._drawings.items():
@@ -821,7 +821,8 @@ class Viewer:
             )
         )
         self._labels = [
-            scene.add_label(f"/overlays/gravity_label{i}", "", visible="gravity" in overlays) for i in range(arm.n)
+            scene.add_label(f"/overlays/gravity_label{i}", "", font_screen_scale=0.75, visible="gravity" in overlays)
+            for i in range(arm.n)
         ]
         self._shown = set(overlays)
         # the panel: overlays, joints, playback
@@ -926,8 +927,8 @@ class Viewer:
                 points[i, 0] = origin
                 points[i, 1] = origin + GRAVITY_SCALE * G[i] / largest * axis
                 unit = "N m" if arm.kinds[i] == "revolute" else "N"
-                value = G[i] if abs(G[i]) > 1e-9 * largest else 0.0
-                self._labels[i].text = f"G{i + 1} = {value:.3g} {unit}"
+                self._labels[i].text = f"G{i + 1} = {G[i]:.3g} {unit}"
+                self._labels[i].visible = abs(G[i]) >= 0.01 * largest  # the joints gravity loads, uncluttered
                 self._labels[i].position = points[i, 1]
             self._overlay["gravity"][0].points = points
 
