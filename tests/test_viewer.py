@@ -7,6 +7,7 @@ from __future__ import annotations
 import base64
 import re
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -222,6 +223,39 @@ def test_torques_colour_the_links_relative_to_the_limits(panda_run: ad.simulatio
         viewer.show_time(float(panda_run.t[row]))
         expected = np.rint(np.add(view.LINK_COLOR, 0.5 * np.subtract(view.TORQUE_COLOR, view.LINK_COLOR)))
         np.testing.assert_allclose(viewer._meshes[3][0].color, expected, atol=1)
+
+
+def test_play_advances_the_time_slider_and_pause_holds_it() -> None:
+    arm = ad.models.load("puma560")
+    run = ad.simulate(arm, ComputedTorque(100, 20), Sinusoid(0.5, 0.5, offset=arm.qn), t_final=1.0, q0=arm.qn)
+    with run.view() as viewer:
+        start = viewer.q
+        viewer._playing.value = True  # as the page's checkbox
+        time.sleep(0.4)
+        viewer._playing.value = False
+        time.sleep(0.1)
+        held = viewer._time.value
+        assert held > 0.1
+        row = int(np.searchsorted(run.t, held))
+        np.testing.assert_allclose(viewer.q, run.q[row])
+        assert np.abs(viewer.q - start).max() > 0.01
+        time.sleep(0.2)
+        assert viewer._time.value == held
+
+
+@pytest.mark.slow
+def test_a_run_with_drives_shows_their_inputs() -> None:
+    from armdyn import actuators as act
+    from armdyn.control import DrivePID
+
+    arm = act.puma560_with_drives()
+    q0 = ad.models.puma560().configuration("qn")
+    run = ad.simulate(arm, DrivePID(20.0, 0.5), Sinusoid(0.1, 0.5, 0.0, q0), t_final=0.3, q0=q0)
+    with run.view() as viewer:
+        viewer.show_time(0.2)
+        row = int(np.searchsorted(run.t, 0.2))
+        shown = [float(x) for x in re.findall(r"q\d: (-?[\d.e+-]+)", viewer._inputs.content)]
+        np.testing.assert_allclose(shown, run.drives.v[row], rtol=5e-3)
 
 
 def test_a_dh_arm_saves_a_page_and_set_configuration_moves_it(tmp_path: Path) -> None:

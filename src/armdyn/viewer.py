@@ -994,7 +994,8 @@ class Viewer:
         self._torque_text.content = f"t = {result.t[row]:.3f} s; tau: {lines}"
         if self._inputs is not None and result.drives is not None:
             v = np.asarray(result.drives.v[row], dtype=float)
-            self._inputs.content = "inputs: " + " | ".join(f"{value:.3g}" for value in v)
+            shown = " | ".join(f"{name}: {value:.3g}" for name, value in zip(self.arm.joint_names, v, strict=True))
+            self._inputs.content = f"drive inputs (V; A for valves): {shown}"
 
     def _play(self, playing: bool) -> None:
         if not playing:
