@@ -281,8 +281,11 @@ def test_missing_meshes_are_drawn_as_capsules_with_a_warning_naming_the_file(
     urdf = tmp_path / "ur5_broken.urdf"
     urdf.write_text(text, encoding="utf-8")
     arm = ad.load_urdf(urdf)
-    with pytest.warns(UserWarning, match="missing.stl"), view.Viewer(arm) as viewer:
-        data = viewer.scene_data()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with view.Viewer(arm) as viewer:
+            data = viewer.scene_data()
+    assert [str(warning.message) for warning in caught if warning.category is UserWarning] == data["warnings"]
     assert any("package://nowhere/missing.stl" in note and "not found" in note for note in data["warnings"])
     assert any("broken.stl" in note and "cannot be loaded" in note for note in data["warnings"])
     assert any(link["kind"] == "capsule" for link in data["links"])
