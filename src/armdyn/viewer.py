@@ -47,6 +47,7 @@ if TYPE_CHECKING:
     from armdyn.simulation import Result
 
 __all__ = [
+    "FRAME_RATE",
     "GRAVITY_SCALE",
     "LAMBDA_MAX_CONDITION",
     "LAMBDA_SCALE",
@@ -58,7 +59,9 @@ __all__ = [
     "equivalent_ellipsoid",
     "lambda_ellipsoid",
     "manipulability_ellipsoid",
+    "resolve_mesh",
     "scene_data",
+    "urdf_of",
 ]
 
 LINK_COLOR = (40, 170, 80)
