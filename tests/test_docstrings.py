@@ -34,6 +34,7 @@ MODULES = (
     "armdyn.statespace",
     "armdyn.properties",
     "armdyn.urdf",
+    "armdyn.viewer",
     "armdyn.dynamics.regressor",
     "armdyn.dynamics.momentum",
     "armdyn.model",

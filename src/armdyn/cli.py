@@ -23,6 +23,7 @@ import os
 import re
 import stat
 import sys
+import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -1647,6 +1648,65 @@ def _task_report(result: Result) -> _Sheet:
     return sheet
 
 
+VIEW_HTML_HELP = (
+    "Write the scene (and the run) as one self-contained offline page to this .html file, then exit (no server "
+    "is left running)."
+)
+VIEW_PORT_HELP = "The viewer's port on 127.0.0.1 (0, the default: a free port)."
+SIMULATE_VIEW_HELP = (
+    "Play the run back in 3-D in the browser (a viser page on 127.0.0.1: time slider, play/pause, desired path and "
+    "trace, torques as link colours) until Ctrl-C. Needs the extra view: pip install 'armdyn[view]'."
+)
+VIEW_OVERLAYS_HELP = "Overlays shown at the start, separated by commas: inertia, lambda, manipulability, com, gravity."
+
+
+def _page_file(path: str, option: str) -> Path:
+    """A saved page's file, checked as ``_output_file``, ending in .html or .htm."""
+    target = _output_file(path, option)
+    if target.suffix.lower() not in (".html", ".htm"):
+        _fail(f"{option} {path}: the page is written as HTML; give a file ending in .html")
+    return target
+
+
+def _in_browser(make: Callable[[], Any], page_file: Path | None, page: str | None, serve: bool) -> None:
+    """Start a viewer with ``make()``: write its page to ``page_file`` and close it, or (``serve``) print its address
+    and serve it until Ctrl-C."""
+    _activity.status("starting the 3-D viewer")
+    viewer = make()
+    try:
+        if page_file is not None:
+            _activity.status(f"writing the page {page}")
+            viewer.save_html(page_file)
+            console.print(f"wrote {page}")
+        if serve:
+            _activity.stop()
+            console.print(f"viewer: open {viewer.url} in a browser (Ctrl-C to stop)")
+            while True:
+                time.sleep(1.0)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        viewer.close()
+
+
+@app.command()
+def view(
+    name: str = typer.Argument(..., help=ARM_HELP),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    port: int = typer.Option(0, "--port", help=VIEW_PORT_HELP),
+    html: str | None = typer.Option(None, "--html", help=VIEW_HTML_HELP),
+    q: str | None = typer.Option(None, "--q", help=DRAW_Q_HELP.replace("--draw draws", "the viewer shows first")),
+    overlays: str = typer.Option("", "--overlays", help=VIEW_OVERLAYS_HELP),
+) -> None:
+    """Show an arm in 3-D in the browser (a viser page on 127.0.0.1): its URDF meshes or capsules, joint sliders,
+    the tool frame and the overlays; with --html, write the scene as one offline page and exit."""
+    page_file = _page_file(html, "--html") if html else None
+    arm = _arm(name, strict)
+    configuration = _joint_state(q, "--q", arm) if q is not None else None
+    chosen = tuple(part.strip() for part in overlays.split(",") if part.strip())
+    _in_browser(lambda: arm.view(port=port, q=configuration, overlays=chosen), page_file, html, page_file is None)
+
+
 @app.command()
 def simulate(
     name: str = typer.Argument(..., help=ARM_HELP),
@@ -1692,6 +1752,9 @@ def simulate(
         help="What the arm's joint limits do: warn (a warning when a joint leaves them), stop (end the run there), "
         "spring (stiff spring-damper stops, as MuJoCo's soft limits; not with --actuators) or ignore.",
     ),
+    view: bool = typer.Option(False, "--view", help=SIMULATE_VIEW_HELP),
+    html: str | None = typer.Option(None, "--html", help=VIEW_HTML_HELP),
+    port: int = typer.Option(0, "--port", help=VIEW_PORT_HELP),
 ) -> None:
     """Simulate an arm under control and report the tracking errors (with units); with --task, control
     in task coordinates (Section 3.5) along a line or a circle of the tool; with --actuators, through its
@@ -1704,6 +1767,7 @@ def simulate(
     plot_file = _output_file(plot, "--plot") if plot else None
     csv_file = _output_file(csv, "--csv") if csv else None
     animation_file = _animation_file(animate, "--animate") if animate else None
+    page_file = _page_file(html, "--html") if html else None
     folder = _output_folder(output, "--output") if output else None
     arm = _arm(name, strict)
     start = _joint_state(q0, "--q0", arm) if q0 is not None else None
@@ -1780,6 +1844,10 @@ def simulate(
         _activity.status(f"writing the animation {animate}")
         result.animate(animation_file)
         console.print(f"wrote {animate}")
+    if page_file is not None or view:
+        limits = _per_joint(torque_limit, "--torque-limit", arm.n) if driven is None and task is None else np.inf
+        finite = bool(np.all(np.isfinite(limits)))
+        _in_browser(lambda: result.view(port=port, torque_limits=limits if finite else None), page_file, html, view)
     if interrupted:
         raise typer.Exit(INTERRUPTED)
 

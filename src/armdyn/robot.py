@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from armdyn.viewer import Viewer
+
 
 class Robot(ArmModel):
     """An arm: links in a kinematic tree with gravity, base and tool, friction, motors and limits,
@@ -128,3 +130,28 @@ class Robot(ArmModel):
         from armdyn.plotting import plot_arm
 
         return plot_arm(self, q, ax=ax, path=path, title=title)
+
+    def view(self, **options: Any) -> Viewer:
+        """The arm in 3-D in the browser (armdyn.viewer.Viewer): its URDF meshes or capsules, joint sliders, the
+        tool frame and the overlays (inertia ellipsoids, Lambda, manipulability, centre of mass, gravity).
+
+        Parameters
+        ----------
+        **options
+            host, port, overlays, q and urdf, as armdyn.viewer.Viewer takes them.
+
+        Returns
+        -------
+        armdyn.viewer.Viewer
+            The running viewer: open its ``url``; ``close()`` it (or use it in a ``with`` block).
+
+        Raises
+        ------
+        armdyn.MissingDependencyError
+            When viser or trimesh is not installed (``pip install 'armdyn[view]'``).
+        armdyn.ModelError
+            As armdyn.viewer.Viewer.
+        """
+        from armdyn.viewer import Viewer
+
+        return Viewer(self, **options)

@@ -77,6 +77,7 @@ if TYPE_CHECKING:
 
     from armdyn.actuators.packing import DriveRecord
     from armdyn.control.task import Tracking
+    from armdyn.viewer import Viewer
 
 SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau", "bdf": "BDF", "lsoda": "LSODA"}
 """The adaptive methods: simulate's names for them (taken in any case) and scipy's."""
@@ -257,6 +258,33 @@ class Result(RunSummaries):
         from armdyn.plotting import animate
 
         return animate(self, path, **options)
+
+    def view(self, **options: Any) -> Viewer:
+        """The run played back in 3-D in the browser (armdyn.viewer.Viewer): a time slider and play/pause, the
+        desired tool path and the tool's trace, each link coloured by its joint's |tau| relative to the torque
+        limits, the drives' inputs for a run with drives, and the viewer's overlays.
+
+        Parameters
+        ----------
+        **options
+            host, port, overlays, urdf and torque_limits, as armdyn.viewer.Viewer takes them.
+
+        Returns
+        -------
+        armdyn.viewer.Viewer
+            The running viewer: open its ``url``, or write the run as an offline page with ``save_html``;
+            ``close()`` it (or use it in a ``with`` block).
+
+        Raises
+        ------
+        armdyn.MissingDependencyError
+            When viser or trimesh is not installed (``pip install 'armdyn[view]'``).
+        armdyn.ModelError
+            As armdyn.viewer.Viewer.
+        """
+        from armdyn.viewer import Viewer
+
+        return Viewer(self.arm, result=self, **options)
 
     def _repr_png_(self) -> bytes:
         """The run's figure (Result.plot's) as PNG bytes: Jupyter shows a Result as its figure."""

@@ -29,6 +29,7 @@ from armdyn.io.urdf_out import ARMDYN_NAMESPACE
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
+from armdyn.model.sources import record_source
 from armdyn.robot import Robot
 
 if TYPE_CHECKING:
@@ -507,6 +508,7 @@ def load_urdf(
                 "fixed), or pass strict=False to load the arm anyway with a warning"
             )
         warnings.warn(message + "; loaded as given", stacklevel=2)
+    record_source(arm, path)  # for the viewer's meshes
     return arm
 
 
