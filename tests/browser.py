@@ -13,11 +13,16 @@ When no Chromium is installed, :func:`require_chromium` skips the test with the 
 
 from __future__ import annotations
 
+import base64
+import contextlib
+import json
 import os
+import select
 import shutil
 import signal
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +62,18 @@ def find_chromium() -> str | None:
     return None
 
 
+def _binary(path: str) -> str:
+    """The browser itself behind a launcher script: Debian's /usr/bin/chromium is a shell script that execs
+    /usr/lib/chromium/chromium and does not pass on the file descriptors 3 and 4 of ``--remote-debugging-pipe``."""
+    with open(path, "rb") as file:
+        script = file.read(2) == b"#!"
+    if script:
+        for candidate in ("/usr/lib/chromium/chromium", "/usr/lib/chromium-browser/chromium-browser"):
+            if os.access(candidate, os.X_OK):
+                return candidate
+    return path
+
+
 def require_chromium() -> str:
     """The browser's path, or skip the calling test naming what is missing and how to install it."""
     path = find_chromium()
@@ -72,12 +89,12 @@ def screenshot(
     url: str,
     path: str | Path,
     size: tuple[int, int] = (800, 600),
-    wait_ms: int = 4000,
+    wait_ms: int = 5000,
     *,
     offline: bool = False,
     timeout: float = 60.0,
 ) -> np.ndarray:
-    """Open ``url`` in headless Chromium, wait, save a PNG screenshot at ``path`` and return its pixels.
+    """Open ``url`` in headless Chromium, wait ``wait_ms``, save a PNG screenshot at ``path`` and return its pixels.
 
     Parameters
     ----------
@@ -88,11 +105,11 @@ def screenshot(
     size : tuple of int
         The window's (width, height) in pixels.
     wait_ms : int
-        Chromium's virtual-time budget: how long the page runs (timers, animation frames) before the shot.
+        Real time from the start of the page's navigation to the shot, ms.
     offline : bool
         Cut the network (`OFFLINE_FLAGS`): every http(s)/WebSocket request of the page fails.
     timeout : float
-        Seconds of real time before the browser is killed.
+        Seconds of real time for the whole run before the browser is killed.
 
     Returns
     -------
@@ -102,38 +119,149 @@ def screenshot(
     Raises
     ------
     RuntimeError
-        When the browser ends without writing the screenshot or overruns ``timeout``.
+        When the browser fails, says the page could not be loaded, or overruns ``timeout``.
+    """
+    return screenshots(url, [(wait_ms, path)], size, offline=offline, timeout=timeout)[0]
+
+
+def screenshots(
+    url: str,
+    shots: list[tuple[int, str | Path]],
+    size: tuple[int, int] = (800, 600),
+    *,
+    offline: bool = False,
+    timeout: float = 60.0,
+) -> list[np.ndarray]:
+    """Screenshots of one page at several times after its navigation, in one browser.
+
+    Chromium is driven through the DevTools protocol on a pipe (``--remote-debugging-pipe``): navigate, sleep,
+    ``Page.captureScreenshot``. Real time, not Chromium's virtual time: ``--virtual-time-budget`` waits for
+    the network to fall idle, which a page holding a WebSocket open never does, and then hangs.
+
+    Parameters
+    ----------
+    url : str
+        The page.
+    shots : list of (int, str or Path)
+        (time after the navigation began in ms, where the PNG goes), in increasing time.
+    size : tuple of int
+        The window's (width, height) in pixels.
+    offline : bool
+        Cut the network (`OFFLINE_FLAGS`).
+    timeout : float
+        Seconds of real time for the whole run before the browser is killed.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        The images, each (height, width, 3) uint8 RGB.
+
+    Raises
+    ------
+    RuntimeError
+        When the browser fails, says the page could not be loaded, or overruns ``timeout``.
     """
     from PIL import Image
 
-    browser = require_chromium()
-    path = Path(path)
-    path.unlink(missing_ok=True)
-    with tempfile.TemporaryDirectory(prefix="armdyn-chromium-") as profile:
-        command = [
-            browser,
-            *FLAGS,
-            *(OFFLINE_FLAGS if offline else ()),
-            f"--user-data-dir={profile}",
-            f"--window-size={size[0]},{size[1]}",
-            f"--virtual-time-budget={int(wait_ms)}",
-            f"--screenshot={path}",
-            url,
-        ]
-        process = subprocess.Popen(
-            command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True
+    browser = _binary(require_chromium())
+    deadline = time.monotonic() + timeout
+    images = []
+    with (
+        tempfile.TemporaryDirectory(prefix="armdyn-chromium-") as profile,
+        _DevTools(
+            [
+                browser,
+                *FLAGS,
+                *(OFFLINE_FLAGS if offline else ()),
+                f"--user-data-dir={profile}",
+                f"--window-size={size[0]},{size[1]}",
+                "about:blank",
+            ],
+            deadline,
+        ) as tools,
+    ):
+        target = tools.call("Target.createTarget", {"url": "about:blank"})["targetId"]
+        session = tools.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
+        tools.call(
+            "Emulation.setDeviceMetricsOverride",
+            {"width": size[0], "height": size[1], "deviceScaleFactor": 1, "mobile": False},
+            session,
         )
-        try:
-            log, _ = process.communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
-            process.communicate()
-            raise RuntimeError(f"{browser} did not finish {url} within {timeout} s") from None
-    if not path.is_file():
-        tail = "\n".join(line for line in log.splitlines() if "GL Driver" not in line)[-2000:]
-        raise RuntimeError(f"{browser} wrote no screenshot of {url} (exit {process.returncode}):\n{tail}")
-    with Image.open(path) as image:
-        return np.asarray(image.convert("RGB"))
+        start = time.monotonic()
+        answer = tools.call("Page.navigate", {"url": url}, session)
+        if answer.get("errorText"):
+            raise RuntimeError(f"{browser} could not load {url}: {answer['errorText']}")
+        for wait_ms, path in shots:
+            time.sleep(max(0.0, start + wait_ms / 1000.0 - time.monotonic()))
+            data = tools.call("Page.captureScreenshot", {"format": "png"}, session)["data"]
+            path = Path(path)
+            path.write_bytes(base64.b64decode(data))
+            with Image.open(path) as image:
+                images.append(np.asarray(image.convert("RGB")))
+    return images
+
+
+class _DevTools:
+    """Chromium with the DevTools protocol on a pipe: JSON messages ending in NUL, commands in on the
+    child's fd 3, answers and events out on its fd 4."""
+
+    def __init__(self, command: list[str], deadline: float) -> None:
+        self.deadline = deadline
+        to_child, self._write = os.pipe()
+        self._read, from_child = os.pipe()
+
+        def wire() -> None:  # in the child: the pipes' ends on fds 3 and 4, open across exec
+            ends = os.dup(to_child), os.dup(from_child)
+            os.dup2(ends[0], 3)
+            os.dup2(ends[1], 4)
+
+        self.process = subprocess.Popen(
+            [*command[:1], "--remote-debugging-pipe", *command[1:]],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            preexec_fn=wire,
+            close_fds=False,
+            start_new_session=True,
+        )
+        os.close(to_child)
+        os.close(from_child)
+        self._buffer = b""
+        self._id = 0
+
+    def call(self, method: str, params: dict | None = None, session: str | None = None) -> dict:
+        """Send one command and return its result (events in between are dropped)."""
+        self._id += 1
+        message: dict = {"id": self._id, "method": method, "params": params or {}}
+        if session is not None:
+            message["sessionId"] = session
+        os.write(self._write, json.dumps(message).encode() + b"\0")
+        while True:
+            while b"\0" not in self._buffer:
+                left = self.deadline - time.monotonic()
+                ready, _, _ = select.select([self._read], [], [], max(left, 0.0))
+                if not ready:
+                    raise RuntimeError(f"Chromium did not answer {method} in time")
+                chunk = os.read(self._read, 1 << 20)
+                if not chunk:
+                    raise RuntimeError(f"Chromium ended before answering {method} (exit {self.process.poll()})")
+                self._buffer += chunk
+            raw, self._buffer = self._buffer.split(b"\0", 1)
+            answer = json.loads(raw)
+            if answer.get("id") == self._id:
+                if "error" in answer:
+                    raise RuntimeError(f"Chromium refused {method}: {answer['error']}")
+                return answer.get("result", {})
+
+    def __enter__(self) -> _DevTools:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(self.process.pid, signal.SIGKILL)
+        self.process.wait()
+        os.close(self._write)
+        os.close(self._read)
 
 
 def colour_mask(image: np.ndarray, rgb: tuple[int, int, int], tolerance: int = 40) -> np.ndarray:
