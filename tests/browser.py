@@ -23,6 +23,7 @@ import signal
 import subprocess
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -93,6 +94,7 @@ def screenshot(
     *,
     offline: bool = False,
     timeout: float = 60.0,
+    ready: Callable[[np.ndarray], bool] | None = None,
 ) -> np.ndarray:
     """Open ``url`` in headless Chromium, wait ``wait_ms``, save a PNG screenshot at ``path`` and return its pixels.
 
@@ -105,11 +107,14 @@ def screenshot(
     size : tuple of int
         The window's (width, height) in pixels.
     wait_ms : int
-        Real time from the start of the page's navigation to the shot, ms.
+        Real time from the start of the page's navigation (or from ``ready``) to the shot, ms.
     offline : bool
         Cut the network (`OFFLINE_FLAGS`): every http(s)/WebSocket request of the page fails.
     timeout : float
         Seconds of real time for the whole run before the browser is killed.
+    ready : callable, optional
+        A test of a screenshot (pixels in, bool out): the page is shot every half second until it passes, and
+        ``wait_ms`` counts from then (a page that loads slowly on a busy machine is waited for).
 
     Returns
     -------
@@ -121,7 +126,7 @@ def screenshot(
     RuntimeError
         When the browser fails, says the page could not be loaded, or overruns ``timeout``.
     """
-    return screenshots(url, [(wait_ms, path)], size, offline=offline, timeout=timeout)[0]
+    return screenshots(url, [(wait_ms, path)], size, offline=offline, timeout=timeout, ready=ready)[0]
 
 
 def screenshots(
@@ -131,6 +136,7 @@ def screenshots(
     *,
     offline: bool = False,
     timeout: float = 60.0,
+    ready: Callable[[np.ndarray], bool] | None = None,
 ) -> list[np.ndarray]:
     """Screenshots of one page at several times after its navigation, in one browser.
 
@@ -143,13 +149,15 @@ def screenshots(
     url : str
         The page.
     shots : list of (int, str or Path)
-        (time after the navigation began in ms, where the PNG goes), in increasing time.
+        (time after the navigation began, or after ``ready``, in ms; where the PNG goes), in increasing time.
     size : tuple of int
         The window's (width, height) in pixels.
     offline : bool
         Cut the network (`OFFLINE_FLAGS`).
     timeout : float
         Seconds of real time for the whole run before the browser is killed.
+    ready : callable, optional
+        A test of a screenshot: the page is shot every half second until it passes; the times count from then.
 
     Returns
     -------
@@ -159,9 +167,16 @@ def screenshots(
     Raises
     ------
     RuntimeError
-        When the browser fails, says the page could not be loaded, or overruns ``timeout``.
+        When the browser fails, says the page could not be loaded, or overruns ``timeout`` (or ``ready`` never
+        passes within it).
     """
     from PIL import Image
+
+    def shoot(path: str | Path) -> np.ndarray:
+        data = tools.call("Page.captureScreenshot", {"format": "png"}, session)["data"]
+        Path(path).write_bytes(base64.b64decode(data))
+        with Image.open(path) as image:
+            return np.asarray(image.convert("RGB"))
 
     browser = _binary(require_chromium())
     deadline = time.monotonic() + timeout
@@ -191,13 +206,21 @@ def screenshots(
         answer = tools.call("Page.navigate", {"url": url}, session)
         if answer.get("errorText"):
             raise RuntimeError(f"{browser} could not load {url}: {answer['errorText']}")
+        if ready is not None:
+            while True:
+                time.sleep(0.5)
+                try:
+                    if ready(shoot(shots[0][1])):
+                        break
+                except RuntimeError as error:  # the page is not yet there to be shot
+                    if "Not attached" not in str(error):
+                        raise
+                if time.monotonic() > deadline - 1.0:
+                    raise RuntimeError(f"{url} was never ready within {timeout} s (last shot: {shots[0][1]})")
+            start = time.monotonic()
         for wait_ms, path in shots:
             time.sleep(max(0.0, start + wait_ms / 1000.0 - time.monotonic()))
-            data = tools.call("Page.captureScreenshot", {"format": "png"}, session)["data"]
-            path = Path(path)
-            path.write_bytes(base64.b64decode(data))
-            with Image.open(path) as image:
-                images.append(np.asarray(image.convert("RGB")))
+            images.append(shoot(path))
     return images
 
 

@@ -52,6 +52,11 @@ def _camera(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return target + 2.2 * reach * direction, target
 
 
+def _drawn(image: np.ndarray) -> bool:
+    """Whether the page has drawn an arm: a few thousand pixels of LINK_COLOR's hue."""
+    return bool(hue_mask(image[: SIZE[1] - BAR, : SIZE[0] - PANEL], view.LINK_COLOR).sum() > 1000)
+
+
 def _assert_arm_drawn(image: np.ndarray, points: np.ndarray, eye: np.ndarray, target: np.ndarray) -> None:
     """The canvas is not blank, and pixels of LINK_COLOR's hue lie on every link's projection and (nearly)
     nowhere else in the part of the image left of the panel and above the playback bar."""
@@ -84,7 +89,8 @@ def puma(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[view.Viewer
 def test_the_live_viewer_draws_the_arm_where_it_projects(puma: tuple[view.Viewer, np.ndarray, Path]) -> None:
     viewer, points, folder = puma
     eye, target = _camera(points)
-    image = screenshot(f"{viewer.url}/?{camera_query(eye, target)}", folder / "puma_live.png", SIZE)
+    url = f"{viewer.url}/?{camera_query(eye, target)}"
+    image = screenshot(url, folder / "puma_live.png", SIZE, 1000, ready=_drawn)  # 1 s more: viser fades new shapes in
     _assert_arm_drawn(image, points, eye, target)
 
 
@@ -92,7 +98,8 @@ def test_the_saved_page_draws_the_arm_offline(puma: tuple[view.Viewer, np.ndarra
     viewer, points, folder = puma
     page = viewer.save_html(folder / "puma.html")
     eye, target = _camera(points)
-    image = screenshot(f"{page.as_uri()}?{camera_query(eye, target)}", folder / "puma_file.png", SIZE, offline=True)
+    url = f"{page.as_uri()}?{camera_query(eye, target)}"
+    image = screenshot(url, folder / "puma_file.png", SIZE, 1000, offline=True, ready=_drawn)
     _assert_arm_drawn(image, points, eye, target)
 
 
@@ -134,6 +141,9 @@ def test_the_cut_network_stops_a_file_page_loading_from_http(tmp_path: Path) -> 
         offline = screenshot(page.as_uri(), tmp_path / "offline.png", (200, 150), 800, offline=True)
         assert _Pixel.requests == 1, "the page reached the server with the network cut"
         np.testing.assert_array_equal(offline[100, 100], [0, 255, 0])  # the image failed
+        with pytest.raises(RuntimeError, match="ERR_PROXY_CONNECTION_FAILED"):  # and so does an http page
+            screenshot(f"http://127.0.0.1:{server.server_port}/", tmp_path / "http.png", (200, 150), 100, offline=True)
+        assert _Pixel.requests == 1
     finally:
         server.shutdown()
         server.server_close()
@@ -148,9 +158,10 @@ def test_a_saved_two_second_panda_run_replays_offline(tmp_path: Path) -> None:
     with run.view() as viewer:
         page = viewer.save_html(tmp_path / "panda.html")
     assert page.stat().st_size <= 5_000_000
-    # the page plays the run from its start once loaded (in a loop): shots 0.6 s apart show two times of it
-    times = (5000, 5600, 6200, 6800)
-    images = screenshots(page.as_uri(), [(t, tmp_path / f"panda_{t}.png") for t in times], SIZE, offline=True)
+    # the page plays the run from its start once loaded (in a loop): shots 0.6 s apart show several times of it
+    times = (0, 600, 1200, 1800)
+    shots = [(t, tmp_path / f"panda_{t}.png") for t in times]
+    images = screenshots(page.as_uri(), shots, SIZE, offline=True, ready=_drawn)
     for image in images:
         assert hue_mask(image[: SIZE[1] - BAR], view.LINK_COLOR).sum() > 2000, "the Panda is not drawn"
     moved = []
