@@ -29,8 +29,8 @@ pytestmark = pytest.mark.slow
 SIZE = (800, 600)
 PANEL = 350
 """Width of viser's control panel at the right of the live page (px): the arm is looked for left of it."""
-BAR = 50
-"""Height of the saved page's playback bar at the bottom (px)."""
+BAR = 40
+"""Height of the saved page's playback bar at the bottom (px): its canvas is the window less the bar."""
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -57,21 +57,24 @@ def _drawn(image: np.ndarray) -> bool:
     return bool(hue_mask(image[: SIZE[1] - BAR, : SIZE[0] - PANEL], view.LINK_COLOR).sum() > 1000)
 
 
-def _assert_arm_drawn(image: np.ndarray, points: np.ndarray, eye: np.ndarray, target: np.ndarray) -> None:
-    """The canvas is not blank, and pixels of LINK_COLOR's hue lie on every link's projection and (nearly)
-    nowhere else in the part of the image left of the panel and above the playback bar."""
+def _assert_arm_drawn(
+    image: np.ndarray, points: np.ndarray, eye: np.ndarray, target: np.ndarray, canvas: tuple[int, int] = SIZE
+) -> None:
+    """The canvas (``canvas`` pixels at the image's top left) is not blank, and pixels of LINK_COLOR's hue lie
+    on every link's projection and (nearly) nowhere else in the part of the image left of the live page's
+    panel and above the saved page's playback bar."""
     assert image.std() > 10, "the screenshot is blank"
     mask = hue_mask(image, view.LINK_COLOR)
     mask[:, SIZE[0] - PANEL :] = False
     mask[SIZE[1] - BAR :, :] = False
-    uv = project(points, eye, target, SIZE)
+    uv = project(points, eye, target, canvas)
     for k in range(len(points) - 1):
         if np.linalg.norm(points[k + 1] - points[k]) < 0.05:
             continue  # coincident frames (a spherical wrist): no capsule of their own
         u, v = np.round(0.5 * (uv[k] + uv[k + 1])).astype(int)
-        window = mask[v - 12 : v + 13, u - 12 : u + 13]
-        assert window.sum() >= 20, f"no link pixels around the projection of link {k + 1}'s capsule at ({u}, {v})"
-    low, high = uv.min(axis=0) - 40, uv.max(axis=0) + 40
+        window = mask[v - 6 : v + 7, u - 6 : u + 7]
+        assert window.sum() >= 40, f"no link pixels around the projection of link {k + 1}'s capsule at ({u}, {v})"
+    low, high = uv.min(axis=0) - 30, uv.max(axis=0) + 30
     rows, cols = np.nonzero(mask)
     inside = (cols >= low[0]) & (cols <= high[0]) & (rows >= low[1]) & (rows <= high[1])
     assert mask.sum() > 500
@@ -100,7 +103,7 @@ def test_the_saved_page_draws_the_arm_offline(puma: tuple[view.Viewer, np.ndarra
     eye, target = _camera(points)
     url = f"{page.as_uri()}?{camera_query(eye, target)}"
     image = screenshot(url, folder / "puma_file.png", SIZE, 1000, offline=True, ready=_drawn)
-    _assert_arm_drawn(image, points, eye, target)
+    _assert_arm_drawn(image, points, eye, target, (SIZE[0], SIZE[1] - BAR))
 
 
 class _Pixel(http.server.BaseHTTPRequestHandler):
