@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test check lint typecheck bench fuzz clean docs docs-serve
+.PHONY: run test check lint typecheck bench fuzz clean docs docs-serve browser
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -24,8 +24,15 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy src/armdyn
 
+# headless Chromium for the viewer's browser tests: Debian's package, installed when missing if we are root;
+# otherwise (or offline) those tests skip, saying why
+browser:
+	@command -v chromium >/dev/null || command -v chromium-browser >/dev/null || command -v google-chrome >/dev/null || \
+	  { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && apt-get update -qq && apt-get install -y -qq chromium; } || \
+	  echo "no Chromium (and not installed: needs root and apt-get): the browser tests will skip"
+
 # two workers, each test file in one (the files' own fixtures then run once)
-test: lint
+test: lint browser
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 # the fast lane: every module's tests but those marked slow (under a minute once Numba's cache is warm)
