@@ -28,7 +28,7 @@ typecheck: $(STAMP)
 # otherwise (or offline) those tests skip, saying why
 browser:
 	@command -v chromium >/dev/null || command -v chromium-browser >/dev/null || command -v google-chrome >/dev/null || \
-	  { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && apt-get update -qq && apt-get install -y -qq chromium; } || \
+	  { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; } || \
 	  echo "no Chromium (and not installed: needs root and apt-get): the browser tests will skip"
 
 # two workers, each test file in one (the files' own fixtures then run once)
