@@ -46,6 +46,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -54,7 +55,7 @@ from typer.testing import CliRunner
 
 import armdyn as ad
 import armdyn.control.drives
-from armdyn import actuators, control, kinematics, properties, statespace, study, task_space, trajectories
+from armdyn import actuators, cli, control, kinematics, properties, statespace, study, task_space, trajectories
 from armdyn.cli import app
 from armdyn.dynamics import regressor as parameterization
 from tests import fuzz_values as fv
@@ -2636,7 +2637,9 @@ class CommandLineFailure(Exception):  # noqa: N818 (a failure of the rule, not a
 def _command(argv: list[str]) -> str:
     """Run a command in a scratch folder: its output when it succeeded; a ModelError with its
     error line when it refused the arguments cleanly; a CommandLineFailure otherwise."""
-    with tempfile.TemporaryDirectory(dir=SCRATCH) as folder, contextlib.chdir(folder):
+    # a viewer that would serve until Ctrl-C (`view` without --html, `simulate --view`) returns at once
+    serving = mock.patch.object(cli, "_wait_for_ctrl_c", lambda: None)
+    with tempfile.TemporaryDirectory(dir=SCRATCH) as folder, contextlib.chdir(folder), serving:
         result = CliRunner().invoke(app, argv, catch_exceptions=True)
     problem = _cli_problem(result)
     if problem:

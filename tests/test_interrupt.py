@@ -48,7 +48,10 @@ def test_chunks_do_not_change_a_run_and_an_interrupt_keeps_the_rows_done() -> No
 
 def _interrupted(argv: list[str], wait: float, env: dict[str, str]) -> tuple[int, str, float]:
     """Run a command, send SIGINT after ``wait`` s: (exit code, stderr, seconds from SIGINT to its first line)."""
-    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    # the child starts with Ctrl-C's default action even where this process ignores it (a shell's background
+    # job, without job control, ignores SIGINT and its children inherit that; Python then installs no handler)
+    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # fmt: skip
     time.sleep(wait)
     sent = time.perf_counter()
     process.send_signal(signal.SIGINT)

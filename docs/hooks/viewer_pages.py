@@ -12,8 +12,8 @@ from typing import Any
 
 
 def on_post_build(config: Any, **kwargs: Any) -> None:
-    """The PUMA 560 under computed torque for 2 s, its Lambda and manipulability ellipsoids shown, as
-    assets/viewer/puma560-run.html."""
+    """assets/viewer/puma560-run.html: the PUMA 560 under computed torque for 2 s, its Lambda and manipulability
+    ellipsoids shown; assets/viewer/puma560-lambda.html: the arm at qn with the two ellipsoids."""
     import numpy as np
 
     import armdyn as ad
@@ -28,3 +28,5 @@ def on_post_build(config: Any, **kwargs: Any) -> None:
     run = ad.simulate(puma, ComputedTorque(100.0, 20.0), path, t_final=2.0, q0=start)
     with run.view(overlays=("lambda", "manipulability")) as viewer:
         viewer.save_html(target / "puma560-run.html")
+    with puma.view(overlays=("lambda", "manipulability"), q=start) as viewer:
+        viewer.save_html(target / "puma560-lambda.html")

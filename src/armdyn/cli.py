@@ -1668,6 +1668,12 @@ def _page_file(path: str, option: str) -> Path:
     return target
 
 
+def _wait_for_ctrl_c() -> None:
+    """Block until Ctrl-C (its KeyboardInterrupt ends the wait)."""
+    while True:
+        time.sleep(1.0)
+
+
 def _in_browser(make: Callable[[], Any], page_file: Path | None, page: str | None, serve: bool) -> None:
     """Start a viewer with ``make()``: write its page to ``page_file`` and close it, or (``serve``) print its address
     and serve it until Ctrl-C."""
@@ -1681,8 +1687,7 @@ def _in_browser(make: Callable[[], Any], page_file: Path | None, page: str | Non
         if serve:
             _activity.stop()
             console.print(f"viewer: open {viewer.url} in a browser (Ctrl-C to stop)")
-            while True:
-                time.sleep(1.0)
+            _wait_for_ctrl_c()
     except KeyboardInterrupt:
         pass
     finally:
@@ -1696,14 +1701,16 @@ def view(
     port: int = typer.Option(0, "--port", help=VIEW_PORT_HELP),
     html: str | None = typer.Option(None, "--html", help=VIEW_HTML_HELP),
     q: str | None = typer.Option(None, "--q", help=DRAW_Q_HELP.replace("--draw draws", "the viewer shows first")),
-    overlays: str = typer.Option("", "--overlays", help=VIEW_OVERLAYS_HELP),
+    overlays: str | None = typer.Option(None, "--overlays", help=VIEW_OVERLAYS_HELP),
 ) -> None:
     """Show an arm in 3-D in the browser (a viser page on 127.0.0.1): its URDF meshes or capsules, joint sliders,
     the tool frame and the overlays; with --html, write the scene as one offline page and exit."""
-    page_file = _page_file(html, "--html") if html else None
+    page_file = _page_file(html, "--html") if html is not None else None
     arm = _arm(name, strict)
     configuration = _joint_state(q, "--q", arm) if q is not None else None
-    chosen = tuple(part.strip() for part in overlays.split(",") if part.strip())
+    chosen = tuple(part.strip() for part in overlays.split(",")) if overlays is not None else ()
+    if any(not part for part in chosen):
+        _fail(f"--overlays {overlays!r}: give overlay names separated by commas, such as lambda,gravity")
     _in_browser(lambda: arm.view(port=port, q=configuration, overlays=chosen), page_file, html, page_file is None)
 
 
@@ -1767,7 +1774,7 @@ def simulate(
     plot_file = _output_file(plot, "--plot") if plot else None
     csv_file = _output_file(csv, "--csv") if csv else None
     animation_file = _animation_file(animate, "--animate") if animate else None
-    page_file = _page_file(html, "--html") if html else None
+    page_file = _page_file(html, "--html") if html is not None else None
     folder = _output_folder(output, "--output") if output else None
     arm = _arm(name, strict)
     start = _joint_state(q0, "--q0", arm) if q0 is not None else None

@@ -30,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import socket
 import threading
 import time
 import warnings
@@ -689,6 +690,7 @@ class Viewer:
         for note in self.warnings:
             warnings.warn(note, stacklevel=2)
         self._limits = self._torque_limits(torque_limits)
+        _check_address(host, port)
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints its address; ``url`` gives it
             self._server = viser.ViserServer(host=host, port=port, verbose=False)
         self._lock = threading.RLock()
@@ -1104,6 +1106,20 @@ class Viewer:
             pass
         finally:
             self.close()
+
+
+def _check_address(host: object, port: object) -> None:
+    """A ModelError unless ``port`` is 0 (a free one) or a port from 1 to 65535 that ``host`` can listen on now:
+    viser's server thread, failing to bind, would leave its caller waiting for ever."""
+    if isinstance(port, bool) or not isinstance(port, (int, np.integer)) or not 0 <= int(port) <= 65535:
+        raise ModelError(f"port must be an integer from 0 (a free port) to 65535, got {port!r}")
+    if not isinstance(host, str) or not host:
+        raise ModelError(f"host must be an address to listen on, such as '127.0.0.1', got {host!r}")
+    try:
+        with socket.create_server((host, int(port))):
+            pass
+    except (OSError, OverflowError, UnicodeError) as error:
+        raise ModelError(f"the viewer cannot listen on {host}:{port}: {error}") from None
 
 
 def _joint_frames(arm: Robot, T: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
