@@ -250,7 +250,15 @@ def kinematics_targets() -> list[Target]:
         _method("jacobian", {"q": q, "frame": FRAME, "link": LINK}),
         _method("jacobian_dot", {"q": q, "qd": qd, "frame": FRAME, "link": LINK}),
         Target("Robot.plot", _drawn, {"q": _one_state("q", none_ok=True)}, SMALL_ARMS),
+        Target("Robot.view", _viewed, {"q": _one_state("q", none_ok=True)}, SMALL_ARMS[:1]),
     ]
+
+
+def _viewed(arm: ad.Robot, **kwargs: object) -> np.ndarray:
+    """Robot.view's scene at the configuration given: its tool position and centre of mass (the server closed)."""
+    with arm.view(**kwargs) as viewer:
+        data = viewer.scene_data()
+        return np.concatenate([np.ravel(data["tool"])[:16], np.ravel(data["com"])])
 
 
 def _drawn(arm: ad.Robot, **kwargs: object) -> np.ndarray:

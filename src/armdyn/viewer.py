@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from armdyn import inputs
 from armdyn.errors import MissingDependencyError, ModelError
 
 if TYPE_CHECKING:
@@ -728,13 +729,11 @@ class Viewer:
         return self._checked(q)
 
     def _checked(self, q: Any) -> np.ndarray:
-        try:
-            values = np.array(q, dtype=float)
-        except (TypeError, ValueError):
-            raise ModelError(f"q must be {self.arm.n} numbers, got {q!r}") from None
-        if values.shape != (self.arm.n,) or not np.all(np.isfinite(values)):
-            raise ModelError(f"q must be {self.arm.n} finite numbers for {self.arm.name}, got {values}")
-        return values
+        """q as one finite real state of the arm (armdyn.inputs.state's checks), or a ModelError naming it."""
+        values = inputs.state(q, self.arm.n, "q", f" for '{self.arm.name}'")
+        if values.shape != (self.arm.n,):
+            raise ModelError(f"q must be one state of {self.arm.n} values for '{self.arm.name}', got {values.shape}")
+        return np.array(values, dtype=float)
 
     def _torque_limits(self, limits: Any) -> np.ndarray:
         n = self.arm.n
