@@ -321,10 +321,14 @@ def test_bad_input_is_refused(tmp_path: Path) -> None:
     with pytest.raises(ModelError, match="overlay 'mass'"):
         view.Viewer(arm, overlays=("mass",))
     with arm.view() as viewer:
-        with pytest.raises(ModelError, match="2 finite numbers"):
+        with pytest.raises(ModelError, match="q must be finite"):
             viewer.set_configuration([0.0, np.nan])
-        with pytest.raises(ModelError, match="2 finite numbers"):
+        with pytest.raises(ModelError, match=r"q must have shape \(2,\)"):
             viewer.set_configuration([0.0, 1.0, 2.0])
+        with pytest.raises(ModelError, match="one state of 2 values"):
+            viewer.set_configuration([[0.0, 1.0]])
+        with pytest.raises(ModelError, match="q must be real"):
+            viewer.set_configuration([0.0, 1j])
         with pytest.raises(ModelError, match="does not exist"):
             viewer.save_html(tmp_path / "nowhere" / "page.html")
         with pytest.raises(ModelError, match="needs a run"):
