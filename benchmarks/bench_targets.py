@@ -40,7 +40,7 @@ import numba
 import numpy as np
 import pinocchio as pin
 from bench_simulation import GAINS, _loop_aba, _loop_computed_torque
-from bench_task import PANDA, PANDA_LOCKED, ROBOTS, pinocchio_model
+from bench_task import PANDA, ROBOTS, panda, pinocchio_model
 from harness import Candidate, Report, Table, arguments, check, describe, ratio, samples, us
 
 from armdyn import simulation
@@ -77,12 +77,8 @@ def arms() -> dict[str, tuple[ad.Robot, pin.Model]]:
         warnings.simplefilter("ignore")  # the Panda's mimic finger joint loads as an independent joint
         ur5 = ad.load_urdf(ROBOTS / "ur_description" / "urdf" / "ur5_robot.urdf").without_friction()
         panda9 = ad.load_urdf(PANDA).without_friction()
-        panda7 = ad.load_urdf(PANDA, locked=PANDA_LOCKED).without_friction()
     full = pin.buildModelFromUrdf(str(PANDA))
-    q_lock = pin.neutral(full)
-    for name, value in PANDA_LOCKED.items():
-        q_lock[full.joints[full.getJointId(name)].idx_q] = value
-    reduced = pin.buildReducedModel(full, [full.getJointId(name) for name in PANDA_LOCKED], q_lock)
+    panda7, reduced, _ = panda()  # the fingers locked in both libraries (bench_task)
     puma = ad.models.puma560().without_friction()
     return {
         "UR5": (ur5, pin.buildModelFromUrdf(str(ROBOTS / "ur_description" / "urdf" / "ur5_robot.urdf"))),
