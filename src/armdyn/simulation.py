@@ -1926,14 +1926,7 @@ def run_many(
             done = count if outcomes[r, 0] < 0 else int(outcomes[r, 0])
             for k in range(done):
                 row = first + k
-                for i in range(n):
-                    error = record[5][k, i] - record[1][k, i]
-                    summary[RMS_ERROR, i] += error * error
-                    summary[MAX_TAU, i] = max(summary[MAX_TAU, i], abs(record[4][k, i]))
-                    if row >= after:
-                        summary[MAX_ERROR_AFTER, i] = max(summary[MAX_ERROR_AFTER, i], abs(error))
-                    summary[FINAL_ERROR, i] = error
-                    summary[FINAL_Q, i] = record[1][k, i]
+                _keep_row(summary, record[5][k], record[1][k], record[4][k], row, after)
                 if every > 0 and row % every == 0:
                     slot = row // every
                     kept_q[r, slot], kept_qd[r, slot] = record[1][k], record[2][k]
