@@ -11,6 +11,9 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[test]"
+	# the MJCF arms of the tests (Panda, Sawyer, iiwa, Jaco, Kinova Gen3, UR5e, xArm7 ...): files only, read by
+	# MuJoCo and never imported, so without the packages' own dependencies
+	$(BIN)/python -m pip install --quiet --no-deps "robosuite==1.5.2" "robosuite-models==1.0.0"
 	touch $(STAMP)
 
 run: $(STAMP)

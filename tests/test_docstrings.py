@@ -54,6 +54,7 @@ MODULES = (
     "armdyn.observers.contact",
     "armdyn.observers.reaction",
     "armdyn.io.model_file",
+    "armdyn.io.mjcf",
     "armdyn.task_space",
     "armdyn.control.task",
     "armdyn.control.drives",

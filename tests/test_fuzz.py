@@ -957,6 +957,94 @@ def urdf_targets(risky: bool = False) -> list[Target]:
     return [Target("load_urdf" + (" (XML bombs)" if risky else ""), lambda arm, **kw: ad.load_urdf(**kw), args)]
 
 
+MJCF = """<mujoco model="fuzz">
+  <worldbody>
+    <body name="upper">
+      <joint name="j1" axis="0 0 1" damping="0.1" armature="0.01"/>
+      <inertial pos="0.2 0 0" mass="1" diaginertia="0.01 0.02 0.02"/>
+      <body name="fore" pos="0.4 0 0">
+        <joint name="j2" axis="0 1 0"/>
+        <inertial pos="0.1 0 0.02" mass="0.5" diaginertia="0.005 0.01 0.01"/>
+        <site name="tip" pos="0.2 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <dcmotor joint="j1" gear="50" resistance="1.2" motorconst="0.05 0.05" inductance="0.002 0"/>
+    <dcmotor joint="j2" gear="30" resistance="2" motorconst="0.04 0.04" inductance="0.003 0"/>
+  </actuator>
+</mujoco>"""
+
+
+def mjcf_values() -> Kinds:
+    """MJCF sources: a good file and its text, files MuJoCo cannot compile or a tree cannot hold, paths that are
+    no file, junk."""
+    good = _write(MJCF, ".xml")
+
+    def file(label: str, text: str) -> Value:
+        path = _write(text, ".xml")
+        return Value(label, path, "bad", names=(path.name,))
+
+    hostile = [
+        ("not XML", "<<<"),
+        ("a URDF's root", "<robot name='x'/>"),
+        ("bad number", MJCF.replace('mass="1"', 'mass="x"')),
+        ("missing mesh", MJCF.replace("<site", "<geom type='mesh' mesh='m'/><site").replace(
+            "<worldbody>", "<asset><mesh name='m' file='missing.stl'/></asset><worldbody>")),
+        ("ball joint", MJCF.replace('<joint name="j2" axis="0 1 0"/>', '<joint name="j2" type="ball"/>')),
+        ("free joint", MJCF.replace('<joint name="j1" axis="0 0 1" damping="0.1" armature="0.01"/>',
+                                    '<freejoint name="j1"/>')),
+        ("no joint", "<mujoco><worldbody><body><geom size='0.1'/></body></worldbody></mujoco>"),
+    ]  # fmt: skip
+    items = [
+        Value("str path", str(good), "same", good),
+        Value("MJCF text", MJCF, "same", good),
+        Value("missing file", SCRATCH / "missing.xml", "bad", names=("missing.xml",)),
+        Value("a folder", SCRATCH, "bad", names=(SCRATCH.name,)),
+        Value("path with NUL", str(good) + "\x00", "bad", names=(good.name, "source")),
+        Value("int", 3, "bad"),
+        Value("bytes path", bytes(good), "either", good),
+    ]
+    junk_sources = junk(skip=("bytes",), names=("source",))
+    return [lazy(lambda a=item: file(*a)) for item in hostile] + items_values(items + junk_sources)
+
+
+def mjcf_targets() -> list[Target]:
+    import mujoco
+
+    good = _write(MJCF, ".xml")
+    model = mujoco.MjModel.from_xml_string(MJCF)
+    gravity = np.array([0.0, 0.0, -9.81])
+    q = np.array([0.3, -0.7])
+    view = lambda arm: arm.inertia_matrix(q)  # noqa: E731 (a Robot or the arm with its drives)
+    gravities = state_values(gravity, batch=False, bounded=False)
+
+    def model_gravity(value: Value) -> Value:  # None is valid: the model's own gravity
+        return dataclasses.replace(value, verdict="either") if value.value is None else value
+
+    flags = Arg(lambda arm: False, lambda arm: choice_values([True, False], [], ["no", 0, None], "either"))
+    common = {
+        "gravity": Arg(lambda arm: gravity, lambda arm: [kind.map(model_gravity) for kind in gravities]),
+        "tool_link": Arg(
+            lambda arm: None, lambda arm: choice_values(["tip", "fore"], ["upper ", "nothing"], [], "bad")
+        ),
+        "locked": Arg(
+            lambda arm: None,
+            lambda arm: choice_values([{}], [{"j3": 0.0}, {"j1": np.nan}, {"j1": 0.0, "j2": 0.0}], [], "bad"),
+            names=("lock", "locking"),
+        ),
+        "strict": flags,
+        "drives": flags,
+    }
+    models = items_values([Value("compiled model", model, "same", model), *junk(names=("model",))])
+    sources = {"source": Arg(lambda arm: good, lambda arm: mjcf_values())}
+    compiled = {"model": Arg(lambda arm: model, lambda arm: models)}
+    return [
+        Target("load_mjcf", lambda arm, **kw: ad.load_mjcf(**kw), sources | common, view=view),
+        Target("from_mujoco", lambda arm, **kw: ad.from_mujoco(**kw), compiled | common, view=view),
+    ]
+
+
 # ----- identification, parameterization ------------------------------------------------------
 
 _SAMPLES: dict[int, dict[str, np.ndarray]] = {}
@@ -2924,6 +3012,7 @@ TARGETS = [
     *constructor_targets(),
     *model_targets(),
     *urdf_targets(),
+    *mjcf_targets(),
     *parameterization_targets(),
     *module_targets(),
     *control_targets(),

@@ -7,6 +7,7 @@ from armdyn.dynamics.regressor import base_parameters
 from armdyn.dynamics.threads import set_threads, threads
 from armdyn.errors import ArgumentError, MissingDependencyError, ModelError, SimulationError, SingularError
 from armdyn.identification import identify
+from armdyn.io.mjcf import from_mujoco, load_mjcf
 from armdyn.model import ArmModel, Inertial, Joint, Link
 from armdyn.robot import Robot
 from armdyn.urdf import load_urdf
@@ -62,9 +63,11 @@ __all__ = [
     "SimulationError",
     "SingularError",
     "base_parameters",
+    "from_mujoco",
     "identify",
     "kinematics",
     "lagrange",
+    "load_mjcf",
     "load_urdf",
     "models",
     "set_threads",

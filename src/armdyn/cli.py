@@ -8,7 +8,7 @@ usage errors), 1 for an unexpected internal error (and for ``check`` when a prop
 fails). ``armdyn --debug COMMAND ...`` shows the full traceback instead. Warnings from the
 library print as one line each, ``warning: ...``, on stderr.
 
-An arm is named by a built-in name, a URDF file (.urdf) or a DH table file (.json, .yaml,
+An arm is named by a built-in name, a URDF file (.urdf), a MuJoCo MJCF file (.xml) or a DH table file (.json, .yaml,
 .yml; see ``armdyn.models.load_dh_file``), the same way for every command (``_arm``). While
 a command works, a spinner or progress bar shows on stderr (``_Activity``): when stderr is
 a terminal, always with ``armdyn --progress``, never with ``--no-progress``. Tables carry
@@ -487,14 +487,18 @@ def _vector(values: object, digits: int = 4) -> str:
     return "[" + ", ".join(_number(v, digits) for v in np.asarray(values).ravel()) + "]"
 
 
-ARM_FILES = (".urdf", ".json", ".yaml", ".yml")
-ARM_HELP = "A built-in arm (see 'armdyn models'), a URDF file (.urdf) or a DH table file (.json, .yaml)."
+ARM_FILES = (".urdf", ".xml", ".mjcf", ".json", ".yaml", ".yml")
+ARM_HELP = (
+    "A built-in arm (see 'armdyn models'), a URDF file (.urdf), a MuJoCo MJCF file (.xml) or a DH table file "
+    "(.json, .yaml)."
+)
 STRICT_HELP = "Refuse inertias that break the triangle inequality (and, in a URDF, joints that move no mass)."
 
 
 def _arm(name: str, strict: bool = True, locked: dict[str, float] | None = None) -> Robot:
-    """The arm a command names: a built-in arm, a URDF file (.urdf) or a DH table file (.json,
-    .yaml, .yml); ``strict`` as ``armdyn.load_urdf`` and ``armdyn.models.load_dh_file`` take it.
+    """The arm a command names: a built-in arm, a URDF file (.urdf), a MuJoCo MJCF file (.xml, .mjcf,
+    read by ``armdyn.load_mjcf``) or a DH table file (.json, .yaml, .yml); ``strict`` as
+    ``armdyn.load_urdf`` and ``armdyn.models.load_dh_file`` take it.
 
     Parameters
     ----------
@@ -519,12 +523,18 @@ def _arm(name: str, strict: bool = True, locked: dict[str, float] | None = None)
     """
     _activity.status(f"{_activity.command} {name}".strip())
     suffix = Path(name).suffix.lower()
-    if locked and suffix != ".urdf":
-        _fail(f"--lock takes joints of a URDF file; {name} is not one")
+    if locked and suffix not in (".urdf", ".xml", ".mjcf"):
+        _fail(f"--lock takes joints of a URDF or MJCF file; {name} is not one")
     if suffix == ".urdf":
         from armdyn.urdf import load_urdf
 
         return load_urdf(name, strict=strict, locked=locked)
+    if suffix in (".xml", ".mjcf"):
+        from armdyn.io.mjcf import load_mjcf
+
+        arm = load_mjcf(name, strict=strict, locked=locked)
+        assert isinstance(arm, Robot)  # without drives=True
+        return arm
     if suffix == ".json" and _is_model_file(name):
         from armdyn.io.model_file import load_arm
 
@@ -536,11 +546,15 @@ def _arm(name: str, strict: bool = True, locked: dict[str, float] | None = None)
     except ModelError as error:
         path = Path(name)
         if path.is_file():
-            _fail(f"{name}: an arm file must be a URDF (.urdf) or a DH table (.json, .yaml, .yml)")
+            _fail(
+                f"{name}: an arm file must be a URDF (.urdf), an MJCF (.xml, .mjcf) or a DH table (.json, .yaml, .yml)"
+            )
         if path.suffix or len(path.parts) > 1:
             _fail(f"{name}: no such file (an arm is a built-in name, {', '.join(catalog.names())}; a URDF file, "
-                  ".urdf; or a DH table file, .json or .yaml)")  # fmt: skip
-        raise ModelError(f"{error}; or give a URDF file (.urdf) or a DH table file (.json, .yaml)") from None
+                  ".urdf; an MJCF file, .xml; or a DH table file, .json or .yaml)")  # fmt: skip
+        raise ModelError(
+            f"{error}; or give a URDF file (.urdf), an MJCF file (.xml) or a DH table file (.json, .yaml)"
+        ) from None
 
 
 def _is_model_file(path: str) -> bool:
@@ -1153,7 +1167,7 @@ def identify(
     lock: str | None = typer.Option(
         None,
         "--lock",
-        help='With --log and a URDF arm: joints held fixed, "name=value,..." (e.g. a gripper\'s fingers).',
+        help='With --log and a URDF or MJCF arm: joints held fixed, "name=value,..." (e.g. a gripper\'s fingers).',
     ),
 ) -> None:
     """Identify an arm's base parameters by least squares: from measured samples in a CSV file, or
@@ -1345,7 +1359,7 @@ def observe(
     quantile: float = typer.Option(0.999, "--quantile", help="The band's quantile of the free residuals per joint."),
     margin: float = typer.Option(2.0, "--margin", help="The band widened about its centre by this factor."),
     strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
-    lock: str | None = typer.Option(None, "--lock", help='A URDF\'s joints held fixed, "name=value,...".'),
+    lock: str | None = typer.Option(None, "--lock", help='A URDF or MJCF file\'s joints held fixed, "name=value,...".'),
 ) -> None:
     """Run the generalized-momentum observer over a log (the external joint torque without a sensor), set a band
     from its collision-free start, and report detections, the link in contact and the residual's rms."""
