@@ -290,7 +290,8 @@ console = _Console(width=None if Console().is_terminal else 140)
 ACTUATORS_HELP = (
     "Drive every joint through its actuator (Section 3.6): dc (DC motors with their electrics; the PUMA 560's "
     "own motors with representative electrics), flexible (the same behind elastic shafts) or hydraulic (servo "
-    "valves with rotary motors or pistons); representative drives sized from the arm's gravity load."
+    "valves with rotary motors or pistons); representative drives sized from the arm's gravity load; or file (an "
+    "MJCF file's own dcmotor actuators)."
 )
 
 DRIVE_GAINS = (
@@ -681,12 +682,21 @@ def show(
 
 
 def _actuated(arm: Robot, name: str, kind: str) -> ActuatedArm:
-    """The arm with drives of ``kind`` (armdyn.actuators.representative_drives; the built-in PUMA 560's motors)."""
+    """The arm with drives of ``kind`` (armdyn.actuators.representative_drives; the built-in PUMA 560's motors; an
+    MJCF file's dcmotor actuators, armdyn.load_mjcf(drives=True))."""
     from armdyn import actuators
 
-    kinds = ("dc", "flexible", "hydraulic")
+    kinds = ("dc", "flexible", "hydraulic", "file")
     if kind not in kinds:
         _fail(f"--actuators must be one of {', '.join(kinds)}, got '{kind}'")
+    if kind == "file":
+        if Path(name).suffix.lower() not in (".xml", ".mjcf"):
+            _fail(f"--actuators file reads the dcmotor actuators of an MJCF file (.xml, .mjcf); {name} is not one")
+        from armdyn.io.mjcf import load_mjcf
+
+        driven = load_mjcf(name, drives=True)
+        assert isinstance(driven, actuators.ActuatedArm)
+        return driven
     if kind == "dc" and name.lower() == "puma560":
         return actuators.puma560_with_drives()
     return actuators.representative_drives(arm, kind)
