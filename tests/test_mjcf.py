@@ -17,7 +17,7 @@ from scipy.integrate import solve_ivp
 
 import armdyn as ad
 from armdyn.errors import ModelError
-from armdyn.io.mjcf import from_mujoco, load_mjcf
+from armdyn.io.mjcf import _joint_name, from_mujoco, load_mjcf
 from tests.helpers import ROBOTS
 
 mujoco = pytest.importorskip("mujoco")
@@ -94,9 +94,6 @@ def without_coulomb(arm):
 
 def assert_same_dynamics(model, arm, label: str, seed: int = 0) -> tuple[float, float, float]:
     """armdyn's M, bias and inverse dynamics (its viscous friction in, Coulomb out) equal MuJoCo's to 1e-12."""
-    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)]
-    from armdyn.io.mjcf import _joint_name
-
     names = [_joint_name(model, j) for j in range(model.njnt)]
     dofs = np.array([model.jnt_dofadr[names.index(name)] for name in arm.joint_names])
     q, qd, qdd = random_states(arm, seed)
@@ -129,8 +126,6 @@ URDF_FILES = sorted(path.relative_to(ROBOTS).as_posix() for path in ROBOTS.rglob
 
 def _locked_equalities(model) -> dict[str, float]:
     """The joints of MuJoCo's joint equalities (a URDF's mimic joints), locked at 0."""
-    from armdyn.io.mjcf import _joint_name
-
     joints = {int(j) for e in range(model.neq) for j in (model.eq_obj1id[e], model.eq_obj2id[e]) if j >= 0}
     return {_joint_name(model, j): 0.0 for j in joints}
 
@@ -212,8 +207,6 @@ def test_a_floating_base_locked_is_the_fixed_base_arm(distribution: str, name: s
     path = _robot_xml(distribution, name)
     model = mujoco.MjModel.from_xml_path(str(path))
     free = next(j for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE)
-    from armdyn.io.mjcf import _joint_name
-
     free_name = _joint_name(model, free)
     with pytest.raises(ModelError, match=rf"free joint '{free_name}'.*floating base.*locked="):
         load_mjcf(path)
@@ -264,12 +257,14 @@ def test_link_frames_are_mujocos_body_frames_with_anchors_refs_and_several_joint
     for q in random_states(arm)[0]:
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
-        frames = arm.link_frames(q) if hasattr(arm, "link_frames") else None
         tool = arm.tool_pose(q)
         site = model.site("tip").id
         assert np.allclose(tool[:3, 3], data.site_xpos[site], atol=1e-14)
         assert np.allclose(tool[:3, :3], data.site_xmat[site].reshape(3, 3), atol=1e-14)
-        del frames
+        transforms = arm.link_transforms(q)
+        for index, body in ((1, "a"), (2, "b")):  # body a has two joints: its frame is the second link's
+            assert np.allclose(transforms[index][:3, 3], data.xpos[model.body(body).id], atol=1e-14)
+            assert np.allclose(transforms[index][:3, :3], data.xmat[model.body(body).id].reshape(3, 3), atol=1e-14)
 
 
 # ----- the dcmotor as the DC drive of Section 3.6 ----------------------------------------------------------------
@@ -464,3 +459,41 @@ def test_gravity_is_the_models_unless_given_or_disabled() -> None:
     assert np.array_equal(load_mjcf(xml, gravity=[0, 0, -1]).gravity, [0.0, 0.0, -1.0])
     off = xml.replace("<option ", '<option><flag gravity="disable"/></option><option ')
     assert np.array_equal(load_mjcf(off).gravity, [0.0, 0.0, 0.0])
+
+
+# ----- the command line -------------------------------------------------------------------------------------------
+def test_commands_take_an_mjcf_file(tmp_path: Path) -> None:
+    from tests.helpers import assert_one_error_line, invoke
+
+    path = tmp_path / "driven.xml"
+    path.write_text(DC_ARM.format(step=1e-3))
+    shown = invoke("show", path, "--actuators", "file")
+    assert shown.exit_code == 0, shown.output
+    assert "two joints with DC motors" in shown.stdout and "shoulder motor" in shown.stdout
+    run = invoke("simulate", path, "--actuators", "file", "--t-final", "0.05")
+    assert run.exit_code == 0, run.output
+    assert_one_error_line(invoke("show", tmp_path / "nothere.xml"), "nothere.xml: no such MJCF file")
+    broken = tmp_path / "broken.xml"
+    broken.write_text("<mujoco><worldbody><body><joint type='ball'/><geom size='0.1'/></body></worldbody></mujoco>")
+    assert_one_error_line(invoke("show", broken), "broken.xml", "ball joints")
+    assert_one_error_line(invoke("show", "puma560", "--actuators", "file"), "--actuators file reads the dcmotor")
+
+
+@pytest.mark.parametrize("name", ["panda", "iiwa", "ur5e", "sawyer", "jaco", "kinova3", "xarm7"])
+def test_pinocchios_own_mjcf_reader_gives_the_same_rigid_body_dynamics(name: str) -> None:
+    """A second, independent reading of the same files: Pinocchio's MJCF parser (which leaves out armature,
+    damping and friction loss) and armdyn's rigid-body inverse dynamics agree to 1e-12."""
+    pin = pytest.importorskip("pinocchio")
+    path = _robot_xml("robosuite", name)
+    model = pin.buildModelFromMJCF(str(path))
+    data = model.createData()
+    arm = load_mjcf(path).without_friction().without_motors()
+    ids = [model.getJointId(joint) for joint in arm.joint_names]
+    q_index, v_index = [model.joints[i].idx_q for i in ids], [model.joints[i].idx_v for i in ids]
+    q, qd, qdd = random_states(arm)
+    theirs = []
+    for k in range(STATES):
+        configuration, velocity, acceleration = pin.neutral(model), np.zeros(model.nv), np.zeros(model.nv)
+        configuration[q_index], velocity[v_index], acceleration[v_index] = q[k], qd[k], qdd[k]
+        theirs.append(pin.rnea(model, data, configuration, velocity, acceleration)[v_index])
+    assert relative(arm.inverse_dynamics(q, qd, qdd), np.array(theirs)) < TOLERANCE
