@@ -350,9 +350,7 @@ def _body(link: Link) -> Inertial:
     return link.inertial if np.array_equal(offset, np.eye(4)) else link.inertial.transformed(offset)
 
 
-def _mujoco_inertia(
-    robot: ArmModel, index: int, axis: np.ndarray | None
-) -> tuple[np.ndarray, float, dict[str, float]]:
+def _mujoco_inertia(robot: ArmModel, index: int, axis: np.ndarray | None) -> tuple[np.ndarray, float, dict[str, float]]:
     """(inertia written, excess d, tendon coefficients): the inertia about the centre of mass, unchanged when
     MuJoCo accepts it (principal moments A <= B <= C with A >= MIN_INERTIA and A + B >= C). Otherwise:
 
@@ -455,9 +453,7 @@ def _link_data(link: Link) -> list[float]:
 
 def _warn_friction(name: str, links: Iterable[Link]) -> None:
     """Warn, naming the joints, when MuJoCo will simulate their friction differently from armdyn."""
-    different = [
-        link.name for link in links if link.coulomb[0] != -link.coulomb[1] or _friction_laws(link)
-    ]
+    different = [link.name for link in links if link.coulomb[0] != -link.coulomb[1] or _friction_laws(link)]
     if different:
         warnings.warn(
             f"to_mjcf('{name}'): joints {different} have asymmetric Coulomb, Stribeck or sigmoid friction, which "
