@@ -59,7 +59,7 @@ from armdyn import kinematics
 from armdyn.actuators.hydraulics import Hydraulic
 from armdyn.actuators.motors import DCMotor
 from armdyn.errors import ModelError
-from armdyn.io.urdf_out import _friction_laws, _numbers, _unique
+from armdyn.io.urdf_out import UNBOUNDED, _friction_laws, _numbers, _unique
 from armdyn.model.arm import ArmModel, Link
 from armdyn.model.inertial import Inertial
 
@@ -115,9 +115,6 @@ MIN_INERTIA = 2e-14
 """The smallest mass (kg) and principal moment of inertia (kg m^2) written for a moving body: twice the 1e-14
 below which MuJoCo's ``fullinertia`` refuses a principal moment (mjMINVAL = 1e-15 for the mass), a margin
 for the rounding of the principal moments."""
-
-UNBOUNDED = 1e16
-"""The number written for the infinite side of a joint range that has one finite side."""
 
 
 def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = None) -> str:
