@@ -132,8 +132,9 @@ def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = N
       ``limited="true"`` when a limit is finite (an infinite side written as +-1e16);
       ``armature`` G^2 Jm, ``damping`` G^2 B and ``frictionloss`` |G| Tc+ when Tc- = -Tc+;
     - ``<inertial pos mass fullinertia>``: the centre of mass and the inertia about it in the
-      body's frame (a point mass, a thin rod or a massless link raised to ``MIN_INERTIA``, which
-      MuJoCo requires: see the module docstring);
+      body's frame, where MuJoCo would refuse it (a point mass, a thin rod, a massless link, moments
+      that break the triangle inequality) changed as the module docstring says: exactly, or
+      with a fixed tendon ``armdyn:inertia:<joint>``, or by at most ``MIN_INERTIA``;
     - ``<numeric name="armdyn:link:<joint>" data>`` (``LINK_FIELDS``) when the joint has what
       MuJoCo cannot hold: asymmetric Coulomb friction, Stribeck or sigmoid friction, a motor
       (Jm != 0 or G != 1);
@@ -171,7 +172,7 @@ def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = N
     armdyn.ModelError
         When ``arm`` is neither an ArmModel nor an ActuatedArm, or has symbolic (SymPy)
         parameters; when a body's principal moments break the triangle inequality, which MuJoCo
-        refuses (the message names the link); when the file cannot be written (the message
+        refuses, and no tendon can hold the excess (the message names the link); when the file cannot be written (the message
         names it).
 
     Warns
