@@ -172,8 +172,8 @@ def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = N
     armdyn.ModelError
         When ``arm`` is neither an ArmModel nor an ActuatedArm, or has symbolic (SymPy)
         parameters; when a body's principal moments break the triangle inequality, which MuJoCo
-        refuses, and no tendon can hold the excess (the message names the link); when the file cannot be written (the message
-        names it).
+        refuses, and no tendon can hold the excess (the message names the link); when the file
+        cannot be written (the message names it).
 
     Warns
     -----
