@@ -49,6 +49,7 @@ MODULES = (
     "armdyn.identification.payload",
     "armdyn.identification.gains",
     "armdyn.io.urdf_out",
+    "armdyn.io.mjcf_out",
     "armdyn.observers.momentum",
     "armdyn.observers.detection",
     "armdyn.observers.contact",

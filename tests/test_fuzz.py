@@ -221,6 +221,9 @@ def dynamics_targets() -> list[Target]:
     targets.append(
         Target("Robot.to_urdf", lambda arm: arm.to_urdf(), {}, ARMS, view=lambda text: np.array([len(text)]))
     )
+    targets.append(
+        Target("Robot.to_mjcf", lambda arm: arm.to_mjcf(), {}, ARMS, view=lambda text: np.array([len(text)]))
+    )
     return targets
 
 

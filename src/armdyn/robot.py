@@ -69,6 +69,28 @@ class Robot(ArmModel):
 
         return to_urdf(self, path)
 
+    def to_mjcf(self, path: str | Path | None = None) -> str:
+        """The arm as MuJoCo MJCF text, written to ``path`` when given (``armdyn.io.mjcf_out.to_mjcf``).
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            The file to write.
+
+        Returns
+        -------
+        str
+            The MJCF; MuJoCo computes the same M(q), bias and inverse dynamics from it.
+
+        Raises
+        ------
+        armdyn.ModelError
+            For a symbolic arm, or a path that cannot be written.
+        """
+        from armdyn.io.mjcf_out import to_mjcf
+
+        return to_mjcf(self, path)
+
     # dynamics (armdyn.dynamics.api)
     inverse_dynamics = api.inverse_dynamics
     forward_dynamics = api.forward_dynamics

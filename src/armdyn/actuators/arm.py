@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import reprlib
 from collections.abc import Sequence
 
@@ -882,6 +883,32 @@ class ActuatedArm:
             It only slices the states.
         """
         return packing.drive_record(self, states, applied)
+
+    def to_mjcf(self, path: str | os.PathLike[str] | None = None) -> str:
+        """The arm with its drives as MuJoCo MJCF text, written to ``path`` when given (``armdyn.io.mjcf_out.to_mjcf``).
+
+        Each rigid DC drive becomes a ``dcmotor`` actuator (gear 1/r, resistance, motor constants,
+        inductance, rotor armature and damping, voltage range), whose control is the voltage
+        (Section 3.6); a drive without a MuJoCo counterpart gets no actuator, with a warning.
+
+        Parameters
+        ----------
+        path : str or os.PathLike, optional
+            The file to write.
+
+        Returns
+        -------
+        str
+            The MJCF; MuJoCo's M(q) is this arm's M'(q) = M(q) + R^-2 J_M.
+
+        Raises
+        ------
+        armdyn.ModelError
+            For a path that cannot be written.
+        """
+        from armdyn.io.mjcf_out import to_mjcf
+
+        return to_mjcf(self, path)
 
     def __repr__(self) -> str:
         kinds = ", ".join(type(drive).__name__ for drive in self.drives)
