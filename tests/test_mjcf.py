@@ -497,3 +497,102 @@ def test_pinocchios_own_mjcf_reader_gives_the_same_rigid_body_dynamics(name: str
         configuration[q_index], velocity[v_index], acceleration[v_index] = q[k], qd[k], qdd[k]
         theirs.append(pin.rnea(model, data, configuration, velocity, acceleration)[v_index])
     assert relative(arm.inverse_dynamics(q, qd, qdd), np.array(theirs)) < TOLERANCE
+
+
+# ----- round trips: to_mjcf then load_mjcf, to_urdf then load_urdf -------------------------------------------------
+def _with_friction_and_motors(arm):
+    """The arm with viscous, Coulomb (symmetric on even joints, asymmetric on odd), rotor inertia and gears on every
+    joint, and Stribeck and sigmoid friction on the first two: what the files must carry."""
+    rng = np.random.default_rng(7)
+    links = []
+    for j, link in enumerate(arm.links):
+        plus = float(rng.uniform(0.05, 0.3))
+        changes = {
+            "viscous": float(rng.uniform(0.001, 0.01)),
+            "coulomb": (plus, -plus if j % 2 == 0 else -0.5 * plus),
+            "motor_inertia": float(rng.uniform(1e-5, 1e-4)),
+            "gear_ratio": float(rng.choice([-1, 1]) * rng.uniform(5, 60)),
+        }
+        if j == 0:
+            changes["stribeck"] = (0.2, 0.05)
+        if j == 1:
+            changes["sigmoid"] = (0.5, 10.0, 0.1)
+        links.append(dataclasses.replace(link, **changes))
+    return arm.replace(links)
+
+
+def _round_trip_arms():
+    arms = [(name, ad.models.load(name)) for name in ad.models.names() if name != "stanford"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        arms += [("ur5", ad.load_urdf(ROBOTS / "ur_description/urdf/ur5_robot.urdf"))]
+        arms += [("panda", ad.load_urdf(ROBOTS / "panda_description/urdf/panda.urdf"))]
+    return arms + [(f"{name} with friction and motors", _with_friction_and_motors(arm)) for name, arm in arms]
+
+
+ROUND_TRIP_ARMS = _round_trip_arms()
+
+
+def assert_same_arm(back, arm, label: str) -> None:
+    """The same M, G, inverse dynamics with friction, friction forces and tool pose at 20 states, to 1e-12."""
+    assert back.joint_names == arm.joint_names and back.kinds == arm.kinds
+    q, qd, qdd = random_states(arm, seed=3)
+    errors = {
+        "M": relative(back.inertia_matrix(q), arm.inertia_matrix(q)),
+        "G": relative(back.gravity_vector(q), arm.gravity_vector(q)),
+        "tau": relative(back.inverse_dynamics(q, qd, qdd), arm.inverse_dynamics(q, qd, qdd)),
+        "F": relative(back.friction(qd), arm.friction(qd)) if np.any(arm.friction(qd)) else 0.0,
+        "tool": float(np.abs(back.tool_pose(q) - arm.tool_pose(q)).max()),
+    }
+    print(label, {key: f"{value:.1e}" for key, value in errors.items()})
+    assert max(errors.values()) < TOLERANCE, (label, errors)
+    limits = np.where(np.abs(back.qlim) >= 1e16, np.copysign(np.inf, back.qlim), back.qlim)  # URDF's "none"
+    assert np.array_equal(limits, arm.qlim) and np.array_equal(back.gravity, arm.gravity)
+
+
+@pytest.mark.parametrize(("name", "arm"), ROUND_TRIP_ARMS, ids=[name for name, _ in ROUND_TRIP_ARMS])
+def test_load_mjcf_of_to_mjcf_is_the_same_arm(name: str, arm) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # friction MuJoCo cannot simulate, the PUMA's unphysical third link
+        text = arm.to_mjcf()
+        back = load_mjcf(text, tool_link="tool")
+    assert_same_arm(back, arm, f"MJCF {name}")
+
+
+@pytest.mark.parametrize(("name", "arm"), ROUND_TRIP_ARMS, ids=[name for name, _ in ROUND_TRIP_ARMS])
+def test_load_urdf_of_to_urdf_is_the_same_arm(name: str, arm, tmp_path: Path) -> None:
+    path = tmp_path / "arm.urdf"
+    arm.to_urdf(path)
+    moments = [np.linalg.eigvalsh(link.inertial.inertia) for link in arm.links]
+    physical = all(a + b >= c - 1e-12 * c for a, b, c in moments)  # the PUMA's and the cylindrical arm's are not
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        back = ad.load_urdf(path, gravity=arm.gravity, tool_link="tool", strict=physical)
+    assert_same_arm(back, arm, f"URDF {name}")
+
+
+def test_the_stanford_arms_unphysical_link_has_no_mjcf() -> None:
+    """Its fifth link's principal moments (0, 0.0004, 0.003) break the triangle inequality, which MuJoCo refuses,
+    and the link turns about its largest moment's axis at rates that change with q (no tendon can hold it)."""
+    with pytest.raises(ModelError, match=r"link 'q5'.*triangle inequality"):
+        ad.models.load("stanford").to_mjcf()
+
+
+def test_an_arm_with_its_dc_drives_comes_back_with_them() -> None:
+    """The PUMA 560 with DC drives (current limits, K_M != K_b on one, asymmetric rotor friction on others):
+    load_mjcf(drives=True) reads armdyn's record of each drive, so the drives, M' and the full model's state
+    derivative are the same."""
+    from armdyn.actuators import motor_drives, with_actuators
+
+    arm, drives = motor_drives(ad.models.puma560(), 0.22, 0.3, 2.1, 2e-3, voltage_limit=40.0, current_limit=8.0)
+    drives[2] = dataclasses.replace(drives[2], back_emf=0.25)
+    actuated = with_actuators(arm, drives)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        back = load_mjcf(actuated.to_mjcf(), drives=True, tool_link="tool")
+    assert [vars(d) | {"name": ""} for d in back.drives] == [vars(d) | {"name": ""} for d in actuated.drives]
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.uniform(-1, 1, (STATES, 12)), rng.uniform(-3, 3, (STATES, 6))], axis=1)
+    v = rng.uniform(-30, 30, (STATES, 6))
+    assert relative(back.state_derivative(x, v), actuated.state_derivative(x, v)) < TOLERANCE
+    assert relative(back.inertia_matrix(x[:, :6]), actuated.inertia_matrix(x[:, :6])) < TOLERANCE

@@ -250,22 +250,18 @@ def test_drives_without_a_counterpart_warn_and_get_no_actuator() -> None:
     arm, drives = motor_drives(load("puma560"), 0.22, 0.3, 2.1, 2e-3, current_limit=8.0)
     drives[1] = dataclasses.replace(drives[1], current_limit=math.inf, coulomb=(0.1, -0.1), stiffness=100.0)
     drives[2] = dataclasses.replace(drives[2], current_limit=math.inf, coulomb=(0.1, -0.1))
+    drives[0] = dataclasses.replace(drives[0], coulomb=(0.2, -0.2))  # q4, q5, q6 keep asymmetric rotor friction
     actuated = with_actuators(arm, drives)
     with pytest.warns(UserWarning) as record:
         text = to_mjcf(actuated)
     messages = " ".join(str(item.message) for item in record)
-    assert (
-        "'motor q1' on joint 'q1' (a current limit" in messages
-        and "'motor q2' on joint 'q2' (a flexible shaft" in messages
-    )
+    assert "'motor q2' on joint 'q2' (a flexible shaft" in messages
+    assert "['motor q1'] have a current limit" in messages and "'motor q4' on joint 'q4' (asymmetric" in messages
     assert "K_M != K_b" in messages and "motor q3" in messages
     model = mujoco.MjModel.from_xml_string(text)
-    assert model.nu == 1 and mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, 0) == "motor q3"
-    # the rigid drives without an actuator keep their rotor on the joint: M is still the drives' M' for them
-    q1 = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "q1")
-    assert model.dof_armature[model.jnt_dofadr[q1]] == pytest.approx(
-        drives[0].rotor_inertia / drives[0].gear_ratio ** 2
-    )
+    written = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)]
+    assert written == ["motor q1", "motor q3"]
+    assert not model.actuator_forcelimited.any()  # the current limit is not written as a torque clamp
 
 
 def test_a_hydraulic_drive_and_asymmetric_rotor_friction_are_named() -> None:

@@ -1718,6 +1718,42 @@ def _in_browser(make: Callable[[], Any], page_file: Path | None, page: str | Non
         viewer.close()
 
 
+CONVERT_FORMATS = {".urdf": "URDF", ".xml": "MuJoCo MJCF", ".mjcf": "MuJoCo MJCF", ".json": "armdyn's model file"}
+
+
+@app.command()
+def convert(
+    name: str = typer.Argument(..., help=ARM_HELP),
+    output: str = typer.Argument(
+        ..., help="The file to write, its format by its suffix: .urdf, .xml or .mjcf (MuJoCo), .json (armdyn's)."
+    ),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help=STRICT_HELP),
+    actuators: str | None = typer.Option(
+        None, "--actuators", help="With an MJCF output, write the arm's drives too (as --actuators of 'show')."
+    ),
+) -> None:
+    """Write an arm as URDF, MuJoCo MJCF or armdyn's model file, with the same dynamics (M, C, G, friction, motors):
+    armdyn.load_urdf, armdyn.load_mjcf and armdyn.load_arm read it back; MuJoCo and Pinocchio compute its dynamics."""
+    target = _output_file(output, "OUTPUT")
+    suffix = target.suffix.lower()
+    if suffix not in CONVERT_FORMATS:
+        _fail(f"OUTPUT {output}: the suffix must be one of {', '.join(CONVERT_FORMATS)} (URDF, MJCF, armdyn's JSON)")
+    if actuators is not None and suffix not in (".xml", ".mjcf"):
+        _fail(f"--actuators: only an MJCF file holds drives (as MuJoCo dcmotor actuators); {output} is not one")
+    arm = _arm(name, strict)
+    if suffix == ".urdf":
+        arm.to_urdf(target)
+    elif suffix == ".json":
+        from armdyn.io.model_file import save_arm
+
+        save_arm(arm, target)
+    else:
+        from armdyn.io.mjcf_out import to_mjcf
+
+        to_mjcf(_actuated(arm, name, actuators) if actuators is not None else arm, target)
+    console.print(f"wrote {output} ({CONVERT_FORMATS[suffix]}, {arm.name}, n = {arm.n})")
+
+
 @app.command()
 def view(
     name: str = typer.Argument(..., help=ARM_HELP),

@@ -31,7 +31,7 @@ import os
 import reprlib
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -39,6 +39,8 @@ import numpy as np
 
 from armdyn import inputs
 from armdyn.errors import MissingDependencyError, ModelError
+from armdyn.io.mjcf_out import DRIVE_FIELDS, DRIVE_NUMERIC, INERTIA_TENDON, LINK_FIELDS, LINK_NUMERIC
+from armdyn.io.urdf_out import UNBOUNDED
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
@@ -47,11 +49,6 @@ from armdyn.robot import Robot
 if TYPE_CHECKING:
     from armdyn.actuators.arm import ActuatedArm
     from armdyn.actuators.motors import DCMotor
-
-LINK_NUMERIC = "armdyn:link:"
-"""The prefix of the ``<custom><numeric>`` that holds a link's friction and motor as armdyn keeps them."""
-LINK_FIELDS = ("viscous", "coulomb+", "coulomb-", "motor_inertia", "gear_ratio", "Fs", "vs", "A", "alpha", "shift")
-"""The order of that numeric's 10 numbers: Link.viscous, Link.coulomb, motor_inertia, gear_ratio, stribeck, sigmoid."""
 
 # mjtJoint and mjtTrn values (MuJoCo's enums, read from the package when it is there)
 _FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3
@@ -134,7 +131,7 @@ def load_mjcf(
     except ValueError as error:
         message = " ".join(str(error).split())
         raise ModelError(f"{where}: MuJoCo cannot compile it: {message}") from None
-    return from_mujoco(model, gravity, tool_link, locked, strict, drives, _where=where if path is None else path.name)
+    return _read(model, gravity, tool_link, locked, strict, drives, where if path is None else path.name)
 
 
 def _source(source: object) -> tuple[str | None, Path | None]:
@@ -174,8 +171,6 @@ def from_mujoco(
     locked: Mapping[str, object] | None = None,
     strict: bool = True,
     drives: bool = False,
-    *,
-    _where: str = "the MuJoCo model",
 ) -> Robot | ActuatedArm:
     """A compiled MuJoCo model (``mujoco.MjModel``) as a Robot, or with ``drives`` as the arm with its drives.
 
@@ -240,6 +235,19 @@ def from_mujoco(
         which the robot equation here does not hold; and, with ``drives``, dcmotor settings without
         a counterpart.
     """
+    return _read(model, gravity, tool_link, locked, strict, drives, "the MuJoCo model")
+
+
+def _read(
+    model: object,
+    gravity: object,
+    tool_link: str | None,
+    locked: Mapping[str, object] | None,
+    strict: bool,
+    drives: bool,
+    _where: str,
+) -> Robot | ActuatedArm:
+    """from_mujoco, its messages naming ``_where`` (the file, the text, or the model)."""
     mujoco = _mujoco()
     if not isinstance(model, mujoco.MjModel):
         raise ModelError(f"model must be a mujoco.MjModel (from_mujoco), got {reprlib.repr(model)}")
@@ -254,11 +262,19 @@ def from_mujoco(
     moving, frames = _tree(mujoco, model, names, locked, _where)
     if not moving:
         raise ModelError(f"{_where}: the model has no hinge or slide joint that moves")
-    custom = _custom_links(mujoco, model, _where)
+    custom = _custom(mujoco, model, LINK_NUMERIC, LINK_FIELDS, _where)
+    recorded = _custom(mujoco, model, DRIVE_NUMERIC, DRIVE_FIELDS, _where) if drives else {}
     links = [_link(model, item, custom.get(item.name), drives, _where) for item in moving]
+    links = [
+        _without_rotor_friction(link, recorded[link.name], _where)
+        if link.name in recorded and link.name not in custom
+        else link
+        for link in links
+    ]
     tool_index, tool = _tool_frame(mujoco, model, frames, tool_link, _where)
     name = _model_name(model) or "mujoco model"
     robot = Robot(links, name=name, gravity=gravity, tool=tool, tool_link=tool_index, description=f"MJCF {_where}")
+    robot = _fold_inertia_tendons(mujoco, model, robot, names, _where)
     hinges = {key: value for key, value in locked.items() if model.jnt_type[names.index(key)] in (_HINGE, _SLIDE)}
     if hinges:
         try:
@@ -270,7 +286,15 @@ def from_mujoco(
         return robot
     from armdyn.actuators.arm import with_actuators
 
-    return with_actuators(robot, [_dc_drive(mujoco, model, names.index(joint), _where) for joint in robot.joint_names])
+    return with_actuators(
+        robot,
+        [
+            _recorded_drive(recorded[joint], joint, _where)
+            if joint in recorded
+            else _dc_drive(mujoco, model, names.index(joint), _where)
+            for joint in robot.joint_names
+        ],
+    )
 
 
 # ----- what a fixed-base tree of hinges and slides cannot hold -------------------------------------------------
@@ -284,8 +308,12 @@ def _refuse_what_a_tree_cannot_hold(mujoco: Any, model: Any, locked: set[int], w
             f"{where}: ball joints {balls}: armdyn models arms of hinge and slide joints (one coordinate each); "
             "model a ball joint as three hinges, or lock it by removing it from the file"
         )
-    if model.ntendon:
-        tendons = [_name(mujoco, model, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon") for t in range(model.ntendon)]
+    tendons = [
+        _name(mujoco, model, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
+        for t in range(model.ntendon)
+        if not _is_inertia_tendon(mujoco, model, t)
+    ]
+    if tendons:
         raise ModelError(
             f"{where}: tendons {tendons}: a tendon couples joints (or closes a loop), which the robot equation of a "
             "kinematic tree does not hold; remove the tendons (and the actuators on them)"
@@ -312,6 +340,55 @@ def _equality(mujoco: Any, model: Any, e: int) -> str:
         return kind
     joints = [_joint_name(model, int(j)) for j in (model.eq_obj1id[e], model.eq_obj2id[e]) if j >= 0]
     return f"joint {' and '.join(joints)}"
+
+
+def _is_inertia_tendon(mujoco: Any, model: Any, t: int) -> bool:
+    """Whether tendon t is one that armdyn.io.mjcf_out.to_mjcf writes for an inertia MuJoCo refuses: named
+    ``armdyn:inertia:JOINT``, fixed (joints only), with an armature and nothing else (no spring, damping,
+    friction, limit or actuator)."""
+    name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_TENDON, t) or ""
+    start, count = int(model.tendon_adr[t]), int(model.tendon_num[t])
+    joints_only = all(int(model.wrap_type[w]) == int(mujoco.mjtWrap.mjWRAP_JOINT) for w in range(start, start + count))
+    on_tendon = int(mujoco.mjtTrn.mjTRN_TENDON)
+    driven = any(
+        int(model.actuator_trntype[a]) == on_tendon and model.actuator_trnid[a, 0] == t for a in range(model.nu)
+    )
+    passive = model.tendon_stiffness[t] == 0 and model.tendon_damping[t] == 0 and model.tendon_frictionloss[t] == 0
+    return name.startswith(INERTIA_TENDON) and joints_only and passive and not model.tendon_limited[t] and not driven
+
+
+def _fold_inertia_tendons(mujoco: Any, model: Any, robot: Robot, names: list[str], where: str) -> Robot:
+    """The armature d of each ``armdyn:inertia:JOINT`` tendon, sum_j c_j q_j, put back into that joint's link as
+    the inertia d n n^T about its centre of mass: exact when n . omega = sum_j c_j qd_j at every state (omega the
+    link's angular velocity in its frame; n is found from the link's angular Jacobian at random states, and
+    the tendon refused, by name, when no n fits). The link's inertia then breaks the triangle inequality, as
+    the arm's did before ``to_mjcf`` wrote it (Inertial with strict=False: a warning names the link)."""
+    from armdyn import kinematics
+
+    links = list(robot.links)
+    for t in range(model.ntendon):
+        tendon = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_TENDON, t)
+        joint = tendon.removeprefix(INERTIA_TENDON)
+        if joint not in robot.joint_names:
+            raise ModelError(f"{where}: tendon '{tendon}' names joint '{joint}', which the arm does not have")
+        index = robot.joint_names.index(joint)
+        coefficients = np.zeros(robot.n)
+        start, count = int(model.tendon_adr[t]), int(model.tendon_num[t])
+        for w in range(start, start + count):
+            coefficients[robot.joint_names.index(names[int(model.wrap_objid[w])])] += float(model.wrap_prm[w])
+        states = np.random.default_rng(0).uniform(-np.pi, np.pi, (6, robot.n))
+        angular = kinematics.jacobian(robot, states, frame="tool", link=index)[:, 3:, :]  # omega in the link frame
+        rows = angular.transpose(0, 2, 1).reshape(-1, 3)  # n . omega = c . qd for every qd: J^T n = c
+        n = np.linalg.lstsq(rows, np.tile(coefficients, len(states)), rcond=None)[0]
+        if np.abs(rows @ n - np.tile(coefficients, len(states))).max() > 1e-9 * max(np.abs(coefficients).max(), 1):
+            raise ModelError(
+                f"{where}: tendon '{tendon}' is no inertia of link '{joint}': its length's rate is not the link's "
+                "angular velocity along one direction of the link"
+            )
+        body = links[index].inertial
+        inertia = body.inertia + float(model.tendon_armature[t]) * np.outer(n, n)
+        links[index] = replace(links[index], inertial=Inertial(body.mass, body.com, inertia, name=joint, strict=False))
+    return robot.replace(links) if model.ntendon else robot
 
 
 def _check_locked(model: Any, names: list[str], locked: object, where: str) -> dict[str, Any]:
@@ -413,6 +490,8 @@ def _link(model: Any, item: _Moving, custom: np.ndarray | None, drives: bool, wh
     """The Link of one moving joint: frames, limits, armature, damping and dry friction (or armdyn's own numbers)."""
     j, dof = item.joint_id, int(model.jnt_dofadr[item.joint_id])
     lower, upper = (float(v) for v in model.jnt_range[j]) if model.jnt_limited[j] else (-np.inf, np.inf)
+    # a bound of UNBOUNDED (1e16) or beyond is none: what to_mjcf and to_urdf write for a half-limited joint
+    lower, upper = (-np.inf if lower <= -UNBOUNDED else lower), (np.inf if upper >= UNBOUNDED else upper)
     gears = [a for a in range(model.nu) if _drives_joint(model, a, j)]
     reflected = [float(model.actuator_gear[a, 0]) ** 2 for a in gears]
     armature = float(model.dof_armature[dof])
@@ -424,7 +503,7 @@ def _link(model: Any, item: _Moving, custom: np.ndarray | None, drives: bool, wh
     friction["coulomb"] = (friction["coulomb"][0], -friction["coulomb"][1])
     if armature and not drives:  # with drives the joint's armature is the rotor's (see _dc_drive)
         friction["motor_inertia"] = armature
-    if custom is not None and not drives:
+    if custom is not None:
         v, tc_plus, tc_minus, jm, g, fs, vs, a, alpha, shift = (float(x) for x in custom)
         friction = {
             "viscous": v, "coulomb": (tc_plus, tc_minus), "motor_inertia": jm, "gear_ratio": g,
@@ -437,20 +516,20 @@ def _link(model: Any, item: _Moving, custom: np.ndarray | None, drives: bool, wh
         raise ModelError(f"{where}: {error}") from None
 
 
-def _custom_links(mujoco: Any, model: Any, where: str) -> dict[str, np.ndarray]:
-    """The links' friction and motor as armdyn wrote them: ``<numeric name="armdyn:link:JOINT">``, by joint."""
+def _custom(mujoco: Any, model: Any, prefix: str, fields: tuple[str, ...], where: str) -> dict[str, np.ndarray]:
+    """What armdyn.io.mjcf_out.to_mjcf kept as armdyn holds it, by joint: ``<numeric name="PREFIX JOINT">``
+    (``armdyn:link:`` a Link's friction and motor, ``armdyn:drive:`` a DC drive), each holding its fields."""
     found = {}
     for k in range(model.nnumeric):
         name = _name(mujoco, model, mujoco.mjtObj.mjOBJ_NUMERIC, k, "numeric")
-        if not name.startswith(LINK_NUMERIC):
+        if not name.startswith(prefix):
             continue
         start, size = int(model.numeric_adr[k]), int(model.numeric_size[k])
-        if size != len(LINK_FIELDS):
+        if size != len(fields):
             raise ModelError(
-                f"{where}: <numeric name='{name}'> holds {size} numbers; it must hold {len(LINK_FIELDS)}: "
-                f"{' '.join(LINK_FIELDS)}"
+                f"{where}: <numeric name='{name}'> holds {size} numbers; it must hold {len(fields)}: {' '.join(fields)}"
             )
-        found[name.removeprefix(LINK_NUMERIC)] = np.array(model.numeric_data[start : start + size], dtype=float)
+        found[name.removeprefix(prefix)] = np.array(model.numeric_data[start : start + size], dtype=float)
     return found
 
 
@@ -538,6 +617,39 @@ def _dc_drive(mujoco: Any, model: Any, joint: int, where: str) -> DCMotor:
         voltage_limit=voltage_limit,
         name=actuator,
     )
+
+
+def _recorded_drive(numbers: np.ndarray, joint: str, where: str) -> DCMotor:
+    """The DC drive armdyn.io.mjcf_out.to_mjcf kept in ``armdyn:drive:JOINT`` (its fields, ``DRIVE_FIELDS``)."""
+    from armdyn.actuators.motors import DCMotor
+
+    J_M, B_M, K_M, K_b, R, L, r, v_max, i_max, plus, minus, stiffness, B_s = (float(x) for x in numbers)
+    try:
+        return DCMotor(
+            J_M, B_M, K_M, K_b, R, L, r, voltage_limit=v_max, current_limit=i_max, coulomb=(plus, minus),
+            stiffness=None if stiffness == np.inf else stiffness, shaft_damping=B_s, name=f"motor {joint}",
+        )  # fmt: skip
+    except ModelError as error:
+        raise ModelError(f"{where}: <numeric name='{DRIVE_NUMERIC}{joint}'>: {error}") from None
+
+
+def _without_rotor_friction(link: Link, numbers: np.ndarray, where: str) -> Link:
+    """The joint's friction without the share |1/r| Tc+ that to_mjcf added to ``frictionloss`` for a rigid drive
+    written as a dcmotor (the drive, read back from its record, carries it again)."""
+    r, plus, stiffness = float(numbers[6]), float(numbers[9]), float(numbers[11])
+    if stiffness != np.inf or r == 0:
+        return link
+    share = abs(1.0 / r) * plus
+    level = link.coulomb[0] - share
+    if level < -1e-9 * share:
+        raise ModelError(
+            f"{where}: joint '{link.name}': its frictionloss {link.coulomb[0]:g} is below the share {share:g} of the "
+            f"rotor's Coulomb friction that <numeric name='{DRIVE_NUMERIC}{link.name}'> records"
+        )
+    try:
+        return replace(link, coulomb=(max(level, 0.0), -max(level, 0.0)))
+    except ModelError as error:
+        raise ModelError(f"{where}: {error}") from None
 
 
 def _voltage_limit(mujoco: Any, model: Any, a: int, actuator: str, where: str) -> float:

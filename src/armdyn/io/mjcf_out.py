@@ -149,9 +149,11 @@ def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = N
     times gear^2), ``ctrlrange`` +-voltage limit when finite; the rotor's symmetric Coulomb
     friction adds |1/r| Tc+ to the joint's ``frictionloss``. The control is the voltage v. Each DC
     drive is kept as well in ``<numeric name="armdyn:drive:<joint>" data>`` (``DRIVE_FIELDS``).
-    A drive with no MuJoCo counterpart (a flexible shaft, a current limit, asymmetric rotor
-    Coulomb friction, a hydraulic drive) gets no actuator, with a warning: a rigid one's rotor
-    (armature, damping, friction) is written on its joint, so M(q) is still the ActuatedArm's.
+    A current limit has no counterpart (MuJoCo's ``saturation`` clamps the torque, not the current
+    loop): the drive is written without it, with a warning. A drive with no MuJoCo counterpart (a
+    flexible shaft, asymmetric rotor Coulomb friction, a hydraulic drive) gets no actuator, with a
+    warning: a rigid one's rotor (armature, damping, friction) is written on its joint, so M(q) is
+    still the ActuatedArm's.
     Lewis, Dawson and Abdallah 2004, Sections 3.2 (mass properties) and 3.6 (actuators), and
     Appendix A (link frames).
 
@@ -494,8 +496,6 @@ def _dcmotor_counterpart(drive: _Drive | None) -> str:
         return "a hydraulic drive"
     if drive.flexible:
         return "a flexible shaft"
-    if math.isfinite(drive.current_limit):
-        return "a current limit (MuJoCo's saturation clamps the torque, not the current loop)"
     plus, minus = _pair(drive)
     if plus != -minus:
         return "asymmetric rotor Coulomb friction"
@@ -526,7 +526,7 @@ def _actuators(
 ) -> None:
     """A motor per joint of a bare arm; a dcmotor per rigid DC drive of an ActuatedArm, with warnings."""
     names: set[str] = set()
-    missing, constants = [], []
+    missing, constants, limited = [], [], []
     for link, drive in zip(robot.links, drives, strict=True):
         if drive is None:
             etree.SubElement(actuator, "motor", name=_unique(link.name, names), joint=link.name, gear="1")
@@ -540,6 +540,8 @@ def _actuators(
         assert isinstance(drive, DCMotor)
         if drive.torque_constant != drive.back_emf:
             constants.append(drive.name)
+        if math.isfinite(drive.current_limit):
+            limited.append(drive.name)
         motor = etree.SubElement(actuator, "dcmotor", name=_unique(drive.name, names), joint=link.name)
         motor.set("gear", repr(1 / drive.gear_ratio))
         motor.set("resistance", repr(float(drive.resistance)))
@@ -555,6 +557,13 @@ def _actuators(
         warnings.warn(
             f"to_mjcf('{robot.name}'): drives {', '.join(missing)} have no MuJoCo counterpart: no actuator is "
             "written for them",
+            UserWarning,
+            stacklevel=3,
+        )
+    if limited:
+        warnings.warn(
+            f"to_mjcf('{robot.name}'): drives {limited} have a current limit, which MuJoCo's dcmotor does not hold "
+            "(its saturation clamps the torque, not the current loop): written without it",
             UserWarning,
             stacklevel=3,
         )
