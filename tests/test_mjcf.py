@@ -324,11 +324,13 @@ def test_dcmotor_rates_equal_mujocos_at_random_states() -> None:
         assert np.allclose(data.qacc, ahead[2:4], rtol=1e-11, atol=1e-11 * np.abs(ahead[2:4]).max())
 
 
-def mujoco_run(step: float, duration: float, every: float) -> np.ndarray:
-    """[q, qd, i] every ``every`` seconds under constant voltages, from rest at q = 0 (MuJoCo's RK4)."""
-    model = mujoco.MjModel.from_xml_string(DC_ARM.format(step=step))
+def mujoco_run(text: str, step: float, duration: float, every: float, voltages: np.ndarray) -> np.ndarray:
+    """[q, qd, i] every ``every`` seconds under constant voltages, from rest at q = 0, by MuJoCo's RK4 at ``step``."""
+    model = mujoco.MjModel.from_xml_string(text)
+    model.opt.timestep, model.opt.integrator = step, mujoco.mjtIntegrator.mjINT_RK4
+    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_LIMIT  # as armdyn's full model: no joint stops
     data = mujoco.MjData(model)
-    data.ctrl[:] = VOLTAGES
+    data.ctrl[:] = voltages
     stride = round(every / step)
     samples = [np.concatenate([data.qpos, data.qvel, data.act])]
     for k in range(1, round(duration / step) + 1):
@@ -338,29 +340,47 @@ def mujoco_run(step: float, duration: float, every: float) -> np.ndarray:
     return np.array(samples)
 
 
-@pytest.mark.slow
-def test_dcmotor_arm_simulated_by_mujoco_and_by_armdyn_agree_over_one_second() -> None:
-    """Joint angles and currents over 1 s under constant voltages, the arm swinging under gravity: MuJoCo's RK4
-    (first order in h on a dcmotor with inductance, whose force uses the current one step ahead) at h, h/2 and
-    h/4, extrapolated twice (Richardson), against armdyn's full model (ActuatedArm.state_derivative) integrated
-    to 1e-12."""
-    arm = load_mjcf(DC_ARM.format(step=1e-3), drives=True)
+def assert_same_run_over_one_second(arm, text: str, voltages: np.ndarray, label: str) -> None:
+    """Joint angles, speeds and currents over 1 s under constant voltages: MuJoCo's RK4 (first order in h on a
+    dcmotor with inductance, whose force uses the current one step ahead) at h, h/2 and h/4, extrapolated twice
+    (Richardson), against armdyn's full model (ActuatedArm.state_derivative) integrated to 1e-12: within 1e-6 of
+    each signal's range."""
     duration, every = 1.0, 0.01
     times = np.linspace(0.0, duration, round(duration / every) + 1)
     exact = solve_ivp(
-        lambda _, x: arm.state_derivative(x, VOLTAGES), (0.0, duration), np.zeros(6), method="DOP853",
+        lambda _, x: arm.state_derivative(x, voltages), (0.0, duration), np.zeros(arm.n_states), method="DOP853",
         rtol=1e-12, atol=1e-12, t_eval=times,
     ).y.T  # fmt: skip
-    runs = [mujoco_run(h, duration, every) for h in (1e-4, 5e-5, 2.5e-5)]
+    runs = [mujoco_run(text, h, duration, every, voltages) for h in (1e-4, 5e-5, 2.5e-5)]
     once = [2 * fine - coarse for coarse, fine in itertools.pairwise(runs)]
     twice = (4 * once[1] - once[0]) / 3
     scale = np.abs(exact).max(axis=0)
     error = np.abs(twice - exact).max(axis=0) / scale
-    print(f"relative errors of [q, qd, i] after two extrapolations: {error}; raw at h/4: "
+    print(f"{label}: relative errors of [q, qd, i] after two extrapolations: {error}; raw at h/4: "
           f"{np.abs(runs[-1] - exact).max(axis=0) / scale}")  # fmt: skip
-    assert np.ptp(exact[:, 0]) > 0.5 and np.ptp(exact[:, 1]) > 0.5  # the arm really moves
-    assert np.all(error[[0, 1, 4, 5]] < 1e-6)  # joint angles and currents
+    assert np.all(np.ptp(exact[:, : arm.n], axis=0) > 0.2)  # the arm really moves
     assert np.all(error < 1e-6)
+
+
+@pytest.mark.slow
+def test_dcmotor_arm_simulated_by_mujoco_and_by_armdyn_agree_over_one_second() -> None:
+    """The arm of an MJCF file with dcmotors, swinging under gravity, as MuJoCo runs it and as armdyn's drives do."""
+    arm = load_mjcf(DC_ARM.format(step=1e-3), drives=True)
+    assert_same_run_over_one_second(arm, DC_ARM.format(step=1e-3), VOLTAGES, "load_mjcf")
+
+
+@pytest.mark.slow
+def test_an_exported_arm_with_dc_drives_runs_in_mujoco_as_in_armdyn() -> None:
+    """The other way: the SCARA with DC drives written by to_mjcf, run by MuJoCo, against armdyn's own model."""
+    from armdyn.actuators import motor_drives, with_actuators
+
+    scara = ad.models.load("scara").without_friction().without_motors()
+    n = scara.n
+    motors = scara.replace([dataclasses.replace(link, motor_inertia=2e-5, gear_ratio=30.0) for link in scara.links])
+    arm, drives = motor_drives(motors, 0.05, 0.05, 1.5, 2e-3)
+    actuated = with_actuators(arm, drives)
+    voltages = np.linspace(3.0, -2.0, n)
+    assert_same_run_over_one_second(actuated, actuated.to_mjcf(), voltages, "to_mjcf")
 
 
 def test_dcmotor_settings_without_a_counterpart_are_named() -> None:
@@ -596,3 +616,32 @@ def test_an_arm_with_its_dc_drives_comes_back_with_them() -> None:
     v = rng.uniform(-30, 30, (STATES, 6))
     assert relative(back.state_derivative(x, v), actuated.state_derivative(x, v)) < TOLERANCE
     assert relative(back.inertia_matrix(x[:, :6]), actuated.inertia_matrix(x[:, :6])) < TOLERANCE
+
+
+def test_convert_writes_each_format_and_show_reads_it_back(tmp_path: Path) -> None:
+    from tests.helpers import assert_one_error_line, invoke
+
+    puma = ad.models.puma560()
+    q = np.array(puma.configurations["qn"])
+    for suffix in (".xml", ".urdf", ".json"):
+        path = tmp_path / f"puma560{suffix}"
+        done = invoke("convert", "puma560", path)
+        assert done.exit_code == 0, done.output
+        assert f"wrote {path}" in done.stdout
+        shown = invoke("show", path, "--no-strict")
+        assert shown.exit_code == 0, shown.output
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        back = load_mjcf(tmp_path / "puma560.xml", tool_link="tool")
+    assert relative(back.inertia_matrix(q), puma.inertia_matrix(q)) < TOLERANCE
+    driven = tmp_path / "driven.xml"
+    done = invoke("convert", "puma560", driven, "--actuators", "dc")
+    assert done.exit_code == 0, done.output
+    model = mujoco.MjModel.from_xml_path(str(driven))
+    assert model.nu == 6 or "no MuJoCo counterpart" in done.stderr
+    assert_one_error_line(invoke("convert", "puma560", tmp_path / "puma.stl"), "the suffix must be one of")
+    assert_one_error_line(
+        invoke("convert", "puma560", tmp_path / "p.urdf", "--actuators", "dc"), "only an MJCF file holds drives"
+    )
+    assert_one_error_line(invoke("convert", "puma560", tmp_path / "none" / "p.xml"), "does not exist")
+    assert_one_error_line(invoke("convert", "stanford", tmp_path / "s.xml"), "link 'q5'", "triangle inequality")

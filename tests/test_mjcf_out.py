@@ -246,7 +246,7 @@ def test_dc_drives_become_dcmotor_actuators() -> None:
     assert error < TOLERANCE
 
 
-def test_drives_without_a_counterpart_warn_and_get_no_actuator() -> None:
+def test_drive_settings_without_a_counterpart_warn() -> None:
     arm, drives = motor_drives(load("puma560"), 0.22, 0.3, 2.1, 2e-3, current_limit=8.0)
     drives[1] = dataclasses.replace(drives[1], current_limit=math.inf, coulomb=(0.1, -0.1), stiffness=100.0)
     drives[2] = dataclasses.replace(drives[2], current_limit=math.inf, coulomb=(0.1, -0.1))
@@ -256,11 +256,12 @@ def test_drives_without_a_counterpart_warn_and_get_no_actuator() -> None:
         text = to_mjcf(actuated)
     messages = " ".join(str(item.message) for item in record)
     assert "'motor q2' on joint 'q2' (a flexible shaft" in messages
-    assert "['motor q1'] have a current limit" in messages and "'motor q4' on joint 'q4' (asymmetric" in messages
+    assert "['motor q1', 'motor q4', 'motor q5', 'motor q6'] have a current limit" in messages
+    assert "['motor q4', 'motor q5', 'motor q6'] have asymmetric rotor Coulomb friction" in messages
     assert "K_M != K_b" in messages and "motor q3" in messages
     model = mujoco.MjModel.from_xml_string(text)
     written = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)]
-    assert written == ["motor q1", "motor q3"]
+    assert written == ["motor q1", "motor q3", "motor q4", "motor q5", "motor q6"]
     assert not model.actuator_forcelimited.any()  # the current limit is not written as a torque clamp
 
 
@@ -273,8 +274,8 @@ def test_a_hydraulic_drive_and_asymmetric_rotor_friction_are_named() -> None:
         model = mujoco.MjModel.from_xml_string(to_mjcf(actuated))
     messages = " ".join(str(item.message) for item in record)
     assert f"'{piston.name}' on joint" in messages and "a hydraulic drive" in messages
-    assert "'asymmetric' on joint" in messages and "asymmetric rotor Coulomb friction" in messages
-    assert model.nu == 0
+    assert "drives ['asymmetric'] have asymmetric rotor Coulomb friction" in messages
+    assert model.nu == 1 and mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, 0) == "asymmetric"
 
 
 def _piston() -> Hydraulic:

@@ -636,8 +636,8 @@ def _recorded_drive(numbers: np.ndarray, joint: str, where: str) -> DCMotor:
 def _without_rotor_friction(link: Link, numbers: np.ndarray, where: str) -> Link:
     """The joint's friction without the share |1/r| Tc+ that to_mjcf added to ``frictionloss`` for a rigid drive
     written as a dcmotor (the drive, read back from its record, carries it again)."""
-    r, plus, stiffness = float(numbers[6]), float(numbers[9]), float(numbers[11])
-    if stiffness != np.inf or r == 0:
+    r, plus, minus, stiffness = float(numbers[6]), float(numbers[9]), float(numbers[10]), float(numbers[11])
+    if stiffness != np.inf or r == 0 or plus != -minus:  # to_mjcf adds only a rigid drive's symmetric friction
         return link
     share = abs(1.0 / r) * plus
     level = link.coulomb[0] - share

@@ -149,11 +149,10 @@ def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = N
     times gear^2), ``ctrlrange`` +-voltage limit when finite; the rotor's symmetric Coulomb
     friction adds |1/r| Tc+ to the joint's ``frictionloss``. The control is the voltage v. Each DC
     drive is kept as well in ``<numeric name="armdyn:drive:<joint>" data>`` (``DRIVE_FIELDS``).
-    A current limit has no counterpart (MuJoCo's ``saturation`` clamps the torque, not the current
-    loop): the drive is written without it, with a warning. A drive with no MuJoCo counterpart (a
-    flexible shaft, asymmetric rotor Coulomb friction, a hydraulic drive) gets no actuator, with a
-    warning: a rigid one's rotor (armature, damping, friction) is written on its joint, so M(q) is
-    still the ActuatedArm's.
+    A current limit and asymmetric rotor Coulomb friction have no counterpart (MuJoCo's
+    ``saturation`` clamps the torque, not the current loop; ``frictionloss`` is symmetric): the
+    drive is written without them, with a warning. A drive with no MuJoCo counterpart (a flexible
+    shaft, a hydraulic drive) gets no actuator, with a warning.
     Lewis, Dawson and Abdallah 2004, Sections 3.2 (mass properties) and 3.6 (actuators), and
     Appendix A (link frames).
 
@@ -496,28 +495,18 @@ def _dcmotor_counterpart(drive: _Drive | None) -> str:
         return "a hydraulic drive"
     if drive.flexible:
         return "a flexible shaft"
-    plus, minus = _pair(drive)
-    if plus != -minus:
-        return "asymmetric rotor Coulomb friction"
     return ""
 
 
 def _driven_link(link: Link, drive: _Drive | None) -> Link:
-    """The Link as MuJoCo's joint sees it: a rigid DC drive without an actuator folded in as the Link's motor
-    (Jm = J_M, G = 1/r, motor-side friction); a drive written as ``dcmotor`` adds only its rotor's
-    symmetric Coulomb friction (its armature and damping are the actuator's)."""
+    """The Link as MuJoCo's joint sees it: a rigid DC drive, written as ``dcmotor`` (its armature and damping
+    are the actuator's), adds its rotor's symmetric Coulomb friction |1/r| Tc+ to the joint's."""
     if not isinstance(drive, DCMotor) or drive.flexible:
         return link
-    r = drive.gear_ratio
     plus, minus = _pair(drive)
-    if _dcmotor_counterpart(drive):  # no actuator: the rotor is the joint's motor, as in mechanical_robot()
-        sense = (plus, minus) if r > 0 else (-minus, -plus)
-        coulomb = (link.coulomb[0] * abs(r) + sense[0], link.coulomb[1] * abs(r) + sense[1])
-        viscous = drive.viscous + link.viscous * r**2
-        return dataclasses.replace(
-            link, motor_inertia=drive.rotor_inertia, gear_ratio=1 / r, viscous=viscous, coulomb=coulomb
-        )
-    extra = abs(1 / r) * plus
+    if plus != -minus:  # MuJoCo's frictionloss is symmetric: the rotor's asymmetric friction is kept in the record
+        return link
+    extra = abs(1 / drive.gear_ratio) * plus
     return dataclasses.replace(link, coulomb=(link.coulomb[0] + extra, link.coulomb[1] - extra))
 
 
@@ -526,7 +515,7 @@ def _actuators(
 ) -> None:
     """A motor per joint of a bare arm; a dcmotor per rigid DC drive of an ActuatedArm, with warnings."""
     names: set[str] = set()
-    missing, constants, limited = [], [], []
+    missing, constants, limited, asymmetric = [], [], [], []
     for link, drive in zip(robot.links, drives, strict=True):
         if drive is None:
             etree.SubElement(actuator, "motor", name=_unique(link.name, names), joint=link.name, gear="1")
@@ -542,6 +531,9 @@ def _actuators(
             constants.append(drive.name)
         if math.isfinite(drive.current_limit):
             limited.append(drive.name)
+        plus, minus = _pair(drive)
+        if plus != -minus:
+            asymmetric.append(drive.name)
         motor = etree.SubElement(actuator, "dcmotor", name=_unique(drive.name, names), joint=link.name)
         motor.set("gear", repr(1 / drive.gear_ratio))
         motor.set("resistance", repr(float(drive.resistance)))
@@ -557,6 +549,13 @@ def _actuators(
         warnings.warn(
             f"to_mjcf('{robot.name}'): drives {', '.join(missing)} have no MuJoCo counterpart: no actuator is "
             "written for them",
+            UserWarning,
+            stacklevel=3,
+        )
+    if asymmetric:
+        warnings.warn(
+            f"to_mjcf('{robot.name}'): drives {asymmetric} have asymmetric rotor Coulomb friction, which MuJoCo's "
+            "frictionloss (symmetric) does not hold: written without it (kept in <numeric name='armdyn:drive:...'>)",
             UserWarning,
             stacklevel=3,
         )
