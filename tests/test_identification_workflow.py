@@ -229,6 +229,8 @@ def test_cli_identifies_from_a_log_and_writes_the_report_and_the_arm(log_csv: Pa
     truth = ad.models.two_link_planar()
     q = np.array([[0.3, -0.4], [1.0, 0.2]])
     np.testing.assert_allclose(identified.gravity_vector(q), truth.gravity_vector(q), rtol=0.02, atol=0.02)
+    in_mujoco = ad.load_mjcf(out / "identified.xml", tool_link="tool")  # the same arm, for MuJoCo
+    np.testing.assert_allclose(in_mujoco.inverse_dynamics(q, q, q), identified.inverse_dynamics(q, q, q), rtol=1e-12)
     assert "Physical consistency of each link" in (out / "report.md").read_text()
 
 

@@ -1347,12 +1347,19 @@ def _identify_log(
             table.add_row(*row)
         console.print(table)
     if model.arm is not None:
+        from armdyn.io.mjcf_out import to_mjcf
         from armdyn.io.model_file import save_arm
         from armdyn.io.urdf_out import to_urdf
 
         to_urdf(model.arm, folder / "identified.urdf")
         save_arm(model.arm, folder / "identified.json")
-        console.print(f"wrote {folder / 'identified.urdf'} and {folder / 'identified.json'}")
+        written = [folder / "identified.urdf", folder / "identified.json"]
+        try:
+            to_mjcf(model.arm, folder / "identified.xml")
+            written.insert(1, folder / "identified.xml")
+        except ModelError as error:  # an inertia MuJoCo cannot hold: the other files still carry the arm
+            warnings.warn(f"identified.xml not written: {error}", stacklevel=1)
+        console.print("wrote " + ", ".join(str(path) for path in written))
     console.print(f"wrote {report} and report.html")
 
 

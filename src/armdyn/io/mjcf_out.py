@@ -11,8 +11,8 @@ in that frame, and the tool, a site named "tool", is composed with the tool link
 
 MuJoCo holds the joint-side rotor inertia G^2 Jm (``armature``), viscous friction G^2 B
 (``damping``) and symmetric Coulomb friction |G| Tc+ (``frictionloss``, MuJoCo's dry friction,
-which its constraint solver applies). It cannot hold asymmetric Coulomb friction, the Stribeck and
-sigmoid laws, or the Link's own Jm, G, B and Tc (only their joint-side products): those go, as the
+which its constraint solver applies; an asymmetric law is written at its mean level (Tc+ - Tc-) / 2).
+It cannot hold asymmetric Coulomb friction, the Stribeck and sigmoid laws, or the Link's own Jm, G, B and Tc (only their joint-side products): those go, as the
 Link keeps them, in a ``<custom><numeric name="armdyn:link:<joint>">`` element (``LINK_NUMERIC``,
 fields ``LINK_FIELDS``), which MuJoCo keeps and ignores. A DC drive of an ActuatedArm is written as
 MuJoCo's ``dcmotor`` actuator and kept exactly in ``armdyn:drive:<joint>`` (``DRIVE_NUMERIC``,
@@ -130,7 +130,8 @@ def to_mjcf(arm: ArmModel | ActuatedArm, path: str | os.PathLike[str] | None = N
       the module docstring; the base transform is in those of the bodies at the root);
     - ``<joint type="hinge"|"slide" axis>`` at the body's origin, with ``range`` and
       ``limited="true"`` when a limit is finite (an infinite side written as +-1e16);
-      ``armature`` G^2 Jm, ``damping`` G^2 B and ``frictionloss`` |G| Tc+ when Tc- = -Tc+;
+      ``armature`` G^2 Jm, ``damping`` G^2 B and ``frictionloss`` |G| (Tc+ - Tc-) / 2 (|G| Tc+ when
+      Tc- = -Tc+);
     - ``<inertial pos mass fullinertia>``: the centre of mass and the inertia about it in the
       body's frame, where MuJoCo would refuse it (a point mass, a thin rod, a massless link, moments
       that break the triangle inequality) changed as the module docstring says: exactly, or
@@ -314,7 +315,8 @@ def _comment(robot: ArmModel) -> str:
 
 
 def _joint(link: Link) -> etree._Element:
-    """A hinge or slide joint at the body's origin: axis, range, armature, damping and symmetric dry friction."""
+    """A hinge or slide joint at the body's origin: axis, range, armature, damping and dry friction (the mean
+    level of an asymmetric Coulomb law)."""
     joint = etree.Element("joint", name=link.name, type="hinge" if link.kind == "revolute" else "slide")
     joint.set("axis", _numbers(link.joint.axis))
     lower, upper = link.limits
@@ -329,8 +331,9 @@ def _joint(link: Link) -> etree._Element:
         joint.set("armature", repr(float(armature)))
     if damping != 0:
         joint.set("damping", repr(float(damping)))
-    if plus == -minus and plus != 0:
-        joint.set("frictionloss", repr(float(abs(gear) * plus)))
+    level = plus if plus == -minus else (plus - minus) / 2  # asymmetric: MuJoCo's nearest, the mean level
+    if level != 0:
+        joint.set("frictionloss", repr(float(abs(gear) * level)))
     return joint
 
 
@@ -456,8 +459,8 @@ def _warn_friction(name: str, links: Iterable[Link]) -> None:
     if different:
         warnings.warn(
             f"to_mjcf('{name}'): joints {different} have asymmetric Coulomb, Stribeck or sigmoid friction, which "
-            f"MuJoCo cannot simulate (its frictionloss is symmetric dry friction): they are kept in "
-            f"<numeric name='{LINK_NUMERIC}<joint>'> only",
+            "MuJoCo cannot simulate (its frictionloss is symmetric dry friction, written at the mean Coulomb level "
+            f"(Tc+ - Tc-) / 2): they are kept exactly in <numeric name='{LINK_NUMERIC}<joint>'> for armdyn",
             UserWarning,
             stacklevel=3,
         )
