@@ -11,10 +11,11 @@ in that frame, and the tool, a site named "tool", is composed with the tool link
 
 MuJoCo holds the joint-side rotor inertia G^2 Jm (``armature``), viscous friction G^2 B
 (``damping``) and symmetric Coulomb friction |G| Tc+ (``frictionloss``, MuJoCo's dry friction,
-which its constraint solver applies; an asymmetric law is written at its mean level (Tc+ - Tc-) / 2).
-It cannot hold asymmetric Coulomb friction, the Stribeck and sigmoid laws, or the Link's own Jm, G, B and Tc (only their joint-side products): those go, as the
-Link keeps them, in a ``<custom><numeric name="armdyn:link:<joint>">`` element (``LINK_NUMERIC``,
-fields ``LINK_FIELDS``), which MuJoCo keeps and ignores. A DC drive of an ActuatedArm is written as
+which its constraint solver applies; an asymmetric law is written at its mean level
+(Tc+ - Tc-) / 2). It cannot hold asymmetric Coulomb friction, the Stribeck and sigmoid laws, or
+the Link's own Jm, G, B and Tc (only their joint-side products): those go, as the Link keeps
+them, in a ``<custom><numeric name="armdyn:link:<joint>">`` element (``LINK_NUMERIC``, fields
+``LINK_FIELDS``), which MuJoCo keeps and ignores. A DC drive of an ActuatedArm is written as
 MuJoCo's ``dcmotor`` actuator and kept exactly in ``armdyn:drive:<joint>`` (``DRIVE_NUMERIC``,
 ``DRIVE_FIELDS``).
 
