@@ -2860,6 +2860,7 @@ BASE = {  # command: its cheapest valid arguments (the CSV added for identify)
     "identify": ["two_link_planar"],
     "simulate": ["two_link_planar", "--t-final", "0.02"],
     "study": ["two_link_planar", "--runs", "20", "--t-final", "0.02", "--spec", "max-error-after-0.01s<1e-3"],
+    "convert": ["two_link_planar", str(SCRATCH / "converted.xml")],
     "demo": None,
 }
 
