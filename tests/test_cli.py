@@ -382,7 +382,7 @@ def test_cli_check_limits_reproduce_example_3_3_1(tmp_path: Path) -> None:
         (["check", "two_link_planar", "-o", "table.xlsx"], ["must end in .csv, .md or .txt"]),
         (["show", "no/such/arm.urdf"], ["no such URDF file"]),
         (["show", "no/such/arm"], ["no such file", "a URDF file"]),
-        (["show", "README.md"], ["an arm file must be a URDF (.urdf) or a DH table"]),
+        (["show", "README.md"], ["an arm file must be a URDF (.urdf), an MJCF (.xml, .mjcf) or a DH table"]),
     ],
 )
 def test_cli_bad_vectors_ranges_and_files_are_one_error_line(args: list[str], fragments: list[str]) -> None:

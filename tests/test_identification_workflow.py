@@ -241,7 +241,7 @@ def test_cli_identifies_from_a_log_and_writes_the_report_and_the_arm(log_csv: Pa
         (["--current"], ["--current needs the current-to-torque gains"]),
         (["--current", "--gains", "1,1"], ["the log holds torques; leave out --current"]),
         (["--holdout", "0.95"], ["--holdout must be a share between 0 and 0.9"]),
-        (["--lock", "q1=0"], ["--lock takes joints of a URDF file"]),
+        (["--lock", "q1=0"], ["--lock takes joints of a URDF or MJCF file"]),
         (["--columns", "t"], ["--columns 't': give name=value pairs"]),
         (["--friction", "lugre"], ["friction must be one of"]),
     ],
