@@ -645,3 +645,50 @@ def test_convert_writes_each_format_and_show_reads_it_back(tmp_path: Path) -> No
     )
     assert_one_error_line(invoke("convert", "puma560", tmp_path / "none" / "p.xml"), "does not exist")
     assert_one_error_line(invoke("convert", "stanford", tmp_path / "s.xml"), "link 'q5'", "triangle inequality")
+
+
+# ----- the geometry the viewer draws -------------------------------------------------------------------------------
+@pytest.mark.parametrize(("distribution", "name", "lock"), [("robosuite", "panda", False), ("robosuite", "gr1", True)])
+def test_each_geom_rides_on_its_link_as_in_mujoco(distribution: str, name: str, lock: bool) -> None:
+    """The geoms recorded for the viewer, posed on armdyn's links, are where MuJoCo puts them at random states (the
+    humanoid with its base and a waist joint locked: geoms on locked bodies ride on the link that carries them)."""
+    from armdyn.model.sources import geometry_of
+
+    path = _robot_xml(distribution, name)
+    model = mujoco.MjModel.from_xml_path(str(path))
+    names = [_joint_name(model, j) for j in range(model.njnt)]
+    locked = {names[0]: None, "torso_waist_yaw": 0.3} if lock else {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        arm = load_mjcf(path, locked=locked)
+    geoms = geometry_of(arm)
+    visual = (model.geom_contype == 0) & (model.geom_conaffinity == 0)
+    assert len(geoms) == np.count_nonzero(visual & (model.geom_bodyid > 0)) > 10
+    data = mujoco.MjData(model)
+    for q in random_states(arm, seed=11)[0][:5]:
+        data.qpos[:] = model.qpos0
+        if lock:
+            data.qpos[model.jnt_qposadr[names.index("torso_waist_yaw")]] = 0.3
+        data.qpos[[model.jnt_qposadr[names.index(joint)] for joint in arm.joint_names]] = q
+        mujoco.mj_kinematics(model, data)
+        frames = arm.link_transforms(q)
+        for geom in geoms:
+            g = geom.index
+            pose = (arm.base if geom.link < 0 else frames[geom.link]) @ geom.pose
+            assert np.allclose(pose[:3, 3], data.geom_xpos[g], atol=1e-12)
+            assert np.allclose(pose[:3, :3], data.geom_xmat[g].reshape(3, 3), atol=1e-12)
+
+
+def test_the_viewer_draws_an_mjcf_arm_with_its_meshes() -> None:
+    pytest.importorskip("trimesh")
+    from armdyn.viewer import _drawings
+
+    arm = load_mjcf(_robot_xml("robosuite", "panda"))
+    drawings, notes = _drawings(arm, None)
+    assert not notes
+    assert all(drawing.kind == "mesh" and drawing.shapes for drawing in drawings.values())
+    primitives = load_mjcf(
+        DC_ARM.format(step=1e-3).replace("<inertial", '<geom type="box" size="0.1 0.02 0.02"/><inertial')
+    )
+    kinds = {drawing.kind for index, drawing in _drawings(primitives, None)[0].items() if index >= 0}
+    assert kinds == {"box"}

@@ -5,7 +5,9 @@ frame, a run's playback, and overlays that only the dynamics can draw.
 draws the arm in it; nothing needs a window or a GPU on this side (the browser renders). A URDF arm is drawn with
 the ``<visual>`` geometry of its file (meshes resolved from ``package://``, ``file://`` and relative paths and
 loaded with trimesh; boxes, cylinders and spheres), each URDF link on the arm link whose body carries it, as
-``armdyn.load_urdf`` merges fixed joints. DH arms, and links whose meshes cannot be loaded (with a warning naming the
+``armdyn.load_urdf`` merges fixed joints. An arm read by ``armdyn.load_mjcf`` is drawn with its model's geoms
+(``armdyn.model.sources.geometry_of``: the visual geoms when the model has any; meshes as MuJoCo compiled them,
+spheres, capsules, ellipsoids, cylinders and boxes). DH arms, and links whose meshes cannot be loaded (with a warning naming the
 file), are drawn as capsules from each joint to the next in ``LINK_COLOR``.
 
 The overlays (``OVERLAYS``, each a checkbox of the viewer's panel):
@@ -494,6 +496,39 @@ def _read_visuals(arm: Robot, urdf: Path) -> tuple[dict[int, list[_Shape]], dict
     return shapes, failed, notes
 
 
+def _mjcf_shapes(arm: Robot) -> dict[int, list[_Shape]]:
+    """The geoms of the MuJoCo model ``armdyn.load_mjcf`` read the arm from, by arm link (-1 the base): meshes as
+    MuJoCo compiled them, the primitives from their MuJoCo sizes (empty for an arm made otherwise)."""
+    from armdyn.model.sources import geometry_of
+
+    shapes: dict[int, list[_Shape]] = {}
+    for geom in geometry_of(arm):
+        if geom.kind == "mesh":
+            assert geom.vertices is not None and geom.faces is not None
+            vertices, faces = geom.vertices, geom.faces
+        else:
+            mesh = _primitive(geom.kind, geom.size)
+            vertices, faces = mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32)
+        shapes.setdefault(geom.link, []).append(_Shape(geom.kind, geom.pose, vertices, faces))
+    return shapes
+
+
+def _primitive(kind: str, size: np.ndarray) -> Any:
+    """A MuJoCo primitive geom as a triangle mesh in its own frame (its long axis along z, as MuJoCo's)."""
+    trimesh = _trimesh()
+    if kind == "sphere":
+        return trimesh.creation.icosphere(subdivisions=2, radius=float(size[0]))
+    if kind == "capsule":
+        return trimesh.creation.capsule(height=2 * float(size[1]), radius=float(size[0]), count=[16, 8])
+    if kind == "cylinder":
+        return trimesh.creation.cylinder(radius=float(size[0]), height=2 * float(size[1]), sections=24)
+    if kind == "box":
+        return trimesh.creation.box(extents=2 * np.asarray(size[:3], dtype=float))
+    mesh = trimesh.creation.icosphere(subdivisions=2, radius=1.0)  # an ellipsoid: the unit sphere scaled
+    mesh.apply_scale(np.asarray(size[:3], dtype=float))
+    return mesh
+
+
 def _load_mesh(trimesh: Any, path: Path) -> Any:
     """One mesh file as one trimesh.Trimesh, vertices merged. A COLLADA file whose materials break (a texture it
     names is missing: pycollada then drops the geometry's instance) is read again without its material bindings,
@@ -558,6 +593,9 @@ def _drawings(arm: Robot, urdf: Path | None) -> tuple[dict[int, _LinkDrawing], l
     notes: list[str] = []
     if urdf is not None:
         shapes, failed, notes = _read_visuals(arm, urdf)
+    else:
+        shapes = _mjcf_shapes(arm)
+    described = urdf is not None or bool(shapes)  # a file says how the links look: the base drawn only by it
     drawings = {-1: _LinkDrawing("base", "none")}
     for i, link in enumerate(arm.links):
         drawings[i] = _LinkDrawing(link.name)
@@ -567,7 +605,7 @@ def _drawings(arm: Robot, urdf: Path | None) -> tuple[dict[int, _LinkDrawing], l
         drawing.files = [shape.file for shape in own if shape.file is not None]
         if own:
             drawing.kind = "mesh" if drawing.files else own[0].kind
-        wanted = index in failed or (not own and (index >= 0 or urdf is None))
+        wanted = index in failed or (not own and (index >= 0 or not described))
         if wanted and segments.get(index):
             drawing.shapes += [_capsule(a, b, radius) for a, b in segments[index]]
             drawing.kind = drawing.kind if own else "capsule"

@@ -44,6 +44,7 @@ from armdyn.io.urdf_out import UNBOUNDED
 from armdyn.model.arm import Link
 from armdyn.model.inertial import Inertial
 from armdyn.model.joint import Joint
+from armdyn.model.sources import Geom, record_geometry
 from armdyn.robot import Robot
 
 if TYPE_CHECKING:
@@ -282,6 +283,7 @@ def _read(
         except ModelError as error:
             raise ModelError(f"{_where}: {error}") from None
     _check_singular(robot, strict, _where)
+    record_geometry(robot, _geometry(mujoco, model, robot, names, locked))
     if not drives:
         return robot
     from armdyn.actuators.arm import with_actuators
@@ -573,6 +575,63 @@ def _check_singular(robot: Robot, strict: bool, where: str) -> None:
     if strict and robot.has_dynamics:
         raise ModelError(message + "; give the bodies they move mass off their axes, or pass strict=False")
     warnings.warn(message + "; loaded as given", stacklevel=4)
+
+
+# ----- what the viewer draws ------------------------------------------------------------------------------------
+_DRAWN = {2: "sphere", 3: "capsule", 4: "ellipsoid", 5: "cylinder", 6: "box", 7: "mesh"}  # mjtGeom values
+
+
+def _geometry(mujoco: Any, model: Any, robot: Robot, names: list[str], locked: dict[str, Any]) -> list[Geom]:
+    """The model's geoms on the arm's links, each posed in the frame of the link that carries it: the visual geoms
+    (neither colliding nor collided with) when the model has any, else every geom; planes, height fields and the
+    world body's geoms (the scene) left out. Each pose is read from MuJoCo's forward kinematics and armdyn's at
+    one configuration (qpos0, the locked joints at their values), which fixes it, the geom being rigid on its link."""
+    data = mujoco.MjData(model)
+    qpos = np.array(model.qpos0, dtype=float)
+    for name, value in locked.items():
+        j = names.index(name)
+        address = int(model.jnt_qposadr[j])
+        if model.jnt_type[j] == _FREE:
+            qpos[address : address + 7] = model.qpos0[address : address + 7] if value is None else value
+        else:
+            qpos[address] = float(value)  # type: ignore[arg-type]
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    q = np.array([qpos[model.jnt_qposadr[names.index(joint)]] for joint in robot.joint_names])
+    frames = robot.link_transforms(q)
+    visual = (model.geom_contype == 0) & (model.geom_conaffinity == 0)
+    chosen = visual if visual.any() else np.ones(model.ngeom, dtype=bool)
+    geoms = []
+    for g in np.flatnonzero(chosen):
+        kind, body = _DRAWN.get(int(model.geom_type[g])), int(model.geom_bodyid[g])
+        if kind is None or body == 0:
+            continue
+        link = _carrier(model, robot, names, body)
+        world = np.eye(4)
+        world[:3, :3], world[:3, 3] = np.reshape(data.geom_xmat[g], (3, 3)), data.geom_xpos[g]
+        frame = robot.base if link < 0 else frames[link]
+        vertices = faces = None
+        if kind == "mesh":
+            mesh = int(model.geom_dataid[g])
+            start, count = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+            vertices = np.array(model.mesh_vert[start : start + count], dtype=np.float32)
+            start, count = int(model.mesh_faceadr[mesh]), int(model.mesh_facenum[mesh])
+            faces = np.array(model.mesh_face[start : start + count], dtype=np.uint32)
+        pose = np.linalg.solve(frame, world)
+        geoms.append(Geom(link, kind, pose, np.array(model.geom_size[g]), vertices, faces, model.geom(g).name, int(g)))
+    return geoms
+
+
+def _carrier(model: Any, robot: Robot, names: list[str], body: int) -> int:
+    """The arm link that carries a body: that of its last joint the arm has (not locked), else its parent's; -1 for
+    a body welded to the world."""
+    while body > 0:
+        first, count = int(model.body_jntadr[body]), int(model.body_jntnum[body])
+        for j in reversed(range(first, first + count)):
+            if names[j] in robot.joint_names:
+                return robot.joint_names.index(names[j])
+        body = int(model.body_parentid[body])
+    return -1
 
 
 # ----- the drives of Section 3.6 ---------------------------------------------------------------------------
