@@ -1770,8 +1770,8 @@ def view(
     q: str | None = typer.Option(None, "--q", help=DRAW_Q_HELP.replace("--draw draws", "the viewer shows first")),
     overlays: str | None = typer.Option(None, "--overlays", help=VIEW_OVERLAYS_HELP),
 ) -> None:
-    """Show an arm in 3-D in the browser (a viser page on 127.0.0.1): its URDF meshes, MJCF geoms or capsules, joint sliders,
-    the tool frame and the overlays; with --html, write the scene as one offline page and exit."""
+    """Show an arm in 3-D in the browser (a viser page on 127.0.0.1): its URDF meshes, MJCF geoms or capsules, joint
+    sliders, the tool frame and the overlays; with --html, write the scene as one offline page and exit."""
     page_file = _page_file(html, "--html") if html is not None else None
     arm = _arm(name, strict)
     configuration = _joint_state(q, "--q", arm) if q is not None else None

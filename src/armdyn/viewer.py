@@ -7,8 +7,8 @@ the ``<visual>`` geometry of its file (meshes resolved from ``package://``, ``fi
 loaded with trimesh; boxes, cylinders and spheres), each URDF link on the arm link whose body carries it, as
 ``armdyn.load_urdf`` merges fixed joints. An arm read by ``armdyn.load_mjcf`` is drawn with its model's geoms
 (``armdyn.model.sources.geometry_of``: the visual geoms when the model has any; meshes as MuJoCo compiled them,
-spheres, capsules, ellipsoids, cylinders and boxes). DH arms, and links whose meshes cannot be loaded (with a warning naming the
-file), are drawn as capsules from each joint to the next in ``LINK_COLOR``.
+spheres, capsules, ellipsoids, cylinders and boxes). DH arms, and links whose meshes cannot be loaded (with a
+warning naming the file), are drawn as capsules from each joint to the next in ``LINK_COLOR``.
 
 The overlays (``OVERLAYS``, each a checkbox of the viewer's panel):
 
