@@ -80,7 +80,8 @@ def load_mjcf(
     fixed-base kinematic tree of hinge and slide joints, numbered as MuJoCo numbers its degrees of
     freedom, so that M(q), the bias C(q, qd) qd + G(q) and inverse dynamics equal MuJoCo's at
     q = qpos, qd = qvel (Lewis, Dawson and Abdallah 2004, eq. 3.2.30; Section 3.6 for the drives).
-    MuJoCo also compiles URDF files, so a ``.urdf`` path is read as MuJoCo reads it.
+    MuJoCo also compiles URDF files, so a ``.urdf`` path is read as MuJoCo reads it. The model's geoms are
+    recorded with the arm (``armdyn.model.sources.geometry_of``), and the viewer draws them.
 
     Parameters
     ----------
