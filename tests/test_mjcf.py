@@ -49,13 +49,14 @@ def _robot_xml(distribution: str, name: str) -> Path:
 # ----- MuJoCo as the oracle -----------------------------------------------------------------------------------
 def mujoco_dynamics(model, q, qd, qdd, dofs):
     """M, qfrc_bias and mj_inverse's qfrc_inverse at each state, on the degrees of freedom ``dofs`` (the others at
-    qpos0 and at rest). Friction loss, contacts, joint limits and springs are switched off: what is compared is
-    M qdd + C qd + G + damping qd."""
+    qpos0 and at rest). Friction loss, contacts, joint limits, springs and equality constraints are switched off:
+    what is compared is M qdd + C qd + G + damping qd."""
     model.opt.disableflags |= (
         mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS
         | mujoco.mjtDisableBit.mjDSBL_CONTACT
         | mujoco.mjtDisableBit.mjDSBL_LIMIT
         | mujoco.mjtDisableBit.mjDSBL_SPRING
+        | mujoco.mjtDisableBit.mjDSBL_EQUALITY  # what armdyn drops holds only locked joints
     )
     data = mujoco.MjData(model)
     qpos_of = np.array([model.jnt_qposadr[model.dof_jntid[d]] for d in dofs])
@@ -692,3 +693,49 @@ def test_the_viewer_draws_an_mjcf_arm_with_its_meshes() -> None:
     )
     kinds = {drawing.kind for index, drawing in _drawings(primitives, None)[0].items() if index >= 0}
     assert kinds == {"box"}
+
+
+GRIPPER = """<mujoco model="arm with a gripper">
+  <worldbody>
+    <body name="upper">
+      <joint name="shoulder" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04"/>
+      <body name="hand" pos="0.4 0 0">
+        <joint name="wrist" axis="0 1 0"/>
+        <geom type="box" size="0.03 0.05 0.02"/>
+        <body name="left" pos="0.05 0.02 0"><joint name="left finger" type="slide" axis="0 1 0" range="0 0.04"/>
+          <geom type="box" size="0.01 0.005 0.02"/><site name="left tip" pos="0.02 0 0"/></body>
+        <body name="right" pos="0.05 -0.02 0"><joint name="right finger" type="slide" axis="0 -1 0" range="0 0.04"/>
+          <geom type="box" size="0.01 0.005 0.02"/><site name="right tip" pos="0.02 0 0"/></body>
+      </body>
+    </body>
+  </worldbody>
+  <tendon><fixed name="split"><joint joint="left finger" coef="0.5"/><joint joint="right finger" coef="0.5"/></fixed>
+  </tendon>
+  <equality>
+    <joint name="mirror" joint1="left finger" joint2="right finger"/>
+    <connect name="closing" site1="left tip" site2="right tip"/>
+  </equality>
+  <actuator><position name="grip" tendon="split" kp="100"/></actuator>
+</mujoco>"""
+
+
+def test_a_gripper_coupled_by_tendons_and_equalities_loads_with_its_fingers_locked() -> None:
+    """A gripper as MuJoCo models them (a tendon, a mirror equality, a closing connect): refused while its fingers
+    move, loaded once they are locked, with MuJoCo's dynamics for the arm's joints."""
+    with pytest.raises(ModelError, match=r"tendons \['split'\].*or lock their joints"):
+        load_mjcf(GRIPPER)
+    with pytest.raises(ModelError, match=r"equality constraints \['mirror \(joint left finger and right finger\)'"):
+        load_mjcf(GRIPPER.replace("<tendon>", "<!--").replace("</tendon>", "-->").replace(
+            '<actuator><position name="grip" tendon="split" kp="100"/></actuator>', ""))  # fmt: skip
+    arm = load_mjcf(GRIPPER, locked={"left finger": 0.0, "right finger": 0.0})
+    assert arm.joint_names == ["shoulder", "wrist"]
+    assert_same_dynamics(mujoco.MjModel.from_xml_string(GRIPPER), arm, "gripper locked")
+    with pytest.raises(ModelError, match=r"tendons \['split'\]"):  # the tendon still couples a moving finger
+        load_mjcf(GRIPPER, locked={"left finger": 0.0})
+    without_coupling = GRIPPER.replace("<tendon>", "<!--").replace("</tendon>", "-->").replace(
+        '<actuator><position name="grip" tendon="split" kp="100"/></actuator>', "").replace(
+        '<joint name="mirror" joint1="left finger" joint2="right finger"/>', "")  # fmt: skip
+    with pytest.raises(ModelError, match=r"\['closing \(connect\)'\]"):  # the loop closes over a moving finger
+        load_mjcf(without_coupling, locked={"left finger": 0.0})
+    assert load_mjcf(without_coupling, locked={"left finger": 0.0, "right finger": 0.0}).n == 2

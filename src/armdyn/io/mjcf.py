@@ -304,7 +304,9 @@ def _read(
 def _refuse_what_a_tree_cannot_hold(mujoco: Any, model: Any, locked: set[int], where: str) -> None:
     """Ball joints, tendons and equality constraints, refused by name (free joints are checked with ``locked``).
 
-    A joint equality (a mimic joint of a URDF) between locked joints constrains nothing that moves, and passes."""
+    What constrains nothing that moves passes: a fixed tendon over locked joints only (a gripper's coupling with
+    its fingers locked), a joint or tendon equality between locked joints (a URDF's mimic joint), a connect or
+    weld between two bodies on the same link once the locked joints are fixed; and armdyn's inertia tendons."""
     balls = [_joint_name(model, j) for j in range(model.njnt) if model.jnt_type[j] == _BALL]
     if balls:
         raise ModelError(
@@ -314,26 +316,64 @@ def _refuse_what_a_tree_cannot_hold(mujoco: Any, model: Any, locked: set[int], w
     tendons = [
         _name(mujoco, model, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
         for t in range(model.ntendon)
-        if not _is_inertia_tendon(mujoco, model, t)
+        if not _is_inertia_tendon(mujoco, model, t) and not _over_locked_joints(mujoco, model, t, locked)
     ]
     if tendons:
         raise ModelError(
             f"{where}: tendons {tendons}: a tendon couples joints (or closes a loop), which the robot equation of a "
-            "kinematic tree does not hold; remove the tendons (and the actuators on them)"
+            "kinematic tree does not hold; remove the tendons (and the actuators on them), or lock their joints"
         )
-    joint_equality = int(mujoco.mjtEq.mjEQ_JOINT)
     constraints = [
         f"{_name(mujoco, model, mujoco.mjtObj.mjOBJ_EQUALITY, e, 'equality')} ({_equality(mujoco, model, e)})"
         for e in range(model.neq)
-        if int(model.eq_type[e]) != joint_equality
-        or not {int(model.eq_obj1id[e]), int(model.eq_obj2id[e])} - {-1} <= locked
+        if not _holds_nothing_that_moves(mujoco, model, e, locked)
     ]
     if constraints:
         raise ModelError(
             f"{where}: equality constraints {constraints}: a connect or weld closes a kinematic loop and a joint or "
-            "tendon equality couples joints, which a kinematic tree does not hold; remove them (a joint equality "
-            "between locked joints may stay)"
+            "tendon equality couples joints, which a kinematic tree does not hold; remove them, or lock the joints "
+            "they couple (or those of the loop)"
         )
+
+
+def _tendon_joints(mujoco: Any, model: Any, t: int) -> set[int] | None:
+    """The joints of a fixed tendon; None for a spatial one (sites, geoms, pulleys: not joints alone)."""
+    start, count = int(model.tendon_adr[t]), int(model.tendon_num[t])
+    wraps = range(start, start + count)
+    if any(int(model.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT) for w in wraps):
+        return None
+    return {int(model.wrap_objid[w]) for w in wraps}
+
+
+def _over_locked_joints(mujoco: Any, model: Any, t: int, locked: set[int]) -> bool:
+    """Whether tendon t is a fixed tendon over locked joints only (its length then never changes)."""
+    joints = _tendon_joints(mujoco, model, t)
+    return joints is not None and joints <= locked
+
+
+def _holds_nothing_that_moves(mujoco: Any, model: Any, e: int, locked: set[int]) -> bool:
+    """Whether equality e constrains only what the locked joints hold still (see _refuse_what_a_tree_cannot_hold)."""
+    kind, ends = int(model.eq_type[e]), [int(i) for i in (model.eq_obj1id[e], model.eq_obj2id[e]) if i >= 0]
+    if kind == int(mujoco.mjtEq.mjEQ_JOINT):
+        return set(ends) <= locked
+    if kind == int(mujoco.mjtEq.mjEQ_TENDON):
+        return all(_over_locked_joints(mujoco, model, t, locked) for t in ends)
+    if kind in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
+        on_sites = int(model.eq_objtype[e]) == int(mujoco.mjtObj.mjOBJ_SITE)
+        bodies = [int(model.site_bodyid[i]) if on_sites else i for i in ends] + [0] * (2 - len(ends))
+        return _moved_by(model, bodies[0], locked) == _moved_by(model, bodies[1], locked)
+    return False
+
+
+def _moved_by(model: Any, body: int, locked: set[int]) -> int:
+    """The last joint that moves a body, once the locked joints are fixed (-1: none, the body is the world's)."""
+    while body > 0:
+        first, count = int(model.body_jntadr[body]), int(model.body_jntnum[body])
+        for j in reversed(range(first, first + count)):
+            if j not in locked:
+                return j
+        body = int(model.body_parentid[body])
+    return -1
 
 
 def _equality(mujoco: Any, model: Any, e: int) -> str:
@@ -369,7 +409,8 @@ def _fold_inertia_tendons(mujoco: Any, model: Any, robot: Robot, names: list[str
     from armdyn import kinematics
 
     links = list(robot.links)
-    for t in range(model.ntendon):
+    inertia_tendons = [t for t in range(model.ntendon) if _is_inertia_tendon(mujoco, model, t)]
+    for t in inertia_tendons:
         tendon = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_TENDON, t)
         joint = tendon.removeprefix(INERTIA_TENDON)
         if joint not in robot.joint_names:
@@ -391,7 +432,7 @@ def _fold_inertia_tendons(mujoco: Any, model: Any, robot: Robot, names: list[str
         body = links[index].inertial
         inertia = body.inertia + float(model.tendon_armature[t]) * np.outer(n, n)
         links[index] = replace(links[index], inertial=Inertial(body.mass, body.com, inertia, name=joint, strict=False))
-    return robot.replace(links) if model.ntendon else robot
+    return robot.replace(links) if inertia_tendons else robot
 
 
 def _check_locked(model: Any, names: list[str], locked: object, where: str) -> dict[str, Any]:
