@@ -181,7 +181,9 @@ def from_mujoco(
     viscous and symmetric Coulomb friction, an actuator's ``armature`` and ``damping`` adding
     gear^2 times theirs. Refused, by name: ball joints, free joints (unless locked, on a body of the
     world), tendons and equality constraints (a loop closed by ``connect`` or ``weld``, a coupling
-    by ``joint``), none of which a serial-chain robot equation holds.
+    by ``joint``), none of which a serial-chain robot equation holds, unless they hold only locked
+    joints (a fixed tendon over locked joints, an equality between them, a ``connect`` or ``weld``
+    within one rigid part: a gripper with its fingers locked).
 
     With ``drives``, every joint must be driven by one ``dcmotor`` actuator, which becomes a DC drive
     of Section 3.6 (Lewis, Dawson and Abdallah 2004; armdyn.actuators.DCMotor): MuJoCo's gear g
@@ -222,7 +224,8 @@ def from_mujoco(
     ------
     armdyn.ModelError
         When ``model`` is not a mujoco.MjModel; when it has a ball joint, a free joint that is not
-        locked (or not on a body of the world), a tendon or an equality constraint (named); when
+        locked (or not on a body of the world), a tendon or an equality constraint that holds a joint
+        that moves (named); when
         ``locked`` names no joint of the model or holds a bad value; when ``tool_link`` is neither a
         body nor a site, or is welded to the world; when gravity is not 3 finite numbers; when no
         joint moves; with ``strict``, when joints move no mass; with ``drives``, when a joint has no
