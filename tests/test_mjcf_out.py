@@ -326,3 +326,24 @@ def test_errors(tmp_path: Path) -> None:
         to_mjcf("puma560")  # type: ignore[arg-type]
     with pytest.raises(ad.ModelError, match=r"missing.*arm\.xml: cannot write the MJCF"):
         to_mjcf(load("scara"), tmp_path / "missing" / "arm.xml")
+
+
+def test_the_quaternion_gives_the_rotation_back_near_half_turns() -> None:
+    """kinematics.quaternion (the MJCF writer's and the viewer's): MuJoCo's mju_quat2Mat of it is the rotation to
+    1e-15, for random rotations and for turns of pi and pi - 1e-9 about random axes, with w >= 0."""
+    from armdyn.kinematics import quaternion
+
+    rng = np.random.default_rng(4)
+    rotations = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(50)]
+    rotations = [r * np.sign(np.linalg.det(r)) for r in rotations]
+    for angle in (np.pi, np.pi - 1e-9):
+        for axis in rng.normal(size=(10, 3)):
+            u = axis / np.linalg.norm(axis)
+            cross = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
+            rotations.append(np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross)
+    for rotation in rotations:
+        q = np.array(quaternion(rotation))
+        back = np.zeros(9)
+        mujoco.mju_quat2Mat(back, q)
+        assert q[0] >= 0 and abs(np.linalg.norm(q) - 1) < 1e-15
+        assert np.abs(back.reshape(3, 3) - rotation).max() < 1e-15

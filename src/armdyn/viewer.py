@@ -631,23 +631,11 @@ def urdf_of(arm: Robot) -> Path | None:
     return source_file(arm)
 
 
-def _quaternion(R: np.ndarray) -> np.ndarray:
-    """The unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
-    trace = np.trace(R)
-    if trace > 0:
-        s = 2.0 * np.sqrt(1.0 + trace)
-        q = [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
-    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
-        q = [(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
-    elif R[1, 1] > R[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
-        q = [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s]
-    else:
-        s = 2.0 * np.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
-        q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s]
-    quaternion = np.array(q)
-    return quaternion / np.linalg.norm(quaternion)
+def _wxyz(rotation: np.ndarray) -> np.ndarray:
+    """A rotation as viser's unit quaternion (w, x, y, z) (armdyn.kinematics.quaternion)."""
+    from armdyn.kinematics import quaternion
+
+    return np.array(quaternion(rotation))
 
 
 def _blend(ratio: float) -> tuple[int, int, int]:
@@ -807,7 +795,7 @@ class Viewer:
                     shape.vertices,
                     shape.faces,
                     color=LINK_COLOR,
-                    wxyz=_quaternion(shape.pose[:3, :3]),
+                    wxyz=_wxyz(shape.pose[:3, :3]),
                     position=shape.pose[:3, 3],
                 )
                 self._meshes[index].append(handle)
@@ -816,7 +804,7 @@ class Viewer:
             f"/arm/link{arm.tool_link}/tool",
             axes_length=0.08,
             axes_radius=0.004,
-            wxyz=_quaternion(tool[:3, :3]),
+            wxyz=_wxyz(tool[:3, :3]),
             position=tool[:3, 3],
         )
         # overlays
@@ -832,7 +820,7 @@ class Viewer:
                     opacity=0.45,
                     subdivisions=2,
                     scale=tuple(np.maximum(ellipsoid["radii"], 1e-4)),
-                    wxyz=_quaternion(ellipsoid["local_axes"]),
+                    wxyz=_wxyz(ellipsoid["local_axes"]),
                     position=ellipsoid["local_centre"],
                     visible="inertia" in overlays,
                 )
@@ -938,7 +926,7 @@ class Viewer:
             with self._server.atomic():
                 for index, node in self._nodes.items():
                     pose = base if index < 0 else T[index]
-                    node.wxyz = _quaternion(pose[:3, :3])
+                    node.wxyz = _wxyz(pose[:3, :3])
                     node.position = pose[:3, 3]
                 self._draw_overlays(q, T)
 
@@ -955,7 +943,7 @@ class Viewer:
                     continue
                 handle.visible = name in shown
                 handle.scale = tuple(np.maximum(data[name]["radii"], 1e-4))
-                handle.wxyz = _quaternion(data[name]["axes"])
+                handle.wxyz = _wxyz(data[name]["axes"])
                 handle.position = data[name]["centre"]
         if "com" in shown:
             self._overlay["com"][0].position = _centre_of_mass(arm, T)

@@ -264,44 +264,9 @@ def _is_actuated(arm: object) -> TypeGuard[ActuatedArm]:
     )
 
 
-def quaternion(rotation: np.ndarray) -> tuple[float, float, float, float]:
-    """The unit quaternion (w, x, y, z) of a rotation matrix, as MJCF's ``quat`` reads it.
-
-    Shepperd's method (Shepperd 1978, "Quaternion from rotation matrix", J. Guidance and Control
-    1(3)): the largest of 4w^2, 4x^2, 4y^2, 4z^2 (from the trace and the diagonal) is taken
-    under the square root and the others follow from the off-diagonal sums and differences, so
-    that no component is divided by a small number; w >= 0.
-
-    Parameters
-    ----------
-    rotation : numpy.ndarray
-        A rotation matrix, (3, 3) (the upper-left block of a 4x4 pose is taken as well).
-
-    Returns
-    -------
-    tuple of float
-        (w, x, y, z), of unit norm to rounding.
-    """
-    r = np.asarray(rotation, dtype=float)[:3, :3]
-    squares = [1 + r[0, 0] + r[1, 1] + r[2, 2], 1 + r[0, 0] - r[1, 1] - r[2, 2]]
-    squares += [1 - r[0, 0] + r[1, 1] - r[2, 2], 1 - r[0, 0] - r[1, 1] + r[2, 2]]
-    largest = int(np.argmax(squares))
-    s = 2 * math.sqrt(squares[largest])  # 4 times the largest component
-    if largest == 0:
-        q = (s / 4, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s)
-    elif largest == 1:
-        q = ((r[2, 1] - r[1, 2]) / s, s / 4, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s)
-    elif largest == 2:
-        q = ((r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, s / 4, (r[1, 2] + r[2, 1]) / s)
-    else:
-        q = ((r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, s / 4)
-    sign = -1.0 if q[0] < 0 else 1.0
-    return (sign * q[0], sign * q[1], sign * q[2], sign * q[3])
-
-
 def _pose(pose: np.ndarray) -> dict[str, str]:
     """A frame's ``pos`` and ``quat`` attributes."""
-    return {"pos": _numbers(pose[:3, 3]), "quat": _numbers(quaternion(pose))}
+    return {"pos": _numbers(pose[:3, 3]), "quat": _numbers(kinematics.quaternion(pose))}
 
 
 def _comment(robot: ArmModel) -> str:
