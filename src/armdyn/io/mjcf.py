@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from armdyn import inputs
+from armdyn import inputs, kinematics
 from armdyn.errors import MissingDependencyError, ModelError
 from armdyn.io.mjcf_out import DRIVE_FIELDS, DRIVE_NUMERIC, INERTIA_TENDON, LINK_FIELDS, LINK_NUMERIC
 from armdyn.io.urdf_out import UNBOUNDED
@@ -409,8 +409,6 @@ def _fold_inertia_tendons(mujoco: Any, model: Any, robot: Robot, names: list[str
     link's angular velocity in its frame; n is found from the link's angular Jacobian at random states, and
     the tendon refused, by name, when no n fits). The link's inertia then breaks the triangle inequality, as
     the arm's did before ``to_mjcf`` wrote it (Inertial with strict=False: a warning names the link)."""
-    from armdyn import kinematics
-
     links = list(robot.links)
     inertia_tendons = [t for t in range(model.ntendon) if _is_inertia_tendon(mujoco, model, t)]
     for t in inertia_tendons:
@@ -497,10 +495,10 @@ def _tree(
                 owner, prefix = -1, _free_pose(mujoco, model, j, locked[names[j]], names[j], where)
                 continue
             if kind == _HINGE:
-                placement = prefix @ _translation(anchor) @ _rotation_about(axis, -reference)
+                placement = prefix @ _translation(anchor) @ kinematics.joint_motion(True, axis, np.array(-reference))
                 offset = _translation(-np.asarray(anchor, dtype=float))
             else:
-                placement, offset = prefix @ _translation(-reference * axis), np.eye(4)
+                placement, offset = prefix @ kinematics.joint_motion(False, axis, np.array(-reference)), np.eye(4)
             moving.append(
                 _Moving(names[j], "revolute" if kind == _HINGE else "prismatic", placement, axis, offset, owner, j)
             )
@@ -644,6 +642,7 @@ def _geometry(mujoco: Any, model: Any, robot: Robot, names: list[str], locked: d
     mujoco.mj_kinematics(model, data)
     q = np.array([qpos[model.jnt_qposadr[names.index(joint)]] for joint in robot.joint_names])
     frames = robot.link_transforms(q)
+    still = {j for j in range(model.njnt) if names[j] not in robot.joint_names}  # locked (or a locked free joint)
     visual = (model.geom_contype == 0) & (model.geom_conaffinity == 0)
     chosen = visual if visual.any() else np.ones(model.ngeom, dtype=bool)
     geoms = []
@@ -651,7 +650,8 @@ def _geometry(mujoco: Any, model: Any, robot: Robot, names: list[str], locked: d
         kind, body = _DRAWN.get(int(model.geom_type[g])), int(model.geom_bodyid[g])
         if kind is None or body == 0:
             continue
-        link = _carrier(model, robot, names, body)
+        mover = _moved_by(model, body, still)
+        link = robot.joint_names.index(names[mover]) if mover >= 0 else -1
         world = np.eye(4)
         world[:3, :3], world[:3, 3] = np.reshape(data.geom_xmat[g], (3, 3)), data.geom_xpos[g]
         frame = robot.base if link < 0 else frames[link]
@@ -667,19 +667,6 @@ def _geometry(mujoco: Any, model: Any, robot: Robot, names: list[str], locked: d
     return geoms
 
 
-def _carrier(model: Any, robot: Robot, names: list[str], body: int) -> int:
-    """The arm link that carries a body: that of its last joint the arm has (not locked), else its parent's; -1 for
-    a body welded to the world."""
-    while body > 0:
-        first, count = int(model.body_jntadr[body]), int(model.body_jntnum[body])
-        for j in reversed(range(first, first + count)):
-            if names[j] in robot.joint_names:
-                return robot.joint_names.index(names[j])
-        body = int(model.body_parentid[body])
-    return -1
-
-
-# ----- the drives of Section 3.6 ---------------------------------------------------------------------------
 def _drives_joint(model: Any, actuator: int, joint: int) -> bool:
     """Whether the actuator acts on the joint itself (a joint transmission)."""
     joint_transmissions = (0, 1)  # mjTRN_JOINT, mjTRN_JOINTINPARENT
@@ -816,17 +803,6 @@ def _pose(mujoco: Any, position: object, quaternion: object) -> np.ndarray:
 def _translation(vector: object) -> np.ndarray:
     pose = np.eye(4)
     pose[:3, 3] = np.asarray(vector, dtype=float)
-    return pose
-
-
-def _rotation_about(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rot(axis, angle) as a 4x4 pose, by Rodrigues' formula (the identity for a zero angle)."""
-    pose = np.eye(4)
-    if angle == 0:
-        return pose
-    u = axis / np.linalg.norm(axis)
-    cross = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
-    pose[:3, :3] = np.eye(3) + np.sin(angle) * cross + (1.0 - np.cos(angle)) * cross @ cross
     return pose
 
 
